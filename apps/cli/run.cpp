@@ -1,0 +1,104 @@
+#include "run.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <nlohmann/json.hpp>
+
+#include "wetcloth/output.hpp"
+#include "wetcloth/scene.hpp"
+
+namespace wetcloth::cli {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+void print_progress(double t, double duration, double wall) {
+  const int width = 30;
+  const double frac = duration > 0 ? std::min(1.0, t / duration) : 1.0;
+  const int fill = static_cast<int>(frac * width);
+  std::fprintf(stderr, "\r[%.*s%*s] %5.1f%%  sim %.3f s  wall %.1f s  %.2fx real time ", fill,
+               "##############################", width - fill, "", 100 * frac, t, wall,
+               wall > 0 ? t / wall : 0.0);
+  std::fflush(stderr);
+}
+
+nlohmann::json metrics_json(const Metrics& m) {
+  nlohmann::json j;
+  const auto cols = metrics_columns();
+  const auto vals = metrics_values(m);
+  for (std::size_t i = 0; i < cols.size(); ++i) j[cols[i]] = vals[i];
+  return j;
+}
+
+// Clears what an earlier run left, so a folder never mixes two runs.
+void clear_outputs(const fs::path& out) {
+  for (const char* f : {"metrics.csv", "summary.json", "scene.toml", "obstacles.obj"})
+    fs::remove(out / f);
+  if (fs::exists(out / "frames"))
+    for (const auto& e : fs::directory_iterator(out / "frames"))
+      if (e.path().extension() == ".obj") fs::remove(e.path());
+}
+
+}  // namespace
+
+RunResult run_scene(const Params& p, const fs::path& out, bool progress) {
+  RunResult r;
+  Simulation sim(p);
+  fs::create_directories(out);
+  clear_outputs(out);
+  if (p.run.meshes) fs::create_directories(out / "frames");
+  write_file_atomic(out / "scene.toml", "# resolved by wetcloth " WETCLOTH_VERSION
+                                        "; `wetcloth run` this file to reproduce the run\n" +
+                                            to_toml(p));
+  write_file_atomic(out / "obstacles.obj", obstacles_obj(sim.model()));
+
+  MetricsTable table;
+  const auto frames = static_cast<long long>(std::floor(p.run.duration * p.run.fps + 1e-9));
+  const auto start = std::chrono::steady_clock::now();
+  auto wall = [&] {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  };
+  for (long long f = 0; f <= frames; ++f) {
+    const double t = std::min(p.run.duration, f / p.run.fps);
+    const bool ok = sim.advance_to(t);
+    const Metrics m = sim.metrics();
+    table.add(m);
+    write_file_atomic(out / "metrics.csv", table.csv());
+    if (p.run.meshes) {
+      char name[32];
+      std::snprintf(name, sizeof name, "frame_%05lld.obj", f);
+      write_file_atomic(out / "frames" / name, cloth_obj(sim.model(), sim.state()));
+    }
+    if (r.time_to_5cm_s < 0 && m.handle_height_m >= 0.05) r.time_to_5cm_s = m.time_s;
+    if (progress) print_progress(sim.state().time, p.run.duration, wall());
+    if (!ok) {
+      r.code = kBlowUp;
+      r.message = sim.blow_up_reason();
+      break;
+    }
+  }
+  if (progress) std::fprintf(stderr, "\n");
+  r.final = table.rows().back();
+  r.peak_deficit_pa = sim.state().peak_deficit;
+  r.steps = sim.state().steps;
+  r.wall_seconds = wall();
+
+  nlohmann::json s;
+  s["scene"] = p.name;
+  s["version"] = WETCLOTH_VERSION;
+  s["status"] = r.code == kOk ? "ok" : "blew up";
+  if (r.code != kOk) s["message"] = r.message;
+  s["steps"] = r.steps;
+  s["particles"] = sim.model().n;
+  s["simulated_seconds"] = sim.state().time;
+  s["wall_seconds"] = r.wall_seconds;
+  s["realtime_factor"] = r.wall_seconds > 0 ? sim.state().time / r.wall_seconds : 0.0;
+  s["peak_pressure_deficit_pa"] = r.peak_deficit_pa;
+  s["final"] = metrics_json(r.final);
+  write_file_atomic(out / "summary.json", s.dump(2) + "\n");
+  return r;
+}
+
+}  // namespace wetcloth::cli

@@ -1,0 +1,40 @@
+// The options every scene-running command takes: SCENE, --set, --humidity, --duration.
+#pragma once
+
+#include <CLI/CLI.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "wetcloth/output.hpp"
+#include "wetcloth/scene.hpp"
+
+namespace wetcloth::cli {
+
+struct SceneOptions {
+  std::string scene;
+  std::vector<std::string> sets;
+  std::optional<double> humidity, duration;
+
+  void add_to(CLI::App* app, bool scene_required = true) {
+    auto* s = app->add_option("scene", scene, "scene: a TOML file, or a built-in name (wetcloth scenes)");
+    if (scene_required) s->required();
+    app->add_option("--set", sets,
+                    "override a parameter, KEY=VALUE in TOML syntax, e.g. "
+                    "--set cloth.resolution=[101,101] (repeatable; wetcloth params lists the keys)")
+        ->allow_extra_args(false);
+    app->add_option("--humidity", humidity, "cloth humidity ω in [0, 1] (= --set cloth.humidity=W)");
+    app->add_option("--duration", duration, "simulated time, s (= --set run.duration=S)");
+  }
+
+  std::vector<std::string> overrides() const {
+    std::vector<std::string> all = sets;
+    if (humidity) all.push_back("cloth.humidity=" + format_number(*humidity));
+    if (duration) all.push_back("run.duration=" + format_number(*duration));
+    return all;
+  }
+
+  Params load() const { return load_scene(scene, overrides()); }
+};
+
+}  // namespace wetcloth::cli

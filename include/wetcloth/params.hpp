@@ -1,0 +1,134 @@
+// Every scene parameter, with its default. Units are SI; see `wetcloth params`
+// (generated from scene.cpp's definitions) for the unit, range and meaning of each.
+#pragma once
+
+#include <array>
+#include <map>
+#include <string>
+
+namespace wetcloth {
+
+using Vec3d = std::array<double, 3>;
+using Vec2d = std::array<double, 2>;
+using Vec2i = std::array<long long, 2>;
+
+// How a scene pulls on the cloth (MODEL.md section 9).
+struct HandleParams {
+  std::string type = "force";   // force | move | pin
+  Vec2d at{0.5, 0.5};           // position on the cloth, (u, v) in [0, 1]
+  long long patch = 0;          // half-width of the patch, in grid steps
+  Vec3d force{0, 0, 0};         // force: total force on the patch, N
+  Vec3d velocity{0, 0, 0};      // move: driving velocity, m/s
+  double max_height = 0;        // force: height cap above the table, m (0: none)
+  double start = 0;             // time the handle starts acting, s
+};
+
+struct Params {
+  std::string name = "scene";
+  std::string description;
+
+  struct Cloth {
+    Vec2i resolution{51, 51};   // particles along u and v
+    Vec2d size{0.3, 0.3};       // width (u) and height (v), m
+    Vec3d center{0, 0, 0};      // centre of the cloth at t = 0, m
+    std::string orientation = "horizontal";  // horizontal (xy plane) | vertical (xz plane)
+    double humidity = 0.0;      // water saturation by weight ω, 0..1
+    double areal_density = 0.12;  // dry ρ_A, kg/m²
+    double water_ratio = 1.0;   // water held at ω = 1 per unit dry mass r_w
+  } cloth;
+
+  struct Springs {
+    double structural_k = 200, structural_damping = 0.01;
+    double shear_k = 20, shear_damping = 0.01;
+    double bending_k = 20, bending_damping = 0.01;
+  } springs;
+
+  struct Forces {
+    Vec3d gravity{0, 0, -9.81};
+    double viscous_damping = 0.2;  // per unit cloth area, N·s/m³
+  } forces;
+
+  struct Wind {
+    Vec3d velocity{0, 0, 0};    // m/s
+    double k = 1.0;             // normal drag coefficient per unit area, N·s/m³
+    Vec2d region_min{0, 0};     // (u, v) box the wind acts in
+    Vec2d region_max{1, 1};
+  } wind;
+
+  struct StrainLimit {
+    bool enabled = true;
+    double tau = 0.10;          // allowed stretch τ_c
+    long long passes = 2;
+  } strain_limit;
+
+  struct Table {
+    bool enabled = true;
+    double height = 0.0;        // z of the plane, m
+  } table;
+
+  struct Ball {
+    bool enabled = false;
+    Vec3d center{0, 0, 0.1};
+    double radius = 0.1;
+  } ball;
+
+  struct Contact {
+    std::string surface = "table";  // table | ball | none
+    double bridge_height = 1e-3;    // liquid-bridge threshold h_th, m
+  } contact;
+
+  struct Adhesion {
+    bool enabled = true;
+    double surface_tension = 0.0728;  // γ, N/m
+    double theta_a_deg = 80;          // contact angle on the cloth
+    double theta_b_deg = 58;          // contact angle on the surface
+    double film_height = 1e-3;        // liquid-bridge height h, m
+  } adhesion;
+
+  struct Friction {
+    double mu = 0.3;
+    std::string normal = "contact";  // contact (adhesion + load) | adhesion (the paper's)
+  } friction;
+
+  struct Air {
+    std::string model = "exchange";  // exchange | sealed | vented | off
+    double p_atm = 101325;            // Pa
+    double d_delta = 1.0e-3;          // D_δ, m/(s·Pa)
+    double k_delta = 0.9e-3;          // K_δ, m/(s·Pa)
+    double breakthrough_pressure = 1000;  // P_b, Pa
+    double band = 0.05;               // ball: air counted within this distance, m
+    std::string force_direction = "surface";  // surface (n_s) | cloth (the cloth normal)
+    bool paper_update_rule = false;
+    double paper_threshold = 0.0;     // m³ of growth per step that triggers an update
+  } air;
+
+  struct SelfCollision {
+    bool enabled = true;
+    double distance = 5e-3;   // d_t, m
+    double k = 200;           // k_t, N/m
+    double damping = 5e-3;    // k_f, N·s/m
+  } self_collision;
+
+  struct Integrator {
+    std::string type = "symplectic-euler";  // explicit-euler | symplectic-euler
+    double dt = 5e-5;         // s
+    double max_speed = 50;    // m/s; faster means the run has blown up
+  } integrator;
+
+  struct Run {
+    double duration = 2.0;    // s
+    double fps = 30;          // output frames per simulated second
+    bool meshes = true;       // write frames/*.obj
+  } run;
+
+  std::map<std::string, HandleParams> handles;  // [handle.NAME]
+};
+
+// Humidity-dependent quantities (MODEL.md sections 1, 4, 6).
+double particle_areal_mass(const Params& p);   // ρ_A (1 + r_w ω), kg/m²
+double permeability(const Params& p);          // δ(ω), eq. 5, m/(s·Pa)
+double adhesion_pressure(const Params& p);     // ω γ (cos θa + cos θb) / h, Pa (eq. 13, area part)
+double adhesion_edge_tension(const Params& p); // ω γ sin θa, N/m (eq. 13, edge part per √S)
+double adhesion_total(const Params& p, double contact_area);  // eq. 13, N
+
+}  // namespace wetcloth

@@ -1,0 +1,57 @@
+// Scenes: TOML files (or built-in names) turned into Params, with every key
+// checked against one table of definitions that also documents them.
+#pragma once
+
+#include <functional>
+#include <stdexcept>
+#include <string>
+#include <variant>
+#include <vector>
+
+#include "wetcloth/params.hpp"
+
+namespace wetcloth {
+
+// Bad input: the message names the file, line and key.
+struct SceneError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+using ParamValue = std::variant<bool, long long, double, std::string, Vec2i, Vec2d, Vec3d>;
+
+// One scene parameter. Keys under a handle read `handle.*.KEY`.
+struct ParamDef {
+  std::string key;
+  std::string unit;
+  std::string meaning;
+  double min = 0, max = 0;            // range for numbers (inclusive); min > max: none
+  std::vector<std::string> choices;   // allowed strings
+  ParamValue default_value;
+  std::function<ParamValue(const Params&, const std::string& handle)> get;
+  std::function<void(Params&, const std::string& handle, const ParamValue&)> set;
+
+  std::string type_name() const;
+  std::string range_text() const;
+};
+
+const std::vector<ParamDef>& param_defs();
+std::string format_value(const ParamValue& v);
+
+struct BuiltinScene {
+  std::string name, description, text;
+};
+const std::vector<BuiltinScene>& builtin_scenes();
+
+// SCENE is a path to a TOML file or a built-in name; overrides are KEY=VALUE
+// strings in TOML syntax (`cloth.resolution=[25,25]`). Throws SceneError.
+Params load_scene(const std::string& scene, const std::vector<std::string>& overrides = {});
+Params parse_scene(const std::string& toml_text, const std::string& source_name,
+                   const std::vector<std::string>& overrides = {});
+
+// Every parameter, resolved, as TOML that load_scene reads back to the same Params.
+std::string to_toml(const Params& p);
+
+// Markdown table of every parameter (the README's table).
+std::string params_markdown();
+
+}  // namespace wetcloth

@@ -1,0 +1,151 @@
+// The wet cloth: a read-only Model (grid, springs, areas, parameters), a
+// copyable State (positions, velocities, trapped air, contact flags), and a
+// Workspace of scratch arrays. Simulation ties them together and runs the
+// step of MODEL.md section 8.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "wetcloth/params.hpp"
+
+namespace wetcloth {
+
+using Vec3 = Eigen::Vector3d;
+
+inline Vec3 to_vec(const Vec3d& a) { return {a[0], a[1], a[2]}; }
+
+// One kind of spring (structural, shear or bending), as flat arrays.
+struct SpringSet {
+  std::vector<int> a, b;
+  std::vector<double> rest;
+  double k = 0, damping = 0;
+  std::size_t size() const { return a.size(); }
+};
+
+enum class HandleType { Force, Move, Pin };
+
+struct Handle {
+  std::string name;
+  HandleType type = HandleType::Force;
+  std::vector<int> particles;
+  Vec3 force_per_particle = Vec3::Zero();
+  Vec3 velocity = Vec3::Zero();
+  double max_height = 0;
+  double start = 0;
+  std::vector<Vec3> anchor;  // positions at t = 0 (move, pin)
+};
+
+enum class SurfaceKind { None, Table, Ball };
+
+struct Model {
+  Params params;
+  int nu = 0, nv = 0, n = 0;
+  std::vector<Vec3> rest_position;
+  std::vector<double> area, mass, inv_mass;
+  std::vector<std::uint8_t> on_border;  // on the cloth's border
+  std::vector<std::uint8_t> driven;     // pinned or moved: dynamics never moves it
+  std::vector<std::uint8_t> in_wind;    // inside the wind region
+  SpringSet structural, shear, bending;
+  std::vector<std::array<int, 3>> triangles;
+  std::vector<Handle> handles;
+  SurfaceKind contact_surface = SurfaceKind::None;
+  int index(int i, int j) const { return j * nu + i; }
+};
+
+Model build_model(const Params& p);
+// Humidity drives mass (section 1), permeability (eq. 5) and adhesion (eq. 13).
+void set_humidity(Model& m, double omega);
+
+struct State {
+  double time = 0;
+  long long steps = 0;
+  std::vector<Vec3> x, v;
+  std::vector<std::uint8_t> contact;  // 1: within h_th of the contact surface
+  double air_atm_volume = 0;          // trapped air at atmospheric pressure V_atm, m³
+  double air_volume = 0;              // V_sum, m³
+  double inner_pressure = 0;          // P_in, Pa (mean over pockets for `vented`)
+  double peak_deficit = 0;            // max over time of P_atm - P_in, Pa
+  std::vector<double> air_share;      // vented: V_atm carried by each particle, m³
+  std::vector<double> pocket_pressure;  // P_in under each particle, Pa
+  // Strain limiting's adaptive order (MODEL.md section 2).
+  std::vector<int> source_distance;   // grid steps from the first-moving particles
+  bool sources_found = false;
+};
+
+// Scratch arrays, reused every step: nothing is allocated per step.
+struct Workspace {
+  std::vector<Vec3> force, normal, x_before, surface_normal;
+  std::vector<double> distance;       // signed distance to the contact surface
+  std::vector<double> adhesion;       // |adhesion force| per particle, N
+  std::vector<double> normal_force;   // total force · n_s before friction, N
+  std::vector<std::uint8_t> border;   // border of the contact region
+  std::vector<int> pocket;            // air pocket of each particle, -1 none
+  std::vector<double> pocket_stiffness;  // dΔP/dV_sum over one step, per pocket, Pa/m³
+  std::vector<double> pocket_sums;    // scratch for the implicit air correction
+  std::vector<Vec3> air_direction;    // A_i n_i of eq. 3 (zero where no air force)
+  std::vector<int> queue;
+  std::vector<int> strain_order;      // structural then shear springs, ordered
+  Vec3 handle_force = Vec3::Zero();   // force the first pulling handle exerts, N
+  // Self-collision spatial hash (counting sort by cell).
+  std::vector<int> cell_start, cell_entries, particle_cell;
+  std::vector<std::array<long long, 3>> cell_coord;
+  std::vector<std::uint8_t> colliding;
+  int colliding_pairs = 0;
+  // Interactive grab (viewer).
+  int grab_particle = -1;
+  Vec3 grab_target = Vec3::Zero();
+  double grab_k = 0;
+};
+
+// One row of metrics.csv (MODEL.md section 10).
+struct Metrics {
+  double time_s = 0, handle_height_m = 0, handle_force_n = 0, max_height_m = 0;
+  double contact_area_m2 = 0, lifted_area_m2 = 0, base_diagonal_m = 0, outer_diagonal_m = 0;
+  double inner_pressure_pa = 0, trapped_air_m3 = 0, air_volume_m3 = 0;
+  double kinetic_energy_j = 0, max_strain = 0, wrinkle_rad = 0, centroid_x_m = 0,
+         centroid_y_m = 0;
+};
+std::vector<std::string> metrics_columns();
+std::vector<double> metrics_values(const Metrics& m);
+
+class Simulation {
+ public:
+  explicit Simulation(const Params& p);
+
+  void step();  // one time step of MODEL.md section 8
+  // Advances to time t; returns false (and stops) if the run blew up.
+  bool advance_to(double t);
+  void reset();
+  void set_humidity(double omega);
+  // New parameters, live: the state is kept when the grid is the same size.
+  void set_params(const Params& p);
+
+  // Non-empty when the state holds NaN or a runaway speed; names what to look at.
+  std::string blow_up_reason() const;
+
+  Metrics metrics() const;
+
+  void grab(int particle, const Vec3& target, double stiffness);
+  void release();
+
+  const Model& model() const { return model_; }
+  const State& state() const { return state_; }
+  State& state() { return state_; }
+  const Workspace& workspace() const { return ws_; }
+
+ private:
+  Model model_;
+  State state_;
+  Workspace ws_;
+  std::vector<std::uint8_t> touched_;  // obstacle each particle was pushed out of this step
+};
+
+// Particle normals, area-weighted over the adjacent triangles.
+void compute_normals(const Model& m, const std::vector<Vec3>& x, std::vector<Vec3>& normal);
+
+}  // namespace wetcloth

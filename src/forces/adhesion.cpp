@@ -1,0 +1,34 @@
+// Liquid-bridge adhesion (MODEL.md section 4, eqs. 6-13, after Lou et al. 2015).
+#include <cmath>
+
+#include "../detail.hpp"
+
+namespace wetcloth::detail {
+
+// eq. 13 shared out per particle: every contact particle gets the area part
+// ω γ (cos θa + cos θb) / h · A_i, and the border of the contact region shares
+// the edge part 2 √S_now ω γ sin θa, so the forces sum to eq. 13 exactly. The
+// force points along -n_s, toward the surface.
+void add_adhesion(const Model& m, const State& s, Workspace& w) {
+  std::fill(w.adhesion.begin(), w.adhesion.end(), 0.0);
+  if (m.contact_surface == SurfaceKind::None) return;
+  const double pressure = adhesion_pressure(m.params);
+  const double tension = adhesion_edge_tension(m.params);
+  if (pressure == 0 && tension == 0) return;
+  double s_now = 0;
+  int border = 0;
+  for (int i = 0; i < m.n; ++i) {
+    if (!s.contact[i]) continue;
+    s_now += m.area[i];
+    border += w.border[i];
+  }
+  const double edge_each = border > 0 ? 2.0 * std::sqrt(s_now) * tension / border : 0.0;
+  for (int i = 0; i < m.n; ++i) {
+    if (!s.contact[i]) continue;
+    const double f = pressure * m.area[i] + (w.border[i] ? edge_each : 0.0);
+    w.adhesion[i] = f;
+    w.force[i] -= f * w.surface_normal[i];
+  }
+}
+
+}  // namespace wetcloth::detail

@@ -1,0 +1,211 @@
+// Air trapped between cloth and contact surface (MODEL.md section 6, eqs. 2-5).
+#include <algorithm>
+#include <cmath>
+
+#include "../detail.hpp"
+
+namespace wetcloth::detail {
+
+namespace {
+
+// Particles whose gap to the surface holds trapped air: above the table, or
+// within the band around the ball.
+bool holds_air(const Model& m, double d) {
+  if (d <= 0) return false;
+  return m.contact_surface != SurfaceKind::Ball || d < m.params.air.band;
+}
+
+// The gap counted in V_sum. Around the ball a particle beyond the band counts
+// as a column of the band's height rather than dropping out: V_sum stays
+// continuous as particles cross the band (a jump in V_sum is a jump in
+// pressure, which kicks the cloth).
+double air_gap(const Model& m, double d) {
+  if (d <= 0) return 0.0;
+  return m.contact_surface == SurfaceKind::Ball ? std::min(d, m.params.air.band) : d;
+}
+
+// Advances one pocket's V_atm over dt with V_sum held fixed, exactly (eq. 4 is
+// stiff: its time constant is well under a millisecond), then lets air break
+// through the wet pores when the deficit exceeds P_b.
+double exchange(const Params& p, double v_atm, double v_sum, double a_sum, double dt,
+                bool breakthrough) {
+  const double delta = permeability(p);
+  if (v_sum <= 0) return 0.0;
+  if (delta > 0 && a_sum > 0) {
+    const double tau = v_sum / (p.air.p_atm * delta * a_sum);
+    v_atm = v_sum + (v_atm - v_sum) * std::exp(-dt / tau);
+  }
+  if (breakthrough) {
+    const double v_min = v_sum * (p.air.p_atm - p.air.breakthrough_pressure) / p.air.p_atm;
+    if (v_atm < v_min) v_atm = v_min;
+  }
+  return v_atm;
+}
+
+double pressure(const Params& p, double v_atm, double v_sum) {
+  return v_sum > 0 ? p.air.p_atm * v_atm / v_sum : p.air.p_atm;  // eq. 2
+}
+
+// How the deficit answers a change of V_sum within one step, dΔP/dV_sum: the
+// air pressure is a stiff spring (a 1 mm film under a 0.2 kg/m² cloth rings at
+// kHz), so the step takes it implicitly (correct_air_implicitly). Permeation
+// over the step relaxes it by e^(-Δt/τ); at the breakthrough cap it is zero.
+double stiffness(const Params& p, double v_atm, double v_sum, double a_sum, double dt, bool leaks) {
+  if (v_sum <= 0) return 0.0;
+  if (leaks && p.air.p_atm - pressure(p, v_atm, v_sum) >= p.air.breakthrough_pressure * (1 - 1e-12))
+    return 0.0;
+  double relax = 1.0;
+  const double delta = permeability(p);
+  if (leaks && delta > 0 && a_sum > 0) relax = std::exp(-dt * p.air.p_atm * delta * a_sum / v_sum);
+  return relax * p.air.p_atm * v_atm / (v_sum * v_sum);
+}
+
+// `vented`: each connected lifted region is its own pocket; one that reaches the
+// cloth's border is open to the room.
+void update_vented(const Model& m, State& s, Workspace& w, double dt) {
+  const Params& p = m.params;
+  std::fill(w.pocket.begin(), w.pocket.end(), -1);
+  w.pocket_stiffness.clear();
+  double total_atm = 0, total_sum = 0;
+  int pockets = 0;
+  for (int seed = 0; seed < m.n; ++seed) {
+    if (w.pocket[seed] >= 0 || s.contact[seed] || !holds_air(m, w.distance[seed])) continue;
+    // Breadth-first flood over structural neighbours.
+    const int id = pockets++;
+    w.queue.clear();
+    w.queue.push_back(seed);
+    w.pocket[seed] = id;
+    bool open = false;
+    double v_atm = 0, v_sum = 0, a_sum = 0;
+    for (std::size_t q = 0; q < w.queue.size(); ++q) {
+      const int k = w.queue[q];
+      open = open || m.on_border[k];
+      v_atm += s.air_share[k];
+      v_sum += m.area[k] * w.distance[k];
+      a_sum += m.area[k];
+      const int i = k % m.nu, j = k / m.nu;
+      const int nb[4][2] = {{i - 1, j}, {i + 1, j}, {i, j - 1}, {i, j + 1}};
+      for (const auto& c : nb) {
+        if (c[0] < 0 || c[1] < 0 || c[0] >= m.nu || c[1] >= m.nv) continue;
+        const int kk = m.index(c[0], c[1]);
+        if (w.pocket[kk] >= 0 || s.contact[kk] || !holds_air(m, w.distance[kk])) continue;
+        w.pocket[kk] = id;
+        w.queue.push_back(kk);
+      }
+    }
+    v_atm = open ? v_sum : exchange(p, v_atm, v_sum, a_sum, dt, true);
+    w.pocket_stiffness.push_back(open ? 0.0 : stiffness(p, v_atm, v_sum, a_sum, dt, true));
+    const double pin = pressure(p, v_atm, v_sum);
+    for (int k : w.queue) {
+      s.air_share[k] = v_sum > 0 ? v_atm * m.area[k] * w.distance[k] / v_sum : 0;
+      s.pocket_pressure[k] = pin;
+    }
+    total_atm += v_atm;
+    total_sum += v_sum;
+  }
+  for (int k = 0; k < m.n; ++k) {
+    if (w.pocket[k] >= 0) continue;
+    s.air_share[k] = 0;  // the liquid film holds no air
+    s.pocket_pressure[k] = p.air.p_atm;
+  }
+  s.air_atm_volume = total_atm;
+  s.air_volume = total_sum;
+  s.inner_pressure = pressure(p, total_atm, total_sum);
+}
+
+}  // namespace
+
+void update_air(const Model& m, State& s, Workspace& w, double dt) {
+  const Params& p = m.params;
+  const std::string& model = p.air.model;
+  w.pocket_stiffness.clear();
+  if (m.contact_surface == SurfaceKind::None) {  // no surface, no trapped air
+    std::fill(w.pocket.begin(), w.pocket.end(), -1);
+    s.air_atm_volume = s.air_volume = 0;
+    s.inner_pressure = p.air.p_atm;
+    return;
+  }
+  if (model == "vented") {
+    update_vented(m, s, w, dt);
+  } else {
+    double v_sum = 0, a_sum = 0, s_now = 0;
+    for (int i = 0; i < m.n; ++i) {
+      if (s.contact[i]) s_now += m.area[i];
+      w.pocket[i] = holds_air(m, w.distance[i]) ? 0 : -1;  // one pocket under the whole cloth
+      v_sum += m.area[i] * air_gap(m, w.distance[i]);
+      if (w.pocket[i] >= 0 && !s.contact[i]) a_sum += m.area[i];
+    }
+    const double grown = v_sum - s.air_volume;
+    if (model == "off" || s_now == 0) {
+      // Nothing is trapped while no part of the cloth touches the surface: the
+      // air under it is open to the room.
+      s.air_atm_volume = v_sum;
+    } else if (model == "exchange") {
+      const bool update = !p.air.paper_update_rule || grown > p.air.paper_threshold;
+      s.air_atm_volume = update ? exchange(p, s.air_atm_volume, v_sum, a_sum, dt, true)
+                                : exchange(p, s.air_atm_volume, v_sum, 0, dt, true);
+    }
+    // `sealed` (Yamada et al. 2013): the amount of air never changes.
+    const bool trapped = model != "off" && s_now > 0;
+    w.pocket_stiffness.push_back(
+        trapped ? stiffness(p, s.air_atm_volume, v_sum, a_sum, dt, model == "exchange") : 0.0);
+    s.air_volume = v_sum;
+    s.inner_pressure = pressure(p, s.air_atm_volume, v_sum);
+    std::fill(s.pocket_pressure.begin(), s.pocket_pressure.end(), s.inner_pressure);
+  }
+  const double deficit = p.air.p_atm - s.inner_pressure;
+  if (deficit > s.peak_deficit) s.peak_deficit = deficit;
+}
+
+// eq. 3: F_i = -(P_atm - P_in) A_i n_i on lifted particles, so that suction
+// pushes the cloth toward the surface. By default n_i is the surface normal n_s:
+// then F_i = -ΔP ∂V_sum/∂x_i for V_sum = Σ A_i d_i, and the air does no net work
+// around a closed path. With the cloth normal (air.force_direction = "cloth", the
+// paper's literal n_i, oriented away from the trapped air) the force is not the
+// gradient of the volume that sets the pressure: it pumps energy into lifted
+// flaps until a pulled cloth flutters and blows up (docs/model.md).
+void add_air_pressure(const Model& m, const State& s, Workspace& w) {
+  std::fill(w.air_direction.begin(), w.air_direction.end(), Vec3::Zero());
+  if (m.params.air.model == "off" || m.contact_surface == SurfaceKind::None) return;
+  const double p_atm = m.params.air.p_atm;
+  const bool along_cloth_normal = m.params.air.force_direction == "cloth";
+  for (int i = 0; i < m.n; ++i) {
+    if (s.contact[i] || !holds_air(m, w.distance[i])) continue;
+    Vec3 n = w.surface_normal[i];
+    if (along_cloth_normal) {
+      n = w.normal[i];
+      if (n.dot(w.surface_normal[i]) < 0) n = -n;
+    }
+    w.air_direction[i] = m.area[i] * n;
+    w.force[i] -= (p_atm - s.pocket_pressure[i]) * w.air_direction[i];
+  }
+}
+
+// Backward Euler for the air term alone. Linearised, the air force is
+// F_i = -ΔP a_i with dΔP = c dV_sum and dV_sum = Σ_j b_j·dx_j (b_j = A_j n_s),
+// a rank-one stiffness per pocket, so (I + Δt² c M⁻¹ a bᵀ) v = v* is solved
+// exactly by Sherman-Morrison in O(n). Without it the air film's kHz ringing
+// and the follower direction of eq. 3 make explicit steps blow up.
+void correct_air_implicitly(const Model& m, State& s, Workspace& w, double dt) {
+  const std::size_t pockets = w.pocket_stiffness.size();
+  if (pockets == 0) return;
+  w.pocket_sums.assign(2 * pockets, 0.0);
+  for (int i = 0; i < m.n; ++i) {
+    const int k = w.pocket[i];
+    if (k < 0) continue;
+    const Vec3 b = m.area[i] * w.surface_normal[i];
+    w.pocket_sums[2 * k] += b.dot(s.v[i]);
+    w.pocket_sums[2 * k + 1] += m.inv_mass[i] * b.dot(w.air_direction[i]);
+  }
+  for (std::size_t k = 0; k < pockets; ++k) {
+    const double c = dt * dt * w.pocket_stiffness[k];
+    w.pocket_sums[2 * k] = c * w.pocket_sums[2 * k] / (1.0 + c * w.pocket_sums[2 * k + 1]);
+  }
+  for (int i = 0; i < m.n; ++i) {
+    const int k = w.pocket[i];
+    if (k < 0 || w.pocket_sums[2 * k] == 0) continue;
+    s.v[i] -= (w.pocket_sums[2 * k] * m.inv_mass[i]) * w.air_direction[i];
+  }
+}
+
+}  // namespace wetcloth::detail

@@ -1,0 +1,11 @@
+// Gravity, m_i g, with the humidity-dependent mass of MODEL.md section 1.
+#include "../detail.hpp"
+
+namespace wetcloth::detail {
+
+void add_gravity(const Model& m, std::vector<Vec3>& f) {
+  const Vec3 g = to_vec(m.params.forces.gravity);
+  for (int i = 0; i < m.n; ++i) f[i] += m.mass[i] * g;
+}
+
+}  // namespace wetcloth::detail

@@ -1,0 +1,36 @@
+// Self-collision (MODEL.md section 7, eq. 15): repulsion springs between particles
+// closer than d_t that are not within two grid steps, found with a spatial hash.
+#include <cstdlib>
+
+#include "../detail.hpp"
+#include "../spatial_hash.hpp"
+
+namespace wetcloth::detail {
+
+void add_self_collision(const Model& m, const State& s, Workspace& w) {
+  const auto& p = m.params.self_collision;
+  w.colliding_pairs = 0;
+  if (!p.enabled) return;
+  const double dt_dist = p.distance, k = p.k;
+  build_hash(s.x, 2 * dt_dist, w);
+  const int nu = m.nu;
+  auto near_in_grid = [nu](int i, int j) {
+    return std::abs(i % nu - j % nu) <= 2 && std::abs(i / nu - j / nu) <= 2;
+  };
+  auto& colliding = w.colliding;
+  std::fill(colliding.begin(), colliding.end(), 0);
+  for_each_close_pair(s.x, dt_dist, w, near_in_grid,
+                      [&](int i, int j, const Vec3& d, double len) {
+                        // eq. 15: F_i = k_t (d_t - |d_ij|) d_ij / |d_ij|, F_j = -F_i
+                        const Vec3 fi = (k * (dt_dist - len) / len) * d;
+                        w.force[i] += fi;
+                        w.force[j] -= fi;
+                        colliding[i] = colliding[j] = 1;
+                        ++w.colliding_pairs;
+                      });
+  // The paper's friction-like damping -k_f v on every colliding particle.
+  for (int i = 0; i < m.n; ++i)
+    if (colliding[i]) w.force[i] -= p.damping * s.v[i];
+}
+
+}  // namespace wetcloth::detail

@@ -1,0 +1,153 @@
+// The cloth grid of MODEL.md section 1: particles, areas, masses, springs.
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+
+#include "detail.hpp"
+
+namespace wetcloth {
+
+namespace {
+double deg(double d) { return d * std::numbers::pi / 180.0; }
+}  // namespace
+
+double particle_areal_mass(const Params& p) {
+  return p.cloth.areal_density * (1.0 + p.cloth.water_ratio * p.cloth.humidity);
+}
+
+// eq. 5: permeability falls linearly with humidity, never below zero.
+double permeability(const Params& p) {
+  return std::max(0.0, p.air.d_delta - p.air.k_delta * p.cloth.humidity);
+}
+
+// eq. 13, the part proportional to the contact area: ω γ (cos θa + cos θb) / h.
+double adhesion_pressure(const Params& p) {
+  const auto& a = p.adhesion;
+  if (!a.enabled) return 0.0;
+  return p.cloth.humidity * a.surface_tension *
+         (std::cos(deg(a.theta_a_deg)) + std::cos(deg(a.theta_b_deg))) / a.film_height;
+}
+
+// eq. 13, the border part per unit of 2√S_now: ω γ sin θa.
+double adhesion_edge_tension(const Params& p) {
+  const auto& a = p.adhesion;
+  if (!a.enabled) return 0.0;
+  return p.cloth.humidity * a.surface_tension * std::sin(deg(a.theta_a_deg));
+}
+
+double adhesion_total(const Params& p, double s_now) {
+  return adhesion_pressure(p) * s_now + 2.0 * std::sqrt(s_now) * adhesion_edge_tension(p);
+}
+
+namespace {
+
+void add_spring(SpringSet& s, const Model& m, int i0, int j0, int i1, int j1) {
+  auto inside = [&](int i, int j) { return i >= 0 && j >= 0 && i < m.nu && j < m.nv; };
+  if (!inside(i0, j0) || !inside(i1, j1)) return;
+  const int a = m.index(i0, j0), b = m.index(i1, j1);
+  s.a.push_back(a);
+  s.b.push_back(b);
+  s.rest.push_back((m.rest_position[b] - m.rest_position[a]).norm());
+}
+
+int nearest(double t, int n) {
+  return std::clamp(static_cast<int>(std::lround(t * (n - 1))), 0, n - 1);
+}
+
+}  // namespace
+
+Model build_model(const Params& p) {
+  Model m;
+  m.params = p;
+  m.nu = static_cast<int>(p.cloth.resolution[0]);
+  m.nv = static_cast<int>(p.cloth.resolution[1]);
+  m.n = m.nu * m.nv;
+  const double du = p.cloth.size[0] / (m.nu - 1), dv = p.cloth.size[1] / (m.nv - 1);
+  const Vec3 c = to_vec(p.cloth.center);
+  const bool vertical = p.cloth.orientation == "vertical";
+
+  m.rest_position.resize(m.n);
+  m.area.resize(m.n);
+  m.on_border.assign(m.n, 0);
+  m.in_wind.assign(m.n, 0);
+  m.driven.assign(m.n, 0);
+  for (int j = 0; j < m.nv; ++j) {
+    for (int i = 0; i < m.nu; ++i) {
+      const int k = m.index(i, j);
+      const double u = i * du - 0.5 * p.cloth.size[0];
+      const double v = j * dv - 0.5 * p.cloth.size[1];
+      // Vertical cloths hang with v = 0 at the top.
+      m.rest_position[k] = vertical ? c + Vec3(u, 0, -v) : c + Vec3(u, v, 0);
+      const bool edge_u = i == 0 || i == m.nu - 1, edge_v = j == 0 || j == m.nv - 1;
+      // Voronoi area: l² inside, half on an edge, a quarter at a corner.
+      m.area[k] = du * dv * (edge_u ? 0.5 : 1.0) * (edge_v ? 0.5 : 1.0);
+      m.on_border[k] = edge_u || edge_v;
+      const double uu = m.nu > 1 ? double(i) / (m.nu - 1) : 0, vv = m.nv > 1 ? double(j) / (m.nv - 1) : 0;
+      m.in_wind[k] = uu >= p.wind.region_min[0] && uu <= p.wind.region_max[0] &&
+                     vv >= p.wind.region_min[1] && vv <= p.wind.region_max[1];
+    }
+  }
+
+  m.structural.k = p.springs.structural_k;
+  m.structural.damping = p.springs.structural_damping;
+  m.shear.k = p.springs.shear_k;
+  m.shear.damping = p.springs.shear_damping;
+  m.bending.k = p.springs.bending_k;
+  m.bending.damping = p.springs.bending_damping;
+  for (int j = 0; j < m.nv; ++j) {
+    for (int i = 0; i < m.nu; ++i) {
+      add_spring(m.structural, m, i, j, i + 1, j);
+      add_spring(m.structural, m, i, j, i, j + 1);
+      add_spring(m.shear, m, i, j, i + 1, j + 1);
+      add_spring(m.shear, m, i + 1, j, i, j + 1);
+      add_spring(m.bending, m, i, j, i + 2, j);
+      add_spring(m.bending, m, i, j, i, j + 2);
+      add_spring(m.bending, m, i, j, i + 2, j + 2);
+      add_spring(m.bending, m, i + 2, j, i, j + 2);
+      if (i + 1 < m.nu && j + 1 < m.nv) {
+        const int a = m.index(i, j), b = m.index(i + 1, j), cc = m.index(i + 1, j + 1),
+                  d = m.index(i, j + 1);
+        m.triangles.push_back({a, b, cc});
+        m.triangles.push_back({a, cc, d});
+      }
+    }
+  }
+  if (p.contact.surface == "table" && p.table.enabled) m.contact_surface = SurfaceKind::Table;
+  if (p.contact.surface == "ball" && p.ball.enabled) m.contact_surface = SurfaceKind::Ball;
+
+  for (const auto& [name, hp] : p.handles) {
+    Handle h;
+    h.name = name;
+    h.type = hp.type == "pin" ? HandleType::Pin : hp.type == "move" ? HandleType::Move
+                                                                     : HandleType::Force;
+    const int ci = nearest(hp.at[0], m.nu), cj = nearest(hp.at[1], m.nv);
+    const int r = static_cast<int>(hp.patch);
+    for (int j = std::max(0, cj - r); j <= std::min(m.nv - 1, cj + r); ++j)
+      for (int i = std::max(0, ci - r); i <= std::min(m.nu - 1, ci + r); ++i)
+        h.particles.push_back(m.index(i, j));
+    h.force_per_particle = to_vec(hp.force) / static_cast<double>(h.particles.size());
+    h.velocity = to_vec(hp.velocity);
+    h.max_height = hp.max_height;
+    h.start = hp.start;
+    for (int k : h.particles) {
+      h.anchor.push_back(m.rest_position[k]);
+      if (h.type != HandleType::Force) m.driven[k] = 1;
+    }
+    m.handles.push_back(std::move(h));
+  }
+  set_humidity(m, p.cloth.humidity);
+  return m;
+}
+
+void set_humidity(Model& m, double omega) {
+  m.params.cloth.humidity = omega;
+  const double rho = particle_areal_mass(m.params);
+  m.mass.resize(m.n);
+  m.inv_mass.resize(m.n);
+  for (int k = 0; k < m.n; ++k) {
+    m.mass[k] = rho * m.area[k];
+    m.inv_mass[k] = m.driven[k] ? 0.0 : 1.0 / m.mass[k];
+  }
+}
+
+}  // namespace wetcloth

@@ -1,0 +1,467 @@
+// Scene files: one table of parameter definitions, used to load, check, print and
+// document every key.
+#include "wetcloth/scene.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <sstream>
+#define TOML_HEADER_ONLY 1
+#include <toml++/toml.h>
+#include <type_traits>
+
+namespace wetcloth {
+
+namespace {
+
+constexpr double kNoLimit = 1e300;
+
+template <class F>
+ParamDef field(std::string key, std::string unit, double lo, double hi, std::string meaning, F acc,
+               std::vector<std::string> choices = {}) {
+  using T = std::remove_cvref_t<decltype(acc(std::declval<Params&>()))>;
+  ParamDef d;
+  d.key = std::move(key);
+  d.unit = std::move(unit);
+  d.meaning = std::move(meaning);
+  d.min = lo;
+  d.max = hi;
+  d.choices = std::move(choices);
+  Params defaults;
+  d.default_value = acc(defaults);
+  d.get = [acc](const Params& p, const std::string&) {
+    return ParamValue(acc(const_cast<Params&>(p)));
+  };
+  d.set = [acc](Params& p, const std::string&, const ParamValue& v) { acc(p) = std::get<T>(v); };
+  return d;
+}
+
+template <class F>
+ParamDef handle_field(std::string key, std::string unit, double lo, double hi, std::string meaning,
+                      F acc, std::vector<std::string> choices = {}) {
+  using T = std::remove_cvref_t<decltype(acc(std::declval<HandleParams&>()))>;
+  ParamDef d;
+  d.key = "handle.*." + key;
+  d.unit = std::move(unit);
+  d.meaning = std::move(meaning);
+  d.min = lo;
+  d.max = hi;
+  d.choices = std::move(choices);
+  HandleParams defaults;
+  d.default_value = acc(defaults);
+  d.get = [acc](const Params& p, const std::string& h) {
+    return ParamValue(acc(const_cast<HandleParams&>(p.handles.at(h))));
+  };
+  d.set = [acc](Params& p, const std::string& h, const ParamValue& v) {
+    acc(p.handles[h]) = std::get<T>(v);
+  };
+  return d;
+}
+
+#define P(path) [](Params & p) -> auto& { return p.path; }
+#define H(path) [](HandleParams & h) -> auto& { return h.path; }
+
+std::vector<ParamDef> make_defs() {
+  const double inf = kNoLimit;
+  return {
+      field("name", "", 1, 0, "scene name (default output folder out/NAME)", P(name)),
+      field("description", "", 1, 0, "one line about the scene", P(description)),
+      field("cloth.resolution", "particles", 2, 2001, "grid nu × nv", P(cloth.resolution)),
+      field("cloth.size", "m", 1e-4, 100, "width (u) and height (v) of the cloth", P(cloth.size)),
+      field("cloth.center", "m", -inf, inf, "centre of the cloth at t = 0", P(cloth.center)),
+      field("cloth.orientation", "", 1, 0, "horizontal: in the xy plane; vertical: in the xz plane, v down",
+            P(cloth.orientation), {"horizontal", "vertical"}),
+      field("cloth.humidity", "1", 0, 1, "water saturation by weight ω = (w − w0)/(w100 − w0)",
+            P(cloth.humidity)),
+      field("cloth.areal_density", "kg/m²", 1e-6, 100, "dry areal density ρ_A", P(cloth.areal_density)),
+      field("cloth.water_ratio", "1", 0, 100, "water held at ω = 1, per unit dry mass (r_w)",
+            P(cloth.water_ratio)),
+      field("springs.structural_k", "N/m", 0, 1e7, "structural stiffness", P(springs.structural_k)),
+      field("springs.structural_damping", "N·s/m", 0, 1e3, "structural damping (eq. 1)",
+            P(springs.structural_damping)),
+      field("springs.shear_k", "N/m", 0, 1e7, "shear stiffness", P(springs.shear_k)),
+      field("springs.shear_damping", "N·s/m", 0, 1e3, "shear damping", P(springs.shear_damping)),
+      field("springs.bending_k", "N/m", 0, 1e7, "bending stiffness", P(springs.bending_k)),
+      field("springs.bending_damping", "N·s/m", 0, 1e3, "bending damping", P(springs.bending_damping)),
+      field("forces.gravity", "m/s²", -1e3, 1e3, "gravitational acceleration", P(forces.gravity)),
+      field("forces.viscous_damping", "N·s/m³", 0, 1e4, "viscous damping −c A_i v_i, per unit area",
+            P(forces.viscous_damping)),
+      field("wind.velocity", "m/s", -1e3, 1e3, "wind velocity", P(wind.velocity)),
+      field("wind.k", "N·s/m³", 0, 1e4, "normal drag per unit area k_w (acts in still air too)",
+            P(wind.k)),
+      field("wind.region_min", "1", 0, 1, "(u, v) corner of the region the wind blows on",
+            P(wind.region_min)),
+      field("wind.region_max", "1", 0, 1, "opposite (u, v) corner of that region", P(wind.region_max)),
+      field("strain_limit.enabled", "", 0, 0, "shorten over-stretched springs (Provot)",
+            P(strain_limit.enabled)),
+      field("strain_limit.tau", "1", 0, 10, "allowed stretch τ_c", P(strain_limit.tau)),
+      field("strain_limit.passes", "", 0, 100, "passes over the springs per step",
+            P(strain_limit.passes)),
+      field("table.enabled", "", 0, 0, "the table: the plane z = table.height", P(table.enabled)),
+      field("table.height", "m", -inf, inf, "height of the table", P(table.height)),
+      field("ball.enabled", "", 0, 0, "a fixed ball", P(ball.enabled)),
+      field("ball.center", "m", -inf, inf, "centre of the ball", P(ball.center)),
+      field("ball.radius", "m", 1e-4, 100, "radius of the ball", P(ball.radius)),
+      field("contact.surface", "", 1, 0, "the surface the cloth sticks to and traps air against",
+            P(contact.surface), {"table", "ball", "none"}),
+      field("contact.bridge_height", "m", 0, 1, "liquid-bridge threshold h_th: closer is in contact",
+            P(contact.bridge_height)),
+      field("adhesion.enabled", "", 0, 0, "liquid-bridge adhesion (eq. 13)", P(adhesion.enabled)),
+      field("adhesion.surface_tension", "N/m", 0, 1, "surface tension γ of the liquid",
+            P(adhesion.surface_tension)),
+      field("adhesion.theta_a_deg", "°", 0, 90, "contact angle θa of the liquid on the cloth",
+            P(adhesion.theta_a_deg)),
+      field("adhesion.theta_b_deg", "°", 0, 90, "contact angle θb on the surface (glass 14)",
+            P(adhesion.theta_b_deg)),
+      field("adhesion.film_height", "m", 1e-7, 1, "liquid-bridge height h", P(adhesion.film_height)),
+      field("friction.mu", "1", 0, 10, "Coulomb friction coefficient μ", P(friction.mu)),
+      field("friction.normal", "", 1, 0,
+            "normal force for friction: contact (adhesion + load) or adhesion (the paper's)",
+            P(friction.normal), {"contact", "adhesion"}),
+      field("air.model", "", 1, 0, "trapped air: exchange (paper), sealed (Yamada), vented, off",
+            P(air.model), {"exchange", "sealed", "vented", "off"}),
+      field("air.p_atm", "Pa", 1, 1e7, "atmospheric pressure", P(air.p_atm)),
+      field("air.d_delta", "m/(s·Pa)", 0, 1, "dry permeability D_δ (eq. 5)", P(air.d_delta)),
+      field("air.k_delta", "m/(s·Pa)", 0, 1, "permeability lost per unit humidity K_δ (eq. 5)",
+            P(air.k_delta)),
+      field("air.breakthrough_pressure", "Pa", 0, 1e7,
+            "deficit at which air breaks through the wet pores P_b", P(air.breakthrough_pressure)),
+      field("air.band", "m", 0, 10, "ball: air counted within this distance of it", P(air.band)),
+      field("air.force_direction", "", 1, 0,
+            "direction of the pressure force (eq. 3): surface normal (conservative) or cloth normal",
+            P(air.force_direction), {"surface", "cloth"}),
+      field("air.paper_update_rule", "", 0, 0, "update the air only when its volume grew (paper)",
+            P(air.paper_update_rule)),
+      field("air.paper_threshold", "m³", 0, 1, "growth per step that triggers that update",
+            P(air.paper_threshold)),
+      field("self_collision.enabled", "", 0, 0, "repulsion between non-neighbouring particles (eq. 15)",
+            P(self_collision.enabled)),
+      field("self_collision.distance", "m", 1e-6, 1, "repulsion distance d_t", P(self_collision.distance)),
+      field("self_collision.k", "N/m", 0, 1e7, "repulsion stiffness k_t", P(self_collision.k)),
+      field("self_collision.damping", "N·s/m", 0, 1e3, "damping k_f of colliding particles",
+            P(self_collision.damping)),
+      field("integrator.type", "", 1, 0, "time integrator", P(integrator.type),
+            {"explicit-euler", "symplectic-euler"}),
+      field("integrator.dt", "s", 1e-9, 1, "time step", P(integrator.dt)),
+      field("integrator.max_speed", "m/s", 1e-3, 1e6, "speed taken as a blow-up", P(integrator.max_speed)),
+      field("run.duration", "s", 0, 1e6, "simulated time", P(run.duration)),
+      field("run.fps", "1/s", 1e-3, 1e5, "output frames per simulated second", P(run.fps)),
+      field("run.meshes", "", 0, 0, "write frames/frame_NNNNN.obj", P(run.meshes)),
+      handle_field("type", "", 1, 0, "force: constant force; move: driven at a velocity; pin: held",
+                   H(type), {"force", "move", "pin"}),
+      handle_field("at", "1", 0, 1, "(u, v) of the handle's centre on the cloth", H(at)),
+      handle_field("patch", "grid steps", 0, 1000, "half-width of the handle's patch", H(patch)),
+      handle_field("force", "N", -1e6, 1e6, "force: total force on the patch", H(force)),
+      handle_field("velocity", "m/s", -1e3, 1e3, "move: velocity of the patch", H(velocity)),
+      handle_field("max_height", "m", 0, 1e3, "force: stop pulling up above this height (0: never)",
+                   H(max_height)),
+      handle_field("start", "s", 0, 1e6, "time the handle starts acting", H(start)),
+  };
+}
+
+#undef P
+#undef H
+
+// Where a node came from: "file:line" for scene files, the --set text for overrides.
+std::string where(const toml::node& n) {
+  const auto& src = n.source();
+  const std::string path = src.path ? *src.path : std::string("<scene>");
+  if (path.rfind("--set", 0) == 0) return path;
+  return path + ":" + std::to_string(src.begin.line);
+}
+
+[[noreturn]] void fail(const toml::node& n, const std::string& key, const std::string& msg) {
+  throw SceneError(where(n) + ": " + key + ": " + msg);
+}
+
+std::string shortest(double v) {
+  char buf[64];
+  auto r = std::to_chars(buf, buf + sizeof buf, v);
+  std::string s(buf, r.ptr);
+  if (s.find_first_of(".eEn") == std::string::npos) s += ".0";  // keep it a TOML float
+  return s;
+}
+
+double number(const toml::node& n, const ParamDef& d, const std::string& key) {
+  double v;
+  if (auto i = n.as_integer())
+    v = static_cast<double>(i->get());
+  else if (auto f = n.as_floating_point())
+    v = f->get();
+  else
+    fail(n, key, "expected a number");
+  if (d.min <= d.max && (v < d.min || v > d.max) )
+    fail(n, key, "value " + shortest(v) + " is out of range " + d.range_text());
+  if (!std::isfinite(v)) fail(n, key, "value is not finite");
+  return v;
+}
+
+template <std::size_t N, class T>
+std::array<T, N> array_of(const toml::node& n, const ParamDef& d, const std::string& key) {
+  const auto* a = n.as_array();
+  if (!a || a->size() != N)
+    fail(n, key, "expected an array of " + std::to_string(N) + " numbers");
+  std::array<T, N> out{};
+  for (std::size_t i = 0; i < N; ++i) {
+    const toml::node& e = *a->get(i);
+    if constexpr (std::is_integral_v<T>) {
+      if (!e.is_integer()) fail(n, key, "expected an array of " + std::to_string(N) + " integers");
+    }
+    out[i] = static_cast<T>(number(e, d, key));
+  }
+  return out;
+}
+
+ParamValue convert(const toml::node& n, const ParamDef& d, const std::string& key) {
+  return std::visit(
+      [&](const auto& def) -> ParamValue {
+        using T = std::decay_t<decltype(def)>;
+        if constexpr (std::is_same_v<T, bool>) {
+          if (!n.is_boolean()) fail(n, key, "expected true or false");
+          return n.as_boolean()->get();
+        } else if constexpr (std::is_same_v<T, long long>) {
+          if (!n.is_integer()) fail(n, key, "expected an integer");
+          return static_cast<long long>(number(n, d, key));
+        } else if constexpr (std::is_same_v<T, double>) {
+          return number(n, d, key);
+        } else if constexpr (std::is_same_v<T, std::string>) {
+          if (!n.is_string()) fail(n, key, "expected a string");
+          std::string s = n.as_string()->get();
+          if (!d.choices.empty() &&
+              std::find(d.choices.begin(), d.choices.end(), s) == d.choices.end())
+            fail(n, key, "'" + s + "' is not one of " + d.range_text());
+          return s;
+        } else if constexpr (std::is_same_v<T, Vec2i>) {
+          return array_of<2, long long>(n, d, key);
+        } else if constexpr (std::is_same_v<T, Vec2d>) {
+          return array_of<2, double>(n, d, key);
+        } else {
+          return array_of<3, double>(n, d, key);
+        }
+      },
+      d.default_value);
+}
+
+const ParamDef* find_def(const std::string& key) {
+  for (const auto& d : param_defs())
+    if (d.key == key) return &d;
+  return nullptr;
+}
+
+void apply_table(const toml::table& t, const std::string& prefix, Params& p) {
+  for (const auto& [k, node] : t) {
+    const std::string key = prefix.empty() ? std::string(k.str()) : prefix + "." + std::string(k.str());
+    if (prefix.empty() && k.str() == "handle") {
+      const auto* handles = node.as_table();
+      if (!handles) fail(node, key, "expected a table of handles, [handle.NAME]");
+      for (const auto& [name, h] : *handles) {
+        const std::string hkey = "handle." + std::string(name.str());
+        const auto* ht = h.as_table();
+        if (!ht) fail(h, hkey, "expected a table");
+        p.handles[std::string(name.str())];  // a handle with every key at its default
+        for (const auto& [hk, hv] : *ht) {
+          const std::string full = hkey + "." + std::string(hk.str());
+          const ParamDef* d = find_def("handle.*." + std::string(hk.str()));
+          if (!d) fail(hv, full, "unknown key (wetcloth params lists the keys)");
+          d->set(p, std::string(name.str()), convert(hv, *d, full));
+        }
+      }
+      continue;
+    }
+    if (const auto* sub = node.as_table()) {
+      if (!find_def(key)) {
+        apply_table(*sub, key, p);
+        continue;
+      }
+    }
+    const ParamDef* d = find_def(key);
+    if (!d) fail(node, key, "unknown key (wetcloth params lists the keys)");
+    d->set(p, "", convert(node, *d, key));
+  }
+}
+
+toml::table parse_override(const std::string& text) {
+  const auto eq = text.find('=');
+  if (eq == std::string::npos || eq == 0)
+    throw SceneError("--set '" + text + "': expected KEY=VALUE, e.g. cloth.humidity=0.5");
+  const std::string key = text.substr(0, eq), value = text.substr(eq + 1);
+  const std::string source = "--set '" + text + "'";
+  try {
+    return toml::parse(key + " = " + value, source);
+  } catch (const toml::parse_error&) {
+    // Let bare words stand for strings: --set air.model=sealed
+    try {
+      return toml::parse(key + " = \"" + value + "\"", source);
+    } catch (const toml::parse_error& e) {
+      throw SceneError(source + ": " + key + ": " + std::string(e.description()));
+    }
+  }
+}
+
+void check_consistency(const Params& p, const std::string& source) {
+  auto bad = [&](const std::string& key, const std::string& msg) {
+    throw SceneError(source + ": " + key + ": " + msg);
+  };
+  if (p.contact.surface == "ball" && !p.ball.enabled)
+    bad("contact.surface", "is 'ball' but ball.enabled is false");
+  if (p.contact.surface == "table" && !p.table.enabled)
+    bad("contact.surface", "is 'table' but table.enabled is false");
+  for (int i = 0; i < 2; ++i)
+    if (p.wind.region_min[i] > p.wind.region_max[i])
+      bad("wind.region_min", "must not exceed wind.region_max");
+}
+
+std::string read_file(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw SceneError(path + ": cannot read the file");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+}  // namespace
+
+std::string ParamDef::type_name() const {
+  return std::visit(
+      [](const auto& v) -> std::string {
+        using T = std::decay_t<decltype(v)>;
+        if constexpr (std::is_same_v<T, bool>) return "bool";
+        if constexpr (std::is_same_v<T, long long>) return "integer";
+        if constexpr (std::is_same_v<T, double>) return "number";
+        if constexpr (std::is_same_v<T, std::string>) return "string";
+        if constexpr (std::is_same_v<T, Vec2i>) return "[int, int]";
+        if constexpr (std::is_same_v<T, Vec2d>) return "[num, num]";
+        return "[x, y, z]";
+      },
+      default_value);
+}
+
+std::string ParamDef::range_text() const {
+  if (!choices.empty()) {
+    std::string s;
+    for (const auto& c : choices) s += (s.empty() ? "" : " | ") + c;
+    return s;
+  }
+  if (min > max) return "";
+  auto num = [](double v) {
+    if (v >= kNoLimit) return std::string("∞");
+    if (v <= -kNoLimit) return std::string("−∞");
+    char buf[32];
+    auto r = std::to_chars(buf, buf + sizeof buf, v);
+    return std::string(buf, r.ptr);
+  };
+  if (std::holds_alternative<bool>(default_value)) return "";
+  return "[" + num(min) + ", " + num(max) + "]";
+}
+
+const std::vector<BuiltinScene>& builtin_scene_texts();  // builtin_scenes.cpp, generated
+
+const std::vector<BuiltinScene>& builtin_scenes() {
+  static const std::vector<BuiltinScene> scenes = [] {
+    std::vector<BuiltinScene> v = builtin_scene_texts();
+    for (auto& s : v) {
+      try {
+        s.description = toml::parse(s.text)["description"].value_or(std::string());
+      } catch (const toml::parse_error&) {
+      }
+    }
+    return v;
+  }();
+  return scenes;
+}
+
+const std::vector<ParamDef>& param_defs() {
+  static const std::vector<ParamDef> defs = make_defs();
+  return defs;
+}
+
+std::string format_value(const ParamValue& v) {
+  return std::visit(
+      [](const auto& x) -> std::string {
+        using T = std::decay_t<decltype(x)>;
+        if constexpr (std::is_same_v<T, bool>) return x ? "true" : "false";
+        if constexpr (std::is_same_v<T, long long>) return std::to_string(x);
+        if constexpr (std::is_same_v<T, double>) return shortest(x);
+        if constexpr (std::is_same_v<T, std::string>) {
+          std::string s = "\"";
+          for (char c : x) {
+            if (c == '"' || c == '\\') s += '\\';
+            s += c;
+          }
+          return s + "\"";
+        }
+        if constexpr (std::is_same_v<T, Vec2i>)
+          return "[" + std::to_string(x[0]) + ", " + std::to_string(x[1]) + "]";
+        if constexpr (std::is_same_v<T, Vec2d>) return "[" + shortest(x[0]) + ", " + shortest(x[1]) + "]";
+        if constexpr (std::is_same_v<T, Vec3d>)
+          return "[" + shortest(x[0]) + ", " + shortest(x[1]) + ", " + shortest(x[2]) + "]";
+      },
+      v);
+}
+
+Params parse_scene(const std::string& text, const std::string& source,
+                   const std::vector<std::string>& overrides) {
+  toml::table root;
+  try {
+    root = toml::parse(text, source);
+  } catch (const toml::parse_error& e) {
+    throw SceneError(source + ":" + std::to_string(e.source().begin.line) + ": " +
+                     std::string(e.description()));
+  }
+  Params p;
+  apply_table(root, "", p);
+  // Overrides are applied on top, each keeping its own source for messages.
+  for (const auto& o : overrides) apply_table(parse_override(o), "", p);
+  check_consistency(p, source);
+  return p;
+}
+
+Params load_scene(const std::string& scene, const std::vector<std::string>& overrides) {
+  std::ifstream probe(scene);
+  if (probe.good()) return parse_scene(read_file(scene), scene, overrides);
+  for (const auto& b : builtin_scenes())
+    if (b.name == scene) return parse_scene(b.text, "scenes/" + b.name + ".toml", overrides);
+  if (scene.find('/') != std::string::npos || scene.find(".toml") != std::string::npos)
+    throw SceneError(scene + ": no such file");
+  std::string names;
+  for (const auto& b : builtin_scenes()) names += (names.empty() ? "" : ", ") + b.name;
+  throw SceneError(scene + ": not a file and not a built-in scene (built-in: " + names + ")");
+}
+
+std::string to_toml(const Params& p) {
+  std::ostringstream o;
+  std::string section;
+  for (const auto& d : param_defs()) {
+    if (d.key.rfind("handle.", 0) == 0) continue;
+    const auto dot = d.key.rfind('.');
+    const std::string sec = dot == std::string::npos ? "" : d.key.substr(0, dot);
+    const std::string leaf = dot == std::string::npos ? d.key : d.key.substr(dot + 1);
+    if (sec != section) {
+      o << "\n[" << sec << "]\n";
+      section = sec;
+    }
+    o << leaf << " = " << format_value(d.get(p, "")) << "\n";
+  }
+  for (const auto& [name, h] : p.handles) {
+    o << "\n[handle." << name << "]\n";
+    for (const auto& d : param_defs()) {
+      if (d.key.rfind("handle.*.", 0) != 0) continue;
+      o << d.key.substr(9) << " = " << format_value(d.get(p, name)) << "\n";
+    }
+  }
+  return o.str();
+}
+
+std::string params_markdown() {
+  std::ostringstream o;
+  o << "| key | unit | default | range | meaning |\n|---|---|---|---|---|\n";
+  for (const auto& d : param_defs()) {
+    std::string def = format_value(d.default_value);
+    o << "| `" << d.key << "` | " << d.unit << " | `" << def << "` | " << d.range_text() << " | "
+      << d.meaning << " |\n";
+  }
+  return o.str();
+}
+
+}  // namespace wetcloth

@@ -1,0 +1,279 @@
+// The step of MODEL.md section 8, stage by stage, and the measurements of section 10.
+#include "wetcloth/simulation.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <sstream>
+
+#include "detail.hpp"
+
+namespace wetcloth {
+
+using namespace detail;
+
+void compute_normals(const Model& m, const std::vector<Vec3>& x, std::vector<Vec3>& normal) {
+  std::fill(normal.begin(), normal.end(), Vec3::Zero());
+  for (const auto& t : m.triangles) {
+    const Vec3 n = (x[t[1]] - x[t[0]]).cross(x[t[2]] - x[t[0]]);  // area-weighted
+    normal[t[0]] += n;
+    normal[t[1]] += n;
+    normal[t[2]] += n;
+  }
+  for (auto& n : normal) {
+    const double len = n.norm();
+    n = len > 0 ? Vec3(n / len) : Vec3::UnitZ();
+  }
+}
+
+Simulation::Simulation(const Params& p) : model_(build_model(p)) { reset(); }
+
+void Simulation::reset() {
+  const int n = model_.n;
+  state_ = State{};
+  state_.x = model_.rest_position;
+  state_.v.assign(n, Vec3::Zero());
+  state_.contact.assign(n, 0);
+  state_.air_share.assign(n, 0.0);
+  state_.pocket_pressure.assign(n, model_.params.air.p_atm);
+  state_.source_distance.assign(n, 0);
+  const int grab = ws_.grab_particle;
+  ws_ = Workspace{};
+  ws_.grab_particle = grab;
+  for (auto* a : {&ws_.force, &ws_.normal, &ws_.surface_normal, &ws_.x_before, &ws_.air_direction})
+    a->assign(n, Vec3::Zero());
+  ws_.distance.assign(n, kInf);
+  ws_.adhesion.assign(n, 0.0);
+  ws_.normal_force.assign(n, 0.0);
+  ws_.border.assign(n, 0);
+  ws_.pocket.assign(n, -1);
+  ws_.colliding.assign(n, 0);
+  touched_.assign(n, 0);
+  release();
+  // The trapped air starts as the volume under the cloth at atmospheric pressure.
+  update_contact(model_, state_, ws_);
+  for (int i = 0; i < n; ++i)
+    if (ws_.distance[i] > 0 && !state_.contact[i]) state_.air_share[i] = model_.area[i] * ws_.distance[i];
+  update_air(model_, state_, ws_, 0.0);
+  state_.air_atm_volume = state_.air_volume;
+  state_.inner_pressure = model_.params.air.p_atm;
+  std::fill(state_.pocket_pressure.begin(), state_.pocket_pressure.end(), state_.inner_pressure);
+  state_.peak_deficit = 0;
+  update_strain_order(model_, state_, ws_);
+  compute_normals(model_, state_.x, ws_.normal);
+}
+
+void Simulation::set_humidity(double omega) { wetcloth::set_humidity(model_, omega); }
+
+void Simulation::set_params(const Params& p) {
+  const bool same_grid = p.cloth.resolution == model_.params.cloth.resolution;
+  model_ = build_model(p);
+  if (!same_grid) reset();
+}
+
+void Simulation::grab(int particle, const Vec3& target, double stiffness) {
+  ws_.grab_particle = particle;
+  ws_.grab_target = target;
+  ws_.grab_k = stiffness;
+}
+
+void Simulation::release() { ws_.grab_particle = -1; }
+
+void Simulation::step() {
+  const Model& m = model_;
+  State& s = state_;
+  Workspace& w = ws_;
+  const double dt = m.params.integrator.dt;
+
+  // 1. Forces, in a fixed order (the order of a float sum is part of the result).
+  compute_normals(m, s.x, w.normal);
+  std::fill(w.force.begin(), w.force.end(), Vec3::Zero());
+  add_spring_forces(m.structural, s.x, s.v, w.force);
+  add_spring_forces(m.shear, s.x, s.v, w.force);
+  add_spring_forces(m.bending, s.x, s.v, w.force);
+  add_gravity(m, w.force);
+  add_viscous_damping(m, s, w.force);
+  add_wind(m, s, w, w.force);
+  add_air_pressure(m, s, w);
+  add_adhesion(m, s, w);
+  add_self_collision(m, s, w);
+  add_handle_forces(m, s, w);
+  for (int i = 0; i < m.n; ++i) w.normal_force[i] = w.force[i].dot(w.surface_normal[i]);
+
+  // 2. Integrate.
+  if (m.params.integrator.type == "explicit-euler") {
+    for (int i = 0; i < m.n; ++i) {
+      s.x[i] += dt * s.v[i];
+      s.v[i] += (dt * m.inv_mass[i]) * w.force[i];
+    }
+    correct_air_implicitly(m, s, w, dt);
+  } else {  // symplectic Euler
+    for (int i = 0; i < m.n; ++i) s.v[i] += (dt * m.inv_mass[i]) * w.force[i];
+    correct_air_implicitly(m, s, w, dt);
+    for (int i = 0; i < m.n; ++i) s.x[i] += dt * s.v[i];
+  }
+  s.time = (s.steps + 1) * dt;  // no drift from summing dt
+  apply_handle_constraints(m, s, w);
+
+  // 3. Collide; 4. friction; 5. strain limiting (then no particle may be left
+  // inside a surface); 6. contact state and air.
+  collide(m, s, &touched_);
+  apply_friction(m, s, w, touched_, dt);
+  if (m.params.strain_limit.enabled) {
+    limit_strain(m, s, w, dt);
+    collide(m, s, nullptr);
+  }
+  update_contact(m, s, w);
+  update_air(m, s, w, dt);
+  ++s.steps;
+}
+
+bool Simulation::advance_to(double t) {
+  const double dt = model_.params.integrator.dt;
+  const auto target = static_cast<long long>(std::llround(t / dt));
+  while (state_.steps < target) {
+    step();
+    if (state_.steps % 200 == 0 && !blow_up_reason().empty()) return false;
+  }
+  return blow_up_reason().empty();
+}
+
+std::string Simulation::blow_up_reason() const {
+  const Params& p = model_.params;
+  double vmax = 0;
+  for (int i = 0; i < model_.n; ++i) {
+    const double v2 = state_.v[i].squaredNorm();
+    if (!std::isfinite(v2) || !state_.x[i].allFinite()) {
+      vmax = std::numeric_limits<double>::infinity();
+      break;
+    }
+    vmax = std::max(vmax, v2);
+  }
+  vmax = std::sqrt(vmax);
+  if (vmax <= p.integrator.max_speed) return {};
+  const double m_min = *std::min_element(model_.mass.begin(), model_.mass.end());
+  const double limit = 2.0 / std::sqrt(8.0 * p.springs.structural_k / m_min);
+  std::ostringstream o;
+  o << "the simulation blew up at t = " << state_.time << " s (";
+  if (std::isfinite(vmax))
+    o << "a particle reached " << vmax << " m/s, over integrator.max_speed = " << p.integrator.max_speed;
+  else
+    o << "NaN in the particle state";
+  o << "). Likely cause: integrator.dt = " << p.integrator.dt
+    << " s is too large for the stiffness springs.structural_k = " << p.springs.structural_k
+    << " N/m and the lightest particle (" << m_min << " kg): the explicit limit is about " << limit
+    << " s. Lower integrator.dt, or the stiffness (springs.*_k, self_collision.k).";
+  return o.str();
+}
+
+namespace {
+
+// Largest extent over 8 directions in the table plane: the diagonal of a square
+// footprint, the diameter of a round one.
+double footprint_diameter(const Model& m, const State& s, bool lifted) {
+  double best = 0;
+  for (int d = 0; d < 8; ++d) {
+    const double a = d * std::numbers::pi / 8;
+    const double cx = std::cos(a), cy = std::sin(a);
+    double lo = kInf, hi = -kInf;
+    for (int i = 0; i < m.n; ++i) {
+      if (bool(s.contact[i]) == lifted) continue;
+      const double t = s.x[i].x() * cx + s.x[i].y() * cy;
+      lo = std::min(lo, t);
+      hi = std::max(hi, t);
+    }
+    if (hi > lo) best = std::max(best, hi - lo);
+  }
+  return best;
+}
+
+}  // namespace
+
+Metrics Simulation::metrics() const {
+  const Model& m = model_;
+  const State& s = state_;
+  const Params& p = m.params;
+  Metrics r;
+  r.time_s = s.time;
+  const double base = p.table.enabled ? p.table.height : 0.0;
+  for (const Handle& h : m.handles) {
+    if (h.type == HandleType::Pin) continue;
+    double z = 0;
+    for (int k : h.particles) z += s.x[k].z();
+    r.handle_height_m = z / h.particles.size() - base;
+    const Vec3 dir = h.type == HandleType::Move ? h.velocity : h.force_per_particle;
+    r.handle_force_n = dir.norm() > 0 ? ws_.handle_force.dot(dir.normalized()) : 0.0;
+    break;
+  }
+  double zmax = -kInf, cx = 0, cy = 0, mass = 0;
+  for (int i = 0; i < m.n; ++i) {
+    zmax = std::max(zmax, s.x[i].z());
+    (s.contact[i] ? r.contact_area_m2 : r.lifted_area_m2) += m.area[i];
+    r.kinetic_energy_j += 0.5 * m.mass[i] * s.v[i].squaredNorm();
+    cx += m.mass[i] * s.x[i].x();
+    cy += m.mass[i] * s.x[i].y();
+    mass += m.mass[i];
+  }
+  r.max_height_m = zmax - base;
+  r.centroid_x_m = cx / mass;
+  r.centroid_y_m = cy / mass;
+  if (m.contact_surface == SurfaceKind::None) {
+    r.contact_area_m2 = 0;
+    r.lifted_area_m2 = 0;
+  } else {
+    r.base_diagonal_m = footprint_diameter(m, s, true);
+    r.outer_diagonal_m = footprint_diameter(m, s, false);
+  }
+  r.inner_pressure_pa = s.inner_pressure;
+  r.trapped_air_m3 = s.air_atm_volume;
+  r.air_volume_m3 = s.air_volume;
+  for (std::size_t e = 0; e < m.structural.size(); ++e) {
+    const double len = (s.x[m.structural.b[e]] - s.x[m.structural.a[e]]).norm();
+    r.max_strain = std::max(r.max_strain, len / m.structural.rest[e] - 1.0);
+  }
+  // Wrinkles: mean |dihedral angle| across the shared diagonal and the edges
+  // between lifted triangles.
+  std::vector<Vec3> tn(m.triangles.size());
+  for (std::size_t t = 0; t < m.triangles.size(); ++t) {
+    const auto& tr = m.triangles[t];
+    tn[t] = (s.x[tr[1]] - s.x[tr[0]]).cross(s.x[tr[2]] - s.x[tr[0]]).normalized();
+  }
+  auto lifted = [&](std::size_t t) {
+    const auto& tr = m.triangles[t];
+    return !s.contact[tr[0]] && !s.contact[tr[1]] && !s.contact[tr[2]];
+  };
+  double sum = 0;
+  long count = 0;
+  auto add = [&](std::size_t a, std::size_t b) {
+    if (!lifted(a) || !lifted(b)) return;
+    sum += std::acos(std::clamp(tn[a].dot(tn[b]), -1.0, 1.0));
+    ++count;
+  };
+  const int cells_u = m.nu - 1;
+  for (int j = 0; j + 1 < m.nv; ++j)
+    for (int i = 0; i < cells_u; ++i) {
+      const std::size_t c = 2 * static_cast<std::size_t>(j * cells_u + i);
+      add(c, c + 1);                                     // diagonal
+      if (i + 1 < cells_u) add(c, c + 2 + 1);            // right edge: (a,b,c) | next (a,c,d)
+      if (j + 2 < m.nv) add(c + 1, c + 2 * cells_u);     // top edge: (a,c,d) | above (a,b,c)
+    }
+  r.wrinkle_rad = count ? sum / count : 0.0;
+  if (m.contact_surface == SurfaceKind::None) r.wrinkle_rad = 0;
+  return r;
+}
+
+std::vector<std::string> metrics_columns() {
+  return {"time_s",          "handle_height_m",   "handle_force_n",   "max_height_m",
+          "contact_area_m2", "lifted_area_m2",    "base_diagonal_m",  "outer_diagonal_m",
+          "inner_pressure_pa", "trapped_air_m3",  "air_volume_m3",    "kinetic_energy_j",
+          "max_strain",      "wrinkle_rad",       "centroid_x_m",     "centroid_y_m"};
+}
+
+std::vector<double> metrics_values(const Metrics& r) {
+  return {r.time_s,          r.handle_height_m,   r.handle_force_n,  r.max_height_m,
+          r.contact_area_m2, r.lifted_area_m2,    r.base_diagonal_m, r.outer_diagonal_m,
+          r.inner_pressure_pa, r.trapped_air_m3,  r.air_volume_m3,   r.kinetic_energy_j,
+          r.max_strain,      r.wrinkle_rad,       r.centroid_x_m,    r.centroid_y_m};
+}
+
+}  // namespace wetcloth

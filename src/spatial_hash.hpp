@@ -1,0 +1,79 @@
+// A spatial hash over particles (Teschner et al. 2003), built by counting sort so
+// that the order of pairs, and so the sums, are deterministic.
+#pragma once
+
+#include <cmath>
+#include <cstdint>
+
+#include "wetcloth/simulation.hpp"
+
+namespace wetcloth::detail {
+
+inline std::uint32_t hash_cell(long long ix, long long iy, long long iz, std::uint32_t mask) {
+  const auto h = static_cast<std::uint64_t>(ix * 73856093LL) ^
+                 static_cast<std::uint64_t>(iy * 19349663LL) ^
+                 static_cast<std::uint64_t>(iz * 83492791LL);
+  return static_cast<std::uint32_t>(h) & mask;
+}
+
+// Sorts particles into buckets of cubic cells of side `cell`.
+inline void build_hash(const std::vector<Vec3>& x, double cell, Workspace& w) {
+  const std::size_t n = x.size();
+  std::size_t size = 1;
+  while (size < 2 * n) size <<= 1;
+  const auto mask = static_cast<std::uint32_t>(size - 1);
+  w.cell_start.assign(size + 1, 0);
+  w.cell_entries.resize(n);
+  w.particle_cell.resize(n);
+  w.cell_coord.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    auto& cc = w.cell_coord[i];
+    cc = {std::llround(std::floor(x[i].x() / cell)), std::llround(std::floor(x[i].y() / cell)),
+          std::llround(std::floor(x[i].z() / cell))};
+    const auto c = hash_cell(cc[0], cc[1], cc[2], mask);
+    w.particle_cell[i] = static_cast<int>(c);
+    ++w.cell_start[c + 1];
+  }
+  for (std::size_t c = 0; c < size; ++c) w.cell_start[c + 1] += w.cell_start[c];
+  std::vector<int>& fill = w.queue;  // reuse as a cursor per bucket
+  fill.assign(w.cell_start.begin(), w.cell_start.end() - 1);
+  for (std::size_t i = 0; i < n; ++i) w.cell_entries[fill[w.particle_cell[i]]++] = static_cast<int>(i);
+}
+
+// Calls fn(i, j, d_ij, |d_ij|) once for every pair i < j closer than `radius`
+// that `skip(i, j)` does not exclude. The hash must have been built with
+// cell = 2 radius: the ball of radius r around a particle then meets at most
+// 2 x 2 x 2 cells.
+template <class Skip, class Fn>
+void for_each_close_pair(const std::vector<Vec3>& x, double radius, const Workspace& w,
+                         Skip skip, Fn fn) {
+  const auto mask = static_cast<std::uint32_t>(w.cell_start.size() - 2);
+  const double r2 = radius * radius;
+  for (std::size_t ii = 0; ii < x.size(); ++ii) {
+    const int i = static_cast<int>(ii);
+    const double cell = 2 * radius;
+    const long long cx = std::llround(std::floor((x[i].x() - radius) / cell));
+    const long long cy = std::llround(std::floor((x[i].y() - radius) / cell));
+    const long long cz = std::llround(std::floor((x[i].z() - radius) / cell));
+    for (int dz = 0; dz <= 1; ++dz)
+      for (int dy = 0; dy <= 1; ++dy)
+        for (int dx = 0; dx <= 1; ++dx) {
+          const std::uint32_t c = hash_cell(cx + dx, cy + dy, cz + dz, mask);
+          const long long ox = cx + dx, oy = cy + dy, oz = cz + dz;
+          for (int e = w.cell_start[c]; e < w.cell_start[c + 1]; ++e) {
+            const int j = w.cell_entries[e];
+            if (j <= i) continue;
+            // A bucket may hold other cells too: take j only in the cell visited,
+            // so that no pair is found twice.
+            const auto& cj = w.cell_coord[j];
+            if (cj[0] != ox || cj[1] != oy || cj[2] != oz || skip(i, j)) continue;
+            const Vec3 d = x[i] - x[j];
+            const double len2 = d.squaredNorm();
+            if (len2 >= r2 || len2 == 0) continue;
+            fn(i, j, d, std::sqrt(len2));
+          }
+        }
+  }
+}
+
+}  // namespace wetcloth::detail

@@ -1,0 +1,34 @@
+// Small scenes built in code for the tests.
+#pragma once
+
+#include "wetcloth/scene.hpp"
+#include "wetcloth/simulation.hpp"
+
+namespace wetcloth::test {
+
+// A cloth with no forces at all: each test switches on what it checks.
+inline Params bare(int n = 2) {
+  Params p;
+  p.cloth.resolution = {n, n};
+  p.cloth.size = {0.01 * (n - 1), 0.01 * (n - 1)};
+  p.cloth.center = {0, 0, 1};
+  p.springs = {};
+  p.springs.structural_damping = p.springs.shear_damping = p.springs.bending_damping = 0;
+  p.forces.gravity = {0, 0, 0};
+  p.forces.viscous_damping = 0;
+  p.wind.k = 0;
+  p.strain_limit.enabled = false;
+  p.table.enabled = false;
+  p.contact.surface = "none";
+  p.air.model = "off";
+  p.self_collision.enabled = false;
+  return p;
+}
+
+// A built-in scene at a coarser grid, with the physics unchanged.
+inline Params coarse(const std::string& scene, std::vector<std::string> sets = {}) {
+  sets.insert(sets.begin(), "cloth.resolution=[25,25]");
+  return load_scene(scene, sets);
+}
+
+}  // namespace wetcloth::test

@@ -1,0 +1,74 @@
+#!/usr/bin/env bash
+# The command-line program end to end: outputs, reproducibility, bad input.
+set -u
+W="$1"; SRC="$2"
+T=$(mktemp -d); trap 'rm -rf "$T"' EXIT
+fails=0; passes=0
+ok()   { passes=$((passes+1)); echo "ok: $1"; }
+bad()  { fails=$((fails+1)); echo "FAIL: $1"; }
+
+# expect_bad NAME EXPECTED_TEXT ARGS...: exit code 2, message names EXPECTED_TEXT, nothing written.
+expect_bad() {
+  local name="$1" text="$2"; shift 2
+  local out="$T/bad_$name"
+  "$W" run "$@" --out "$out" --quiet 2>"$T/err" >/dev/null; local code=$?
+  if [ $code -ne 2 ]; then bad "$name: exit code $code, want 2"; return; fi
+  if ! grep -qF -- "$text" "$T/err"; then bad "$name: message lacks '$text': $(cat "$T/err")"; return; fi
+  if [ -e "$out" ]; then bad "$name: wrote $out"; return; fi
+  ok "$name ($(head -1 "$T/err"))"
+}
+
+printf '[cloth]\nhumidity = = 1\n' > "$T/syntax.toml"
+printf '[cloth]\nhumidty = 0.5\n' > "$T/unknown.toml"
+printf '[integrator]\ndt = "small"\n' > "$T/type.toml"
+printf '[cloth]\nareal_density = -0.12\n' > "$T/mass.toml"
+printf '\n[cloth]\nhumidity = 1.5\n' > "$T/humid.toml"
+printf '[cloth]\nresolution = [1, 5]\n' > "$T/res.toml"
+printf '[integrator]\ndt = 0.0\n' > "$T/dt.toml"
+expect_bad syntax     "syntax.toml:2"                   "$T/syntax.toml"
+expect_bad unknown    "unknown.toml:2: cloth.humidty"   "$T/unknown.toml"
+expect_bad type       "type.toml:2: integrator.dt"      "$T/type.toml"
+expect_bad mass       "mass.toml:2: cloth.areal_density" "$T/mass.toml"
+expect_bad humidity   "humid.toml:3: cloth.humidity"    "$T/humid.toml"
+expect_bad resolution "res.toml:2: cloth.resolution"    "$T/res.toml"
+expect_bad dt         "dt.toml:2: integrator.dt"        "$T/dt.toml"
+expect_bad missing    "nowhere.toml: no such file"      "$T/nowhere.toml"
+expect_bad name       "no-such-scene"                   no-such-scene
+expect_bad set        "cloth.humidity"                  hang --humidity 2
+expect_bad setkey     "cloth.colour"                    hang --set cloth.colour=1
+
+# A run writes every output; its scene.toml reproduces it bit for bit.
+args=(--set cloth.resolution=[15,15] --duration 0.1 --quiet)
+"$W" run pull-straight --out "$T/a" "${args[@]}" || bad "run failed"
+for f in metrics.csv scene.toml summary.json obstacles.obj frames/frame_00000.obj frames/frame_00003.obj; do
+  [ -s "$T/a/$f" ] && ok "wrote $f" || bad "missing $f"
+done
+head -1 "$T/a/metrics.csv" | grep -q "time_s,handle_height_m" && ok "metrics header" || bad "metrics header"
+[ "$(wc -l < "$T/a/metrics.csv")" -eq 5 ] && ok "one row per frame" || bad "rows: $(wc -l < "$T/a/metrics.csv")"
+ls "$T/a" "$T/a/frames" | grep -q '\.tmp$' && bad "temporary files left" || ok "no temporary files"
+"$W" run pull-straight --out "$T/b" "${args[@]}"
+cmp -s "$T/a/metrics.csv" "$T/b/metrics.csv" && ok "identical metrics.csv twice" || bad "metrics differ between runs"
+"$W" run "$T/a/scene.toml" --out "$T/c" --quiet
+cmp -s "$T/a/metrics.csv" "$T/c/metrics.csv" && ok "scene.toml reproduces the run" || bad "scene.toml does not reproduce"
+grep -q '"realtime_factor"' "$T/a/summary.json" && grep -q '"final"' "$T/a/summary.json" && ok "summary.json" || bad "summary.json"
+
+# A blow-up: exit 3, a message naming the time step, the outputs so far intact.
+"$W" run hang --out "$T/boom" --set integrator.dt=2e-3 --duration 1 --quiet 2>"$T/err"; code=$?
+[ $code -eq 3 ] && ok "blow-up exits 3" || bad "blow-up exit code $code"
+grep -q "integrator.dt" "$T/err" && ok "blow-up message names integrator.dt" || bad "blow-up message: $(cat "$T/err")"
+[ -s "$T/boom/metrics.csv" ] && [ -s "$T/boom/summary.json" ] && ok "outputs kept" || bad "blow-up outputs missing"
+
+# The other commands.
+"$W" scenes | grep -q "^pull-straight" && ok "scenes" || bad "scenes"
+"$W" check drop-ball --humidity 0.3 | grep -q "humidity = 0.3" && ok "check" || bad "check"
+"$W" run --help | grep -q -- "--humidity" && ok "run --help" || bad "run --help"
+# The README's parameter table is the one `wetcloth params --markdown` prints.
+"$W" params --markdown > "$T/params.md"
+if awk '/<!-- params:begin -->/{f=1;next}/<!-- params:end -->/{f=0}f' "$SRC/README.md" | cmp -s - "$T/params.md"; then
+  ok "README parameter table is current"
+else
+  bad "README parameter table differs from 'wetcloth params --markdown' (run: make readme-params)"
+fi
+
+echo "$passes passed, $fails failed"
+[ $fails -eq 0 ]

@@ -1,0 +1,111 @@
+#include <gtest/gtest.h>
+
+#include "wetcloth/scene.hpp"
+
+using namespace wetcloth;
+
+namespace {
+std::string error_of(const std::string& text, std::vector<std::string> sets = {}) {
+  try {
+    parse_scene(text, "bad.toml", sets);
+  } catch (const SceneError& e) {
+    return e.what();
+  }
+  return "";
+}
+}  // namespace
+
+TEST(SceneLoader, ReadsValuesAndKeepsDefaults) {
+  const Params p = parse_scene("[cloth]\nhumidity = 0.3\nresolution = [11, 21]\n", "s.toml");
+  EXPECT_EQ(p.cloth.humidity, 0.3);
+  EXPECT_EQ(p.cloth.resolution[1], 21);
+  EXPECT_EQ(p.springs.structural_k, 200);  // MODEL.md default
+}
+
+TEST(SceneLoader, IntegersAreAcceptedForNumbers) {
+  EXPECT_EQ(parse_scene("[cloth]\nhumidity = 1\n", "s.toml").cloth.humidity, 1.0);
+}
+
+TEST(SceneLoader, SyntaxErrorNamesFileAndLine) {
+  EXPECT_NE(error_of("[cloth]\nhumidity = = 2\n").find("bad.toml:2"), std::string::npos);
+}
+
+TEST(SceneLoader, UnknownKeyNamesFileLineAndKey) {
+  const auto e = error_of("[cloth]\n\nhumidty = 0.5\n");
+  EXPECT_NE(e.find("bad.toml:3"), std::string::npos) << e;
+  EXPECT_NE(e.find("cloth.humidty"), std::string::npos) << e;
+}
+
+TEST(SceneLoader, WrongTypeNamesTheKey) {
+  const auto e = error_of("[integrator]\ndt = \"fast\"\n");
+  EXPECT_NE(e.find("bad.toml:2: integrator.dt"), std::string::npos) << e;
+}
+
+TEST(SceneLoader, OutOfRangeValuesAreRejected) {
+  for (const char* text : {"[cloth]\nhumidity = 1.5\n", "[cloth]\nareal_density = -0.1\n",
+                           "[cloth]\nresolution = [1, 10]\n", "[integrator]\ndt = 0.0\n",
+                           "[integrator]\ndt = -1e-5\n"}) {
+    const auto e = error_of(text);
+    EXPECT_NE(e.find("bad.toml:2"), std::string::npos) << text << " -> " << e;
+    EXPECT_NE(e.find("out of range"), std::string::npos) << text << " -> " << e;
+  }
+}
+
+TEST(SceneLoader, ChoicesAreChecked) {
+  const auto e = error_of("[air]\nmodel = \"leaky\"\n");
+  EXPECT_NE(e.find("air.model"), std::string::npos) << e;
+  EXPECT_NE(e.find("exchange"), std::string::npos) << e;
+}
+
+TEST(SceneLoader, HandleKeysAreChecked) {
+  const Params p = parse_scene("[handle.pull]\nforce = [0, 0, 2]\npatch = 1\n", "s.toml");
+  EXPECT_EQ(p.handles.at("pull").force[2], 2.0);
+  EXPECT_EQ(p.handles.at("pull").type, "force");
+  const auto e = error_of("[handle.pull]\nforse = [0, 0, 2]\n");
+  EXPECT_NE(e.find("handle.pull.forse"), std::string::npos) << e;
+}
+
+TEST(SceneLoader, OverridesUseDottedKeysAndNameThemselves) {
+  const Params p = parse_scene("", "s.toml", {"cloth.resolution=[5,7]", "air.model=sealed"});
+  EXPECT_EQ(p.cloth.resolution[1], 7);
+  EXPECT_EQ(p.air.model, "sealed");
+  const auto e = error_of("", {"cloth.humidity=2"});
+  EXPECT_NE(e.find("--set 'cloth.humidity=2'"), std::string::npos) << e;
+  EXPECT_NE(error_of("", {"nonsense"}).find("KEY=VALUE"), std::string::npos);
+}
+
+TEST(SceneLoader, ResolvedTomlReadsBackToTheSameParameters) {
+  Params p = load_scene("pull-straight", {"cloth.humidity=0.1234567890123", "wind.velocity=[1e-7, 2, 3]"});
+  const Params q = parse_scene(to_toml(p), "resolved.toml");
+  EXPECT_EQ(to_toml(p), to_toml(q));
+  EXPECT_EQ(q.cloth.humidity, 0.1234567890123);
+  EXPECT_EQ(q.handles.size(), p.handles.size());
+}
+
+TEST(SceneLoader, UnknownSceneAndMissingFile) {
+  try {
+    load_scene("no-such-scene");
+    FAIL();
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("built-in"), std::string::npos);
+  }
+  EXPECT_THROW(load_scene("/nonexistent/scene.toml"), SceneError);
+}
+
+TEST(SceneLoader, EveryBuiltinSceneLoads) {
+  ASSERT_GE(builtin_scenes().size(), 4u);
+  for (const auto& s : builtin_scenes()) {
+    EXPECT_NO_THROW(load_scene(s.name)) << s.name;
+    EXPECT_FALSE(s.description.empty()) << s.name;
+  }
+}
+
+TEST(SceneLoader, EveryParameterIsDocumented) {
+  for (const auto& d : param_defs()) {
+    EXPECT_FALSE(d.meaning.empty()) << d.key;
+    // Every number has a unit ("1" when dimensionless).
+    if (std::holds_alternative<double>(d.default_value)) {
+      EXPECT_FALSE(d.unit.empty()) << d.key;
+    }
+  }
+}

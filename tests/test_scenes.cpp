@@ -1,0 +1,59 @@
+// Built-in scenes, run at a coarser grid with the physics unchanged.
+#include <gtest/gtest.h>
+
+#include "common.hpp"
+#include "detail.hpp"
+#include "wetcloth/output.hpp"
+
+using namespace wetcloth;
+
+TEST(Scenes, HangSettles) {
+  Simulation sim(test::coarse("hang"));
+  ASSERT_TRUE(sim.advance_to(6.0)) << sim.blow_up_reason();
+  EXPECT_LT(sim.metrics().kinetic_energy_j, 1e-6);
+  EXPECT_GT(sim.metrics().kinetic_energy_j, 0);
+}
+
+// No particle ends a step inside a surface, at any step.
+void expect_never_inside(const Params& p, double duration) {
+  Simulation sim(p);
+  const long long steps = std::llround(duration / p.integrator.dt);
+  double worst = 0;
+  bool touched = false;
+  for (long long k = 0; k < steps; ++k) {
+    sim.step();
+    for (const Vec3& x : sim.state().x) {
+      if (p.table.enabled) worst = std::min(worst, detail::query_surface(p, SurfaceKind::Table, x).distance);
+      if (p.ball.enabled) worst = std::min(worst, detail::query_surface(p, SurfaceKind::Ball, x).distance);
+    }
+    touched = touched || sim.metrics().contact_area_m2 > 0;
+  }
+  EXPECT_TRUE(touched) << "the cloth never reached the surface";
+  EXPECT_GE(worst, -1e-12);
+  EXPECT_TRUE(sim.blow_up_reason().empty()) << sim.blow_up_reason();
+}
+
+TEST(Scenes, DropTableNeverPenetrates) { expect_never_inside(test::coarse("drop-table"), 1.0); }
+
+TEST(Scenes, DropBallNeverPenetrates) { expect_never_inside(test::coarse("drop-ball"), 1.0); }
+
+TEST(Scenes, DropTableComesToRest) {
+  Simulation sim(test::coarse("drop-table"));
+  ASSERT_TRUE(sim.advance_to(2.0)) << sim.blow_up_reason();
+  const Metrics m = sim.metrics();
+  EXPECT_LT(m.kinetic_energy_j, 1e-6);
+  EXPECT_GT(m.contact_area_m2, 0.95 * 0.09);
+}
+
+TEST(Scenes, SameSceneGivesIdenticalMetrics) {
+  auto run = [] {
+    Simulation sim(test::coarse("pull-straight", {"run.duration=0.3"}));
+    MetricsTable t;
+    for (int f = 0; f <= 6; ++f) {
+      sim.advance_to(f * 0.05);
+      t.add(sim.metrics());
+    }
+    return t.csv();
+  };
+  EXPECT_EQ(run(), run());
+}

@@ -1,0 +1,68 @@
+#include <gtest/gtest.h>
+
+#include "common.hpp"
+#include "detail.hpp"
+
+using namespace wetcloth;
+
+TEST(Springs, ForceMatchesEquation1) {
+  SpringSet s;
+  s.a = {0};
+  s.b = {1};
+  s.rest = {0.01};
+  s.k = 200;
+  s.damping = 0.01;
+  std::vector<Vec3> x = {Vec3(0, 0, 0), Vec3(0.012, 0.016, 0)};  // |d| = 0.02
+  std::vector<Vec3> v = {Vec3(0, 0, 0), Vec3(0.3, 0.4, 1.0)};     // (v_b - v_a)·u = 0.5
+  std::vector<Vec3> f(2, Vec3::Zero());
+  detail::add_spring_forces(s, x, v, f);
+  const Vec3 u(0.6, 0.8, 0);
+  const Vec3 expected = u * (200 * (0.02 - 0.01) + 0.01 * 0.5);
+  EXPECT_NEAR((f[0] - expected).norm(), 0, 1e-12);
+  EXPECT_NEAR((f[1] + expected).norm(), 0, 1e-12);
+}
+
+TEST(Springs, CompressedSpringPushesApart) {
+  SpringSet s;
+  s.a = {0};
+  s.b = {1};
+  s.rest = {0.02};
+  s.k = 100;
+  std::vector<Vec3> x = {Vec3(0, 0, 0), Vec3(0, 0, 0.01)};
+  std::vector<Vec3> v(2, Vec3::Zero()), f(2, Vec3::Zero());
+  detail::add_spring_forces(s, x, v, f);
+  EXPECT_NEAR(f[0].z(), -1.0, 1e-12);
+  EXPECT_NEAR(f[1].z(), 1.0, 1e-12);
+}
+
+TEST(Springs, UndampedSpringKeepsEnergyUnderSymplecticEuler) {
+  // 2 x 2 particles of 7.5 g on a 1 m square: ω Δt ≈ 0.006, where symplectic
+  // Euler's energy error (of order ω Δt) is well under 1 %.
+  Params p = test::bare(2);
+  p.cloth.size = {1.0, 1.0};
+  p.springs.structural_k = 200;
+  p.springs.shear_k = 0;
+  p.springs.bending_k = 0;
+  Simulation sim(p);
+  sim.state().x[3] += Vec3(0.05, -0.02, 0.03);  // stretch, then let go
+  auto energy = [&] {
+    const Model& m = sim.model();
+    const State& s = sim.state();
+    double e = 0;
+    for (int i = 0; i < m.n; ++i) e += 0.5 * m.mass[i] * s.v[i].squaredNorm();
+    for (std::size_t k = 0; k < m.structural.size(); ++k) {
+      const double ext = (s.x[m.structural.b[k]] - s.x[m.structural.a[k]]).norm() - m.structural.rest[k];
+      e += 0.5 * m.structural.k * ext * ext;
+    }
+    return e;
+  };
+  const double e0 = energy();
+  ASSERT_GT(e0, 0);
+  double worst = 0;
+  for (int step = 0; step < 100000; ++step) {
+    sim.step();
+    if (step % 100 == 0) worst = std::max(worst, std::abs(energy() / e0 - 1));
+  }
+  worst = std::max(worst, std::abs(energy() / e0 - 1));
+  EXPECT_LT(worst, 0.01);
+}

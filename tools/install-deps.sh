@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# Installs the Debian packages wetcloth needs, only those that are missing.
+set -euo pipefail
+pkgs=(
+  cmake g++ make pkg-config
+  libeigen3-dev libtomlplusplus-dev libcli11-dev nlohmann-json3-dev libstb-dev
+  libgtest-dev libgmock-dev libbenchmark-dev
+  python3 python3-matplotlib
+  libglfw3-dev libimgui-dev libepoxy-dev libegl-dev libgl1-mesa-dri xvfb xauth ffmpeg
+)
+missing=()
+for p in "${pkgs[@]}"; do
+  dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
+done
+[ ${#missing[@]} -eq 0 ] && exit 0
+echo "installing: ${missing[*]}"
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then
+  command -v sudo >/dev/null || { echo "error: need root (or sudo) to install: ${missing[*]}" >&2; exit 1; }
+  SUDO=sudo
+fi
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get update -qq
+$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"

@@ -1,0 +1,36 @@
+// The cloth as the viewer shows it: positions, normals and a colour per particle,
+// either the fabric's own or a field of the simulation mapped through a colour scale.
+#pragma once
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include "draw.hpp"
+#include "wetcloth/simulation.hpp"
+
+namespace wetcloth::viewer {
+
+enum class ColorBy { Fabric, Contact, Pressure, Strain, Adhesion };
+inline constexpr std::array<const char*, 5> kColorByNames{"none", "contact", "pressure", "strain",
+                                                          "adhesion"};
+
+// The legend of the current colouring.
+struct Legend {
+  std::string title;       // what is shown, with its unit
+  float lo = 0, hi = 1;    // values at the two ends of the scale
+  bool diverging = false;  // blue - white - red around zero
+  bool binary = false;     // contact: two colours
+};
+
+// sRGB colour of t in [0, 1] on the sequential (viridis) or diverging scale.
+Vec3f colormap(float t, bool diverging);
+// The two colours of the contact colouring.
+inline const Vec3f kContactColor{0.95f, 0.55f, 0.15f}, kFreeColor{0.55f, 0.60f, 0.68f};
+
+// Builds the mesh of the simulation's cloth, coloured by mode. scale is the
+// range of the automatic scales (pressure, adhesion): it grows at once and
+// shrinks slowly, so that colours do not flicker; keep it between calls.
+Legend cloth_mesh(const Simulation& sim, ColorBy mode, float& scale, ClothMesh& mesh);
+
+}  // namespace wetcloth::viewer

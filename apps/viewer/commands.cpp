@@ -1,0 +1,129 @@
+// `wetcloth view` and `wetcloth render`: options, scene loading, exit codes.
+#include "commands.hpp"
+
+#include <CLI/CLI.hpp>
+#include <cstdio>
+#include <memory>
+
+#include "cli/scene_options.hpp"
+#include "programs.hpp"
+
+namespace wetcloth::viewer {
+
+namespace {
+
+// "1280x720" -> width, height; false if it is not that.
+bool parse_size(const std::string& s, int& w, int& h) {
+  char x = 0, extra = 0;
+  return std::sscanf(s.c_str(), "%d%c%d%c", &w, &x, &h, &extra) == 3 && (x == 'x' || x == 'X') &&
+         w >= 16 && h >= 16 && w <= 8192 && h <= 8192;
+}
+
+const CLI::Validator kSize(
+    [](std::string& s) {
+      int w = 0, h = 0;
+      return parse_size(s, w, h) ? std::string() : "expected WxH, e.g. 1280x720 (16 to 8192 each)";
+    },
+    "WxH");
+
+ColorBy color_by(const std::string& name) {
+  for (std::size_t i = 0; i < kColorByNames.size(); ++i)
+    if (name == kColorByNames[i]) return static_cast<ColorBy>(i);
+  return ColorBy::Fabric;
+}
+
+struct Commands {
+  CLI::App *view = nullptr, *render = nullptr;
+  cli::SceneOptions view_scene, render_scene;
+  std::string view_size = "1280x720", render_size = "1280x720";
+  std::string view_color = "none", render_color = "none";
+  std::pair<double, std::string> shot;
+  std::string out;
+  double fps = 0;
+  bool video = false, quiet = false;
+
+  int run_view() {
+    ViewOptions o;
+    if (view_scene.scene.empty()) view_scene.scene = "pull-straight";
+    o.scene = view_scene.scene;
+    o.params = view_scene.load();
+    o.overrides = view_scene.overrides();
+    parse_size(view_size, o.width, o.height);
+    o.color = color_by(view_color);
+    if (view->count("--screenshot-after")) {
+      if (!(shot.first >= 0) || shot.second.empty())
+        throw SceneError("--screenshot-after: expected SECONDS >= 0 and a FILE name");
+      o.screenshot_after = shot.first;
+      o.screenshot_file = shot.second;
+    }
+    return run_viewer(o);
+  }
+
+  int run_render() {
+    RenderOptions o;
+    o.params = render_scene.load();
+    o.out = out;
+    parse_size(render_size, o.width, o.height);
+    o.fps = fps;
+    o.video = video;
+    o.quiet = quiet;
+    o.color = color_by(render_color);
+    return render_frames(o);
+  }
+};
+
+}  // namespace
+
+std::function<std::optional<int>()> add_commands(CLI::App& app) {
+  auto c = std::make_shared<Commands>();
+  const std::vector<std::string> colors(kColorByNames.begin(), kColorByNames.end());
+
+  c->view = app.add_subcommand("view", "open a window and run a scene live (GLFW, OpenGL 3.3)");
+  c->view_scene.add_to(c->view, /*scene_required=*/false);
+  c->view->add_option("--size", c->view_size, "window size")->check(kSize)->capture_default_str();
+  c->view->add_option("--color", c->view_color, "colour the cloth by")
+      ->check(CLI::IsMember(colors))
+      ->capture_default_str();
+  c->view
+      ->add_option("--screenshot-after", c->shot,
+                   "run to SECONDS of simulated time, save the window (panel included) as the PNG "
+                   "FILE and exit")
+      ->type_name("SECONDS FILE");
+  c->view->footer(
+      "SCENE defaults to pull-straight. The simulation runs live, as close to real time as the\n"
+      "machine allows (the panel shows the real-time factor); --duration is not a limit here.\n"
+      "Mouse: left-drag the cloth to pull it, left- or right-drag elsewhere to orbit, middle-drag\n"
+      "to pan, wheel to zoom. Keys: W/A/S/D move, F frame the scene, Space pause, N single\n"
+      "step, R reset, O wireframe, P screenshot (PNG in the current folder), Esc quit.");
+
+  c->render = app.add_subcommand("render", "render a scene offscreen to PNG frames (and an MP4)");
+  c->render_scene.add_to(c->render);
+  c->render->add_option("--out", c->out, "output folder")->required();
+  c->render->add_option("--size", c->render_size, "image size")
+      ->check(kSize)
+      ->capture_default_str();
+  c->render
+      ->add_option("--fps", c->fps, "frames per simulated second (default: the scene's run.fps)")
+      ->check(CLI::PositiveNumber);
+  c->render->add_flag("--video", c->video, "also make DIR/video.mp4 with ffmpeg");
+  c->render->add_option("--color", c->render_color, "colour the cloth by")
+      ->check(CLI::IsMember(colors))
+      ->capture_default_str();
+  c->render->add_flag("--quiet", c->quiet, "no progress, no summary");
+  c->render->footer(
+      "Writes DIR/frame_00000.png ... one per output frame (EGL, no display needed), and with\n"
+      "--video DIR/video.mp4. Exit codes: 0 ok, 1 error (no OpenGL, ffmpeg), 2 bad input\n"
+      "(nothing written), 3 the simulation blew up (frames so far kept).");
+
+  return [c]() -> std::optional<int> {
+    if (!*c->view && !*c->render) return std::nullopt;
+    try {
+      return *c->view ? c->run_view() : c->run_render();
+    } catch (const SceneError& e) {
+      std::fprintf(stderr, "wetcloth: error: %s\n", e.what());
+      return 2;
+    }
+  };
+}
+
+}  // namespace wetcloth::viewer

@@ -1,0 +1,761 @@
+#include "draw.hpp"
+
+#include <epoxy/gl.h>
+
+#include <Eigen/Geometry>
+#include <Eigen/LU>
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <stdexcept>
+#include <string>
+
+namespace wetcloth::viewer {
+
+namespace {
+
+constexpr float kDeg = std::numbers::pi_v<float> / 180;
+// Unit vector towards the key light: high, from the camera's left, so the tent's
+// two flanks get different light and its shadow falls beside it.
+const Vec3f kLight = Vec3f(-0.55f, -0.25f, 0.8f).normalized();
+
+Mat4f look_at(const Vec3f& eye, const Vec3f& target, const Vec3f& up) {
+  const Vec3f f = (target - eye).normalized();
+  const Vec3f s = f.cross(up).normalized();
+  const Vec3f u = s.cross(f);
+  Mat4f m;
+  m << s.x(), s.y(), s.z(), -s.dot(eye),   //
+      u.x(), u.y(), u.z(), -u.dot(eye),    //
+      -f.x(), -f.y(), -f.z(), f.dot(eye),  //
+      0, 0, 0, 1;
+  return m;
+}
+
+Mat4f perspective(float fovy, float aspect, float near, float far) {
+  const float f = 1.0f / std::tan(fovy / 2);
+  Mat4f m = Mat4f::Zero();
+  m(0, 0) = f / aspect;
+  m(1, 1) = f;
+  m(2, 2) = (far + near) / (near - far);
+  m(2, 3) = 2 * far * near / (near - far);
+  m(3, 2) = -1;
+  return m;
+}
+
+Mat4f ortho(float half, float near, float far) {
+  Mat4f m = Mat4f::Identity();
+  m(0, 0) = m(1, 1) = 1 / half;
+  m(2, 2) = -2 / (far - near);
+  m(2, 3) = -(far + near) / (far - near);
+  return m;
+}
+
+Mat4f translate_scale(const Vec3f& t, const Vec3f& s) {
+  Mat4f m = Mat4f::Identity();
+  m.diagonal().head<3>() = s;
+  m.block<3, 1>(0, 3) = t;
+  return m;
+}
+
+// --- shaders -------------------------------------------------------------------
+
+// The sky, shared by the background and the ground's fog (sRGB, neutral grey so
+// that the blue cloth stands out).
+const char* kSky = R"(
+vec3 sky(vec3 d) {
+  vec3 horizon = vec3(0.52, 0.53, 0.55), zenith = vec3(0.24, 0.25, 0.28), below = vec3(0.33, 0.33, 0.34);
+  return d.z > 0.0 ? mix(horizon, zenith, sqrt(clamp(d.z, 0.0, 1.0)))
+                   : mix(horizon, below, clamp(-d.z * 4.0, 0.0, 1.0));
+}
+)";
+
+const char* kSkyVert = R"(#version 330 core
+out vec2 v_ndc;
+void main() {  // one triangle covering the screen, no vertex buffer, on the far plane
+  vec2 p = vec2((gl_VertexID << 1) & 2, gl_VertexID & 2) * 2.0 - 1.0;
+  v_ndc = p;
+  gl_Position = vec4(p, 1.0, 1.0);
+}
+)";
+
+const char* kSkyFrag = R"(
+in vec2 v_ndc;
+uniform mat4 u_inv_view_proj;
+out vec4 frag;
+void main() {
+  vec4 a = u_inv_view_proj * vec4(v_ndc, -1.0, 1.0), b = u_inv_view_proj * vec4(v_ndc, 1.0, 1.0);
+  frag = vec4(sky(normalize(b.xyz / b.w - a.xyz / a.w)), 1.0);
+}
+)";
+
+const char* kLitVert = R"(#version 330 core
+layout(location = 0) in vec3 a_pos;
+layout(location = 1) in vec3 a_normal;
+layout(location = 2) in vec3 a_color;
+uniform mat4 u_model;  // unit sphere or unit quad to world; identity for the cloth
+uniform mat4 u_view_proj;
+out vec3 v_pos;
+out vec3 v_normal;
+out vec3 v_color;
+void main() {
+  vec4 p = u_model * vec4(a_pos, 1.0);
+  v_pos = p.xyz;
+  v_normal = mat3(u_model) * a_normal;
+  v_color = a_color;
+  gl_Position = u_view_proj * p;
+}
+)";
+
+// One source, specialised by MATERIAL (0 plain, 1 fabric, 2 ground) and SHADOWS:
+// a software rasteriser runs both sides of every branch, so variants are compiled
+// instead of branching on uniforms.
+const char* kLitFrag = R"(
+in vec3 v_pos;
+in vec3 v_normal;
+in vec3 v_color;
+uniform vec3 u_eye;
+uniform vec3 u_light;  // unit vector towards the light
+out vec4 frag;
+
+#if SHADOWS
+uniform mat4 u_light_view_proj;
+uniform sampler2DShadow u_shadow_map;
+uniform float u_softness;       // shadow blur radius, shadow-map uv units
+uniform float u_normal_offset;  // m
+uniform float u_depth_bias;     // shadow-map depth units
+uniform float u_slope_bias;     // blur radius in depth units: a tilted receiver's depth spread
+const vec2 kDisk[12] = vec2[](
+  vec2(-0.326, -0.406), vec2(-0.840, -0.074), vec2(-0.696, 0.457), vec2(-0.203, 0.621),
+  vec2(0.962, -0.195), vec2(0.473, -0.480), vec2(0.519, 0.767), vec2(0.185, -0.893),
+  vec2(0.507, 0.064), vec2(0.896, 0.412), vec2(-0.322, -0.933), vec2(-0.792, -0.598));
+
+// Share of the key light that reaches p: percentage-closer filtering over a disk,
+// each tap itself bilinear, for soft edges. Outside the map: lit.
+float lit_fraction(vec3 p, vec3 n_towards_light) {
+  vec4 l = u_light_view_proj * vec4(p + n_towards_light * u_normal_offset, 1.0);
+  vec3 c = l.xyz / l.w * 0.5 + 0.5;
+  // Over the blur disk a receiver tilted by theta from the light spans r tan(theta)
+  // in depth: without that much bias it would shadow itself in stripes.
+  float cos_t = clamp(dot(n_towards_light, u_light), 0.2, 1.0);
+  float bias = u_depth_bias + u_slope_bias * sqrt(1.0 - cos_t * cos_t) / cos_t;
+  float s = 0.0;
+  for (int i = 0; i < 12; ++i)
+    s += texture(u_shadow_map, vec3(c.xy + kDisk[i] * u_softness, c.z - bias));
+  bool inside = all(greaterThanEqual(c, vec3(0.0))) && all(lessThanEqual(c, vec3(1.0)));
+  return inside ? s / 12.0 : 1.0;
+}
+#endif
+
+#if MATERIAL == 1
+uniform float u_wetness;
+#elif MATERIAL == 2
+uniform vec4 u_table;  // table centre xy, half-width, 1 if there is a table
+uniform vec2 u_fog;    // fog start and end distance, m
+// Anti-aliased grid lines every `cell` metres, faded where they get denser than pixels.
+float grid(vec2 p, float cell) {
+  vec2 q = p / cell, w = fwidth(q);
+  vec2 d = abs(fract(q - 0.5) - 0.5) / max(w, vec2(1e-6));
+  return (1.0 - min(min(d.x, d.y), 1.0)) * clamp(1.5 - 4.0 * max(w.x, w.y), 0.0, 1.0);
+}
+#endif
+
+void main() {
+  vec3 n = normalize(v_normal);
+  bool back = !gl_FrontFacing;
+  if (back) n = -n;  // two-sided lighting: light the side we see
+  vec3 v = normalize(u_eye - v_pos);
+  vec3 albedo = v_color * v_color;  // sRGB to linear, gamma 2: cheap on a software rasteriser
+  float ks = 0.04, shininess = 24.0;
+#if MATERIAL == 1
+  if (back) albedo *= 0.72;                 // the underside, a shade darker
+  albedo *= mix(1.0, 0.55, u_wetness);      // water darkens fabric...
+  ks = mix(0.03, 0.20, u_wetness);          // ...and makes it glossy
+  shininess = mix(10.0, 60.0, u_wetness);
+#elif MATERIAL == 2
+  bool on_table = u_table.w > 0.5 && all(lessThan(abs(v_pos.xy - u_table.xy), vec2(u_table.z)));
+  vec3 base = on_table ? vec3(0.66, 0.61, 0.54) : vec3(0.42, 0.42, 0.43);
+  base *= 1.0 - max(0.22 * grid(v_pos.xy, 0.05), 0.45 * grid(v_pos.xy, 0.5));
+  albedo = base * base;
+  ks = 0.02;
+#endif
+  float ndl = max(dot(n, u_light), 0.0);
+#if SHADOWS
+  float sh = lit_fraction(v_pos, dot(n, u_light) >= 0.0 ? n : -n);
+#else
+  float sh = 1.0;
+#endif
+  // Hemisphere ambient: cool sky above, warm bounce from the table below.
+  vec3 ambient = mix(vec3(0.20, 0.19, 0.17), vec3(0.40, 0.42, 0.46), 0.5 + 0.5 * n.z);
+  vec3 h = normalize(u_light + v);
+  float spec = ks * pow(max(dot(n, h), 0.0), shininess) * (shininess + 8.0) / 8.0;
+  vec3 c = albedo * (ambient + 1.1 * ndl * sh * vec3(1.0, 0.97, 0.92)) + vec3(spec * ndl * sh);
+  c = c / (1.0 + 0.25 * c);  // gentle tone mapping: highlights roll off instead of clipping
+  c = sqrt(c * 1.25);
+#if MATERIAL == 2  // the ground fades into the sky with distance
+  c = mix(c, sky(-v), smoothstep(u_fog.x, u_fog.y, length(v_pos - u_eye)));
+#endif
+  frag = vec4(c, 1.0);
+}
+)";
+
+const char* kDepthVert = R"(#version 330 core
+layout(location = 0) in vec3 a_pos;
+uniform mat4 u_model;
+uniform mat4 u_view_proj;
+void main() { gl_Position = u_view_proj * u_model * vec4(a_pos, 1.0); }
+)";
+
+const char* kDepthFrag = R"(#version 330 core
+void main() {}
+)";
+
+const char* kFlatFrag = R"(#version 330 core
+uniform vec4 u_color;
+out vec4 frag;
+void main() { frag = u_color; }
+)";
+
+GLuint compile(GLenum type, const std::string& src) {
+  const GLuint s = glCreateShader(type);
+  const char* p = src.c_str();
+  glShaderSource(s, 1, &p, nullptr);
+  glCompileShader(s);
+  GLint ok = 0;
+  glGetShaderiv(s, GL_COMPILE_STATUS, &ok);
+  if (!ok) {
+    char log[4096];
+    glGetShaderInfoLog(s, sizeof log, nullptr, log);
+    glDeleteShader(s);
+    throw std::runtime_error(std::string("shader does not compile: ") + log);
+  }
+  return s;
+}
+
+GLuint program(const std::string& vert, const std::string& frag) {
+  const GLuint v = compile(GL_VERTEX_SHADER, vert), f = compile(GL_FRAGMENT_SHADER, frag);
+  const GLuint p = glCreateProgram();
+  glAttachShader(p, v);
+  glAttachShader(p, f);
+  glLinkProgram(p);
+  glDeleteShader(v);
+  glDeleteShader(f);
+  GLint ok = 0;
+  glGetProgramiv(p, GL_LINK_STATUS, &ok);
+  if (!ok) {
+    char log[4096];
+    glGetProgramInfoLog(p, sizeof log, nullptr, log);
+    glDeleteProgram(p);
+    throw std::runtime_error(std::string("shaders do not link: ") + log);
+  }
+  return p;
+}
+
+GLint loc(GLuint prog, const char* name) { return glGetUniformLocation(prog, name); }
+void set(GLuint prog, const char* name, const Mat4f& m) {
+  glUniformMatrix4fv(loc(prog, name), 1, GL_FALSE, m.data());
+}
+void set(GLuint prog, const char* name, const Vec3f& v) {
+  glUniform3fv(loc(prog, name), 1, v.data());
+}
+void set(GLuint prog, const char* name, float x) { glUniform1f(loc(prog, name), x); }
+void set(GLuint prog, const char* name, int x) { glUniform1i(loc(prog, name), x); }
+
+// A mesh with interleaved position, normal, colour (9 floats per vertex).
+struct Mesh {
+  GLuint vao = 0, vbo = 0, ebo = 0;
+  GLsizei count = 0;  // indices
+
+  void create() {
+    glGenVertexArrays(1, &vao);
+    glGenBuffers(1, &vbo);
+    glGenBuffers(1, &ebo);
+    glBindVertexArray(vao);
+    glBindBuffer(GL_ARRAY_BUFFER, vbo);
+    glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ebo);
+    for (GLuint a = 0; a < 3; ++a) {
+      glEnableVertexAttribArray(a);
+      glVertexAttribPointer(
+          a, 3, GL_FLOAT, GL_FALSE, 9 * sizeof(float),
+          reinterpret_cast<void*>(static_cast<std::uintptr_t>(a * 3 * sizeof(float))));
+    }
+    glBindVertexArray(0);
+  }
+  void destroy() {
+    glDeleteVertexArrays(1, &vao);
+    glDeleteBuffers(1, &vbo);
+    glDeleteBuffers(1, &ebo);
+  }
+  void upload(const std::vector<float>& vertices, const std::vector<unsigned>& indices,
+              GLenum usage) {
+    glBindVertexArray(vao);
+    glBindBuffer(GL_ARRAY_BUFFER, vbo);
+    glBufferData(GL_ARRAY_BUFFER, static_cast<GLsizeiptr>(vertices.size() * sizeof(float)),
+                 vertices.data(), usage);
+    if (!indices.empty()) {
+      glBufferData(GL_ELEMENT_ARRAY_BUFFER,
+                   static_cast<GLsizeiptr>(indices.size() * sizeof(unsigned)), indices.data(),
+                   usage);
+      count = static_cast<GLsizei>(indices.size());
+    }
+    glBindVertexArray(0);
+  }
+  void draw() const {
+    glBindVertexArray(vao);
+    glDrawElements(GL_TRIANGLES, count, GL_UNSIGNED_INT, nullptr);
+  }
+};
+
+void push(std::vector<float>& v, const Vec3f& p, const Vec3f& n, const Vec3f& c) {
+  v.insert(v.end(), {p.x(), p.y(), p.z(), n.x(), n.y(), n.z(), c.x(), c.y(), c.z()});
+}
+
+constexpr int kShadowSize = 1024;
+
+}  // namespace
+
+// --- camera ------------------------------------------------------------------------
+
+Vec3f Camera::eye() const {
+  const float y = yaw_deg * kDeg, p = pitch_deg * kDeg;
+  return target +
+         distance * Vec3f(std::cos(p) * std::cos(y), std::cos(p) * std::sin(y), std::sin(p));
+}
+
+Mat4f Camera::view() const { return look_at(eye(), target, Vec3f::UnitZ()); }
+
+Mat4f Camera::projection(float aspect) const {
+  Mat4f m = perspective(fov_deg * kDeg, aspect, distance * 0.02f, distance * 20 + 20);
+  m(0, 2) = -shift_x;  // x_ndc += shift_x
+  return m;
+}
+
+void Camera::ray(double px, double py, int w, int h, Vec3f& origin, Vec3f& dir) const {
+  const Mat4f inv = (projection(static_cast<float>(w) / h) * view()).inverse();
+  const float x = static_cast<float>(2 * px / w - 1), y = static_cast<float>(1 - 2 * py / h);
+  const Eigen::Vector4f a = inv * Eigen::Vector4f(x, y, -1, 1),
+                        b = inv * Eigen::Vector4f(x, y, 1, 1);
+  origin = a.head<3>() / a.w();
+  dir = (b.head<3>() / b.w() - origin).normalized();
+}
+
+void Camera::move(float forward, float right) {
+  const float y = yaw_deg * kDeg;
+  const Vec3f f(-std::cos(y), -std::sin(y), 0);  // horizontal, towards the target
+  target += forward * f + right * f.cross(Vec3f::UnitZ());
+}
+
+Camera frame_box(const Vec3f& lo, const Vec3f& hi, float aspect) {
+  Camera c;
+  c.target = (lo + hi) / 2;
+  // The nearest distance from which every corner of the box is in the picture,
+  // with a small border.
+  const float ty = 0.92f * std::tan(c.fov_deg * kDeg / 2), tx = ty * aspect;
+  c.distance = 1;
+  const Mat4f v = c.view();
+  const Vec3f right = v.block<1, 3>(0, 0).transpose(), up = v.block<1, 3>(1, 0).transpose(),
+              back = v.block<1, 3>(2, 0).transpose();
+  float d = 0.05f;
+  for (int k = 0; k < 8; ++k) {
+    const Vec3f q(k & 1 ? hi.x() : lo.x(), k & 2 ? hi.y() : lo.y(), k & 4 ? hi.z() : lo.z());
+    const Vec3f r = q - c.target;
+    d = std::max(
+        {d, r.dot(back) + std::abs(r.dot(right)) / tx, r.dot(back) + std::abs(r.dot(up)) / ty});
+  }
+  c.distance = d;
+  return c;
+}
+
+Camera frame_scene(const Params& p, float aspect) {
+  const Vec3f center =
+      Eigen::Vector3d(p.cloth.center[0], p.cloth.center[1], p.cloth.center[2]).cast<float>();
+  const float su = static_cast<float>(p.cloth.size[0]), sv = static_cast<float>(p.cloth.size[1]);
+  Vec3f half =
+      p.cloth.orientation == "vertical" ? Vec3f(su / 2, 0.02f, sv / 2) : Vec3f(su / 2, sv / 2, 0);
+  Vec3f lo = center - half, hi = center + half;
+  // Room above a flat cloth for the tent a pulling handle raises.
+  const float lift = std::max(su, sv) * 0.4f;
+  if (p.cloth.orientation != "vertical") hi.z() += lift;
+  // The table, when the cloth lies on it or falls onto it soon (not under a hanging flag).
+  const float table = static_cast<float>(p.table.height);
+  if (p.table.enabled && lo.z() - table < std::max(su, sv) * 0.5f) lo.z() = std::min(lo.z(), table);
+  if (p.ball.enabled) {
+    const Vec3f b =
+        Eigen::Vector3d(p.ball.center[0], p.ball.center[1], p.ball.center[2]).cast<float>();
+    const float r = static_cast<float>(p.ball.radius);
+    lo = lo.cwiseMin(b - Vec3f::Constant(r));
+    hi = hi.cwiseMax(b + Vec3f::Constant(r));
+  }
+  return frame_box(lo, hi, aspect);
+}
+
+Stage stage_from(const Params& p) {
+  Stage s;
+  s.table = p.table.enabled;
+  s.table_center = {static_cast<float>(p.cloth.center[0]), static_cast<float>(p.cloth.center[1])};
+  s.table_half = static_cast<float>(std::max(p.cloth.size[0], p.cloth.size[1]) * 2);
+  s.ball = p.ball.enabled;
+  s.ball_center =
+      Eigen::Vector3d(p.ball.center[0], p.ball.center[1], p.ball.center[2]).cast<float>();
+  s.ball_radius = static_cast<float>(p.ball.radius);
+  if (s.table) {
+    s.ground_z = static_cast<float>(p.table.height);
+  } else {  // no table: the grid a little below the lowest thing in the scene
+    float low = static_cast<float>(p.cloth.center[2]);
+    if (p.cloth.orientation == "vertical") low -= static_cast<float>(p.cloth.size[1]);
+    if (s.ball) low = std::min(low, s.ball_center.z() - s.ball_radius);
+    s.ground_z = low - 0.1f;
+  }
+  return s;
+}
+
+// --- renderer -----------------------------------------------------------------------
+
+enum Material { kPlain = 0, kFabric = 1, kGround = 2 };
+
+struct Renderer::Impl {
+  GLuint sky = 0, depth = 0, flat = 0;
+  GLuint lit[3][2] = {};  // [material][shadows], compiled when first used
+  GLuint empty_vao = 0;
+  Mesh cloth, sphere, quad;
+  GLuint line_vao = 0, line_vbo = 0;
+  GLuint shadow_tex = 0, shadow_fbo = 0;
+  std::vector<float> vertices;
+  std::vector<std::array<int, 3>> triangles;  // the cloth's, as last uploaded
+
+  Impl() {
+    const std::string header = "#version 330 core\n";
+    sky = program(kSkyVert, header + kSky + kSkyFrag);
+    depth = program(kDepthVert, kDepthFrag);
+    flat = program(kDepthVert, kFlatFrag);
+    glGenVertexArrays(1, &empty_vao);
+    cloth.create();
+    sphere.create();
+    quad.create();
+
+    // Unit sphere (ball, grab marker).
+    std::vector<float> v;
+    std::vector<unsigned> idx;
+    const int rings = 32, segs = 64;
+    for (int r = 0; r <= rings; ++r)
+      for (int s = 0; s <= segs; ++s) {
+        const float th = std::numbers::pi_v<float> * r / rings,
+                    ph = 2 * std::numbers::pi_v<float> * s / segs;
+        const Vec3f p(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th));
+        push(v, p, p, Vec3f(0.85f, 0.52f, 0.30f));
+      }
+    for (int r = 0; r < rings; ++r)
+      for (int s = 0; s < segs; ++s) {
+        const unsigned a = r * (segs + 1) + s, b = a + 1, c = a + segs + 1, d = c + 1;
+        idx.insert(idx.end(), {a, c, d, a, d, b});  // counter-clockwise seen from outside
+      }
+    sphere.upload(v, idx, GL_STATIC_DRAW);
+
+    // Unit ground quad in z = 0, facing up.
+    v.clear();
+    for (auto [x, y] : {std::pair{-1, -1}, {1, -1}, {1, 1}, {-1, 1}})
+      push(v, Vec3f(x, y, 0), Vec3f::UnitZ(), Vec3f::Ones());
+    quad.upload(v, {0, 1, 2, 0, 2, 3}, GL_STATIC_DRAW);
+
+    glGenVertexArrays(1, &line_vao);
+    glGenBuffers(1, &line_vbo);
+    glBindVertexArray(line_vao);
+    glBindBuffer(GL_ARRAY_BUFFER, line_vbo);
+    glBufferData(GL_ARRAY_BUFFER, 6 * sizeof(float), nullptr, GL_STREAM_DRAW);
+    glEnableVertexAttribArray(0);
+    glVertexAttribPointer(0, 3, GL_FLOAT, GL_FALSE, 3 * sizeof(float), nullptr);
+    glBindVertexArray(0);
+
+    // Shadow map: depth texture compared in hardware (sampler2DShadow), linear
+    // filtering so that each tap is already a 2x2 percentage-closer filter.
+    glGenTextures(1, &shadow_tex);
+    glBindTexture(GL_TEXTURE_2D, shadow_tex);
+    glTexImage2D(GL_TEXTURE_2D, 0, GL_DEPTH_COMPONENT24, kShadowSize, kShadowSize, 0,
+                 GL_DEPTH_COMPONENT, GL_UNSIGNED_INT, nullptr);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_S, GL_CLAMP_TO_EDGE);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_WRAP_T, GL_CLAMP_TO_EDGE);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_MODE, GL_COMPARE_REF_TO_TEXTURE);
+    glTexParameteri(GL_TEXTURE_2D, GL_TEXTURE_COMPARE_FUNC, GL_LEQUAL);
+    glGenFramebuffers(1, &shadow_fbo);
+    glBindFramebuffer(GL_FRAMEBUFFER, shadow_fbo);
+    glFramebufferTexture2D(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_TEXTURE_2D, shadow_tex, 0);
+    glDrawBuffer(GL_NONE);
+    glReadBuffer(GL_NONE);
+    glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  }
+
+  ~Impl() {
+    for (GLuint p : {sky, depth, flat}) glDeleteProgram(p);
+    for (auto& m : lit)
+      for (GLuint p : m)
+        if (p) glDeleteProgram(p);
+    glDeleteVertexArrays(1, &empty_vao);
+    cloth.destroy();
+    sphere.destroy();
+    quad.destroy();
+    glDeleteVertexArrays(1, &line_vao);
+    glDeleteBuffers(1, &line_vbo);
+    glDeleteTextures(1, &shadow_tex);
+    glDeleteFramebuffers(1, &shadow_fbo);
+  }
+
+  GLuint lit_program(Material m, bool shadows) {
+    GLuint& p = lit[m][shadows];
+    if (!p)
+      p = program(kLitVert, "#version 330 core\n#define MATERIAL " + std::to_string(m) +
+                                "\n#define SHADOWS " + std::to_string(shadows ? 1 : 0) + "\n" +
+                                kSky + kLitFrag);
+    return p;
+  }
+
+  void upload_cloth(const ClothMesh& m) {
+    vertices.clear();
+    vertices.reserve(m.position.size() * 9);
+    for (std::size_t i = 0; i < m.position.size(); ++i)
+      push(vertices, m.position[i], i < m.normal.size() ? m.normal[i] : Vec3f::UnitZ(),
+           i < m.color.size() ? m.color[i] : kClothColor);
+    std::vector<unsigned> idx;
+    if (m.triangles != triangles) {  // the grid changed (or first frame)
+      triangles = m.triangles;
+      for (const auto& t : triangles)
+        idx.insert(idx.end(), {unsigned(t[0]), unsigned(t[1]), unsigned(t[2])});
+      if (idx.empty()) cloth.count = 0;
+    }
+    cloth.upload(vertices, idx, GL_STREAM_DRAW);
+  }
+};
+
+Renderer::Renderer() : impl_(std::make_unique<Impl>()) {}
+Renderer::~Renderer() = default;
+
+void Renderer::draw(const ClothMesh& cloth, const Stage& stage, const Camera& cam, int width,
+                    int height, const DrawOptions& opt) {
+  Impl& r = *impl_;
+  r.upload_cloth(cloth);
+  const Mat4f identity = Mat4f::Identity();
+  // The ball drawn a hair smaller than it is: the cloth resting on it may sink into it
+  // by a fraction of a millimetre, which would show as specks of ball through the cloth.
+  const float ball_r = std::max(stage.ball_radius - 0.0015f, stage.ball_radius * 0.98f);
+  const Mat4f ball_model = translate_scale(stage.ball_center, Vec3f::Constant(ball_r));
+
+  // Light frustum: an orthographic box around what casts shadows (cloth, ball).
+  Vec3f lo = Vec3f::Constant(1e30f), hi = Vec3f::Constant(-1e30f);
+  for (const auto& p : cloth.position) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  if (stage.ball) {
+    lo = lo.cwiseMin(stage.ball_center - Vec3f::Constant(stage.ball_radius));
+    hi = hi.cwiseMax(stage.ball_center + Vec3f::Constant(stage.ball_radius));
+  }
+  if (lo.x() > hi.x()) lo = hi = Vec3f::Zero();
+  const Vec3f center = (lo + hi) / 2;
+  const float radius = (hi - lo).norm() / 2 + 0.02f;
+  const float reach = 20;  // receivers far below the casters still get their shadow
+  const Mat4f light_view_proj = ortho(radius, 0.0f, 2 * radius + reach) *
+                                look_at(center + kLight * (radius + 0.01f), center, Vec3f::UnitZ());
+
+  GLint target_fbo = 0;
+  glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &target_fbo);
+  glDisable(GL_BLEND);
+  glDisable(GL_SCISSOR_TEST);
+  glDisable(GL_CULL_FACE);  // the cloth has two sides; the rest is seen from outside only
+  glEnable(GL_DEPTH_TEST);
+  glDepthFunc(GL_LESS);
+  glDepthMask(GL_TRUE);
+  glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
+
+  if (opt.shadows) {
+    glBindFramebuffer(GL_FRAMEBUFFER, r.shadow_fbo);
+    glViewport(0, 0, kShadowSize, kShadowSize);
+    glClear(GL_DEPTH_BUFFER_BIT);
+    glEnable(GL_POLYGON_OFFSET_FILL);
+    glPolygonOffset(1.5f, 2.0f);  // slope-scaled bias against shadow acne
+    glUseProgram(r.depth);
+    set(r.depth, "u_view_proj", light_view_proj);
+    set(r.depth, "u_model", identity);
+    r.cloth.draw();
+    if (stage.ball) {
+      set(r.depth, "u_model", ball_model);
+      r.sphere.draw();
+    }
+    glDisable(GL_POLYGON_OFFSET_FILL);
+  }
+
+  glBindFramebuffer(GL_FRAMEBUFFER, target_fbo);
+  glViewport(0, 0, width, height);
+  glClear(GL_DEPTH_BUFFER_BIT);
+  const Mat4f view_proj =
+      cam.projection(static_cast<float>(width) / std::max(height, 1)) * cam.view();
+  glActiveTexture(GL_TEXTURE0);
+  glBindTexture(GL_TEXTURE_2D, r.shadow_tex);
+  const float texel = 2 * radius / kShadowSize;
+  auto use_lit = [&](Material m, bool shadows) {
+    const GLuint p = r.lit_program(m, shadows && opt.shadows);
+    glUseProgram(p);
+    set(p, "u_view_proj", view_proj);
+    set(p, "u_eye", cam.eye());
+    set(p, "u_light", kLight);
+    if (shadows && opt.shadows) {
+      set(p, "u_light_view_proj", light_view_proj);
+      set(p, "u_shadow_map", 0);
+      const float blur = 0.004f, depth_range = 2 * radius + reach;  // ~4 mm penumbra
+      set(p, "u_softness", blur / (2 * radius));
+      set(p, "u_normal_offset", 1.5f * texel);
+      set(p, "u_depth_bias", 0.0005f / depth_range);
+      set(p, "u_slope_bias", blur / depth_range);
+    }
+    return p;
+  };
+
+  // Opaque things nearest first, so that the expensive ground and sky are shaded
+  // only where they show (early depth test).
+  GLuint p = use_lit(opt.fabric ? kFabric : kPlain, true);
+  if (opt.fabric) set(p, "u_wetness", std::clamp(opt.wetness, 0.0f, 1.0f));
+  set(p, "u_model", identity);
+  if (opt.wireframe) {  // the lines drawn later must win the depth test
+    glEnable(GL_POLYGON_OFFSET_FILL);
+    glPolygonOffset(1.0f, 1.0f);
+  }
+  r.cloth.draw();
+  glDisable(GL_POLYGON_OFFSET_FILL);
+
+  if (stage.ball) {
+    p = use_lit(kPlain, true);
+    set(p, "u_model", ball_model);
+    r.sphere.draw();
+  }
+
+  // The ground in two pieces: a patch where shadows can fall (the casters' box
+  // stretched away from the light), then the rest, lost in the fog at its edges,
+  // without shadow lookups. Both pushed back a little: the cloth lies within a
+  // millimetre of the table.
+  const Eigen::Vector2f shift =
+      -kLight.head<2>() / kLight.z() * std::max(0.0f, hi.z() - stage.ground_z);
+  const Eigen::Vector2f a =
+      lo.head<2>().cwiseMin(lo.head<2>() + shift) - Eigen::Vector2f::Constant(0.02f);
+  const Eigen::Vector2f b =
+      hi.head<2>().cwiseMax(hi.head<2>() + shift) + Eigen::Vector2f::Constant(0.02f);
+  const float extent = 30;
+  glEnable(GL_POLYGON_OFFSET_FILL);
+  for (bool patch : {true, false}) {
+    if (patch && !opt.shadows) continue;
+    p = use_lit(kGround, patch);
+    glUniform4f(loc(p, "u_table"), stage.table_center.x(), stage.table_center.y(), stage.table_half,
+                stage.table ? 1.0f : 0.0f);
+    glUniform2f(loc(p, "u_fog"), cam.distance * 2.0f, std::min(cam.distance * 8.0f, extent * 0.8f));
+    const Vec3f mid = patch ? Vec3f((a.x() + b.x()) / 2, (a.y() + b.y()) / 2, stage.ground_z)
+                            : Vec3f(stage.table_center.x(), stage.table_center.y(), stage.ground_z);
+    const Vec3f half =
+        patch ? Vec3f((b.x() - a.x()) / 2, (b.y() - a.y()) / 2, 1) : Vec3f(extent, extent, 1);
+    set(p, "u_model", translate_scale(mid, half));
+    glPolygonOffset(patch ? 1.0f : 2.0f, patch ? 4.0f : 16.0f);  // the patch wins over the rest
+    r.quad.draw();
+  }
+  glDisable(GL_POLYGON_OFFSET_FILL);
+
+  // The sky where nothing else was drawn: on the far plane, no depth written.
+  glDepthFunc(GL_LEQUAL);
+  glDepthMask(GL_FALSE);
+  glUseProgram(r.sky);
+  set(r.sky, "u_inv_view_proj", Mat4f(view_proj.inverse()));
+  glBindVertexArray(r.empty_vao);
+  glDrawArrays(GL_TRIANGLES, 0, 3);
+  glDepthMask(GL_TRUE);
+  glDepthFunc(GL_LESS);
+
+  const GLuint flat = r.flat;
+  glUseProgram(flat);
+  set(flat, "u_view_proj", view_proj);
+  if (opt.wireframe) {
+    set(flat, "u_model", identity);
+    glUniform4f(loc(flat, "u_color"), 0.05f, 0.07f, 0.12f, 1.0f);
+    glPolygonMode(GL_FRONT_AND_BACK, GL_LINE);
+    r.cloth.draw();
+    glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
+  }
+  if (opt.grab_particle >= 0 && opt.grab_particle < static_cast<int>(cloth.position.size())) {
+    const Vec3f pa = cloth.position[opt.grab_particle], pb = opt.grab_target;
+    const float line[6] = {pa.x(), pa.y(), pa.z(), pb.x(), pb.y(), pb.z()};
+    glBindBuffer(GL_ARRAY_BUFFER, r.line_vbo);
+    glBufferSubData(GL_ARRAY_BUFFER, 0, sizeof line, line);
+    glUniform4f(loc(flat, "u_color"), 1.0f, 0.85f, 0.1f, 1.0f);
+    set(flat, "u_model", identity);
+    glDisable(GL_DEPTH_TEST);  // the pull stays visible through the cloth
+    glBindVertexArray(r.line_vao);
+    glDrawArrays(GL_LINES, 0, 2);
+    set(flat, "u_model", translate_scale(pb, Vec3f::Constant(cam.distance * 0.006f)));
+    r.sphere.draw();
+    glEnable(GL_DEPTH_TEST);
+  }
+  glBindVertexArray(0);
+  glUseProgram(0);
+}
+
+// --- offscreen target ----------------------------------------------------------------
+
+Framebuffer::Framebuffer(int width, int height, int samples) : w_(width), h_(height) {
+  GLint max_samples = 0;
+  glGetIntegerv(GL_MAX_SAMPLES, &max_samples);
+  samples_ = samples = std::clamp(samples, 0, static_cast<int>(max_samples));
+  glGenFramebuffers(1, &msaa_fbo_);
+  glGenRenderbuffers(1, &color_rb_);
+  glGenRenderbuffers(1, &depth_rb_);
+  glBindRenderbuffer(GL_RENDERBUFFER, color_rb_);
+  glRenderbufferStorageMultisample(GL_RENDERBUFFER, samples, GL_RGBA8, w_, h_);
+  glBindRenderbuffer(GL_RENDERBUFFER, depth_rb_);
+  glRenderbufferStorageMultisample(GL_RENDERBUFFER, samples, GL_DEPTH_COMPONENT24, w_, h_);
+  glBindFramebuffer(GL_FRAMEBUFFER, msaa_fbo_);
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, color_rb_);
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_DEPTH_ATTACHMENT, GL_RENDERBUFFER, depth_rb_);
+  const bool ok = glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE;
+
+  glGenFramebuffers(1, &resolve_fbo_);
+  glGenRenderbuffers(1, &resolve_rb_);
+  glBindRenderbuffer(GL_RENDERBUFFER, resolve_rb_);
+  glRenderbufferStorage(GL_RENDERBUFFER, GL_RGBA8, w_, h_);
+  glBindFramebuffer(GL_FRAMEBUFFER, resolve_fbo_);
+  glFramebufferRenderbuffer(GL_FRAMEBUFFER, GL_COLOR_ATTACHMENT0, GL_RENDERBUFFER, resolve_rb_);
+  const bool ok2 = glCheckFramebufferStatus(GL_FRAMEBUFFER) == GL_FRAMEBUFFER_COMPLETE;
+  glBindFramebuffer(GL_FRAMEBUFFER, 0);
+  if (!ok || !ok2)
+    throw std::runtime_error("cannot make a " + std::to_string(w_) + "x" + std::to_string(h_) +
+                             " offscreen framebuffer");
+}
+
+Framebuffer::~Framebuffer() {
+  glDeleteFramebuffers(1, &msaa_fbo_);
+  glDeleteFramebuffers(1, &resolve_fbo_);
+  for (GLuint rb : {color_rb_, depth_rb_, resolve_rb_}) glDeleteRenderbuffers(1, &rb);
+}
+
+void Framebuffer::bind() { glBindFramebuffer(GL_FRAMEBUFFER, msaa_fbo_); }
+
+Image Framebuffer::read() {
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, msaa_fbo_);
+  glBindFramebuffer(GL_DRAW_FRAMEBUFFER, resolve_fbo_);
+  glBlitFramebuffer(0, 0, w_, h_, 0, 0, w_, h_, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, resolve_fbo_);
+  Image img = read_pixels(w_, h_);
+  glBindFramebuffer(GL_FRAMEBUFFER, msaa_fbo_);
+  return img;
+}
+
+void Framebuffer::blit_to(unsigned fbo) {
+  glBindFramebuffer(GL_READ_FRAMEBUFFER, msaa_fbo_);
+  glBindFramebuffer(GL_DRAW_FRAMEBUFFER, fbo);
+  glBlitFramebuffer(0, 0, w_, h_, 0, 0, w_, h_, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+  glBindFramebuffer(GL_FRAMEBUFFER, fbo);
+}
+
+Image read_pixels(int width, int height) {
+  Image img(width, height);
+  std::vector<std::uint8_t> raw(img.rgb.size());
+  glPixelStorei(GL_PACK_ALIGNMENT, 1);
+  glReadPixels(0, 0, width, height, GL_RGB, GL_UNSIGNED_BYTE, raw.data());
+  // GL's rows go bottom up; images top down.
+  const std::size_t row = static_cast<std::size_t>(width) * 3;
+  for (int y = 0; y < height; ++y)
+    std::copy_n(&raw[(height - 1 - y) * row], row, &img.rgb[y * row]);
+  return img;
+}
+
+}  // namespace wetcloth::viewer

@@ -1,0 +1,250 @@
+// `wetcloth render` and the sweep's contact sheet: offscreen (EGL), through the
+// same Renderer as the window viewer.
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <sstream>
+
+#include "commands.hpp"
+#include "draw.hpp"
+#include "egl_context.hpp"
+#include "programs.hpp"
+#include "wetcloth/output.hpp"
+#include "wetcloth/scene.hpp"
+#include "wetcloth/simulation.hpp"
+
+extern char** environ;
+
+namespace wetcloth::viewer {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double ms_since(Clock::time_point t) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
+}
+
+// Runs a program (no shell: arguments are passed as they are); its exit status, or
+// -1 if it could not be started.
+int spawn_and_wait(const std::vector<std::string>& args) {
+  std::vector<char*> argv;
+  for (const auto& a : args) argv.push_back(const_cast<char*>(a.c_str()));
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  if (posix_spawnp(&pid, argv[0], nullptr, nullptr, argv.data(), environ) != 0) return -1;
+  int status = 0;
+  while (waitpid(pid, &status, 0) < 0)
+    if (errno != EINTR) return -1;
+  return WIFEXITED(status) ? WEXITSTATUS(status) : 128;
+}
+
+// A frame of `wetcloth run` (frames/frame_NNNNN.obj): v, vn, f a//a b//b c//c.
+bool read_cloth_obj(const fs::path& path, ClothMesh& mesh) {
+  std::ifstream in(path);
+  if (!in) return false;
+  mesh = ClothMesh{};
+  std::string line;
+  while (std::getline(in, line)) {
+    std::istringstream s(line);
+    std::string tag;
+    s >> tag;
+    if (tag == "v" || tag == "vn") {
+      Vec3f p;
+      s >> p.x() >> p.y() >> p.z();
+      (tag == "v" ? mesh.position : mesh.normal).push_back(p);
+    } else if (tag == "f") {
+      std::array<int, 3> t{};
+      std::string tok;
+      for (int k = 0; k < 3 && s >> tok; ++k) t[k] = std::atoi(tok.c_str()) - 1;  // "a//a": a
+      mesh.triangles.push_back(t);
+    }
+  }
+  const int n = static_cast<int>(mesh.position.size());
+  for (const auto& t : mesh.triangles)
+    for (int i : t)
+      if (i < 0 || i >= n) return false;
+  if (mesh.normal.size() != mesh.position.size()) {  // no normals in the file: make them
+    mesh.normal.assign(n, Vec3f::Zero());
+    for (const auto& t : mesh.triangles) {
+      const Vec3f c = (mesh.position[t[1]] - mesh.position[t[0]])
+                          .cross(mesh.position[t[2]] - mesh.position[t[0]]);
+      for (int i : t) mesh.normal[i] += c;
+    }
+    for (auto& v : mesh.normal) v = v.norm() > 0 ? Vec3f(v.normalized()) : Vec3f::UnitZ();
+  }
+  mesh.color.assign(n, kClothColor);
+  return n > 0;
+}
+
+// The last frames/frame_NNNNN.obj of a run folder; empty if there is none.
+fs::path last_frame(const fs::path& dir) {
+  fs::path best;
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(dir / "frames", ec)) {
+    const std::string name = e.path().filename().string();
+    if (name.starts_with("frame_") && e.path().extension() == ".obj" &&
+        (best.empty() || name > best.filename().string()))
+      best = e.path();
+  }
+  return best;
+}
+
+}  // namespace
+
+int render_frames(const RenderOptions& o) {
+  const Params& p = o.params;
+  const double fps = o.fps > 0 ? o.fps : p.run.fps;
+  try {
+    // The context first: if there is no GL, nothing is written.
+    OffscreenContext context;
+    Renderer renderer;
+    Framebuffer target(o.width, o.height);
+
+    fs::create_directories(o.out);
+    for (const auto& e : fs::directory_iterator(o.out)) {  // a folder never mixes two renders
+      const std::string name = e.path().filename().string();
+      if ((name.starts_with("frame_") && e.path().extension() == ".png") || name == "video.mp4")
+        fs::remove(e.path());
+    }
+
+    Simulation sim(p);
+    const Camera cam = frame_scene(p, static_cast<float>(o.width) / o.height);
+    const Stage stage = stage_from(p);
+    DrawOptions opt;
+    opt.fabric = o.color == ColorBy::Fabric;
+    opt.wetness = static_cast<float>(p.cloth.humidity);
+    const auto frames = static_cast<long long>(std::floor(p.run.duration * fps + 1e-9));
+    const bool progress = !o.quiet && isatty(STDERR_FILENO);
+    ClothMesh mesh;
+    float scale = 0;
+    double draw_ms = 0, png_ms = 0;
+    long long written = 0;
+    for (long long f = 0; f <= frames; ++f) {
+      const bool ok = sim.advance_to(std::min(p.run.duration, f / fps));
+      cloth_mesh(sim, o.color, scale, mesh);
+      auto t0 = Clock::now();
+      target.bind();
+      renderer.draw(mesh, stage, cam, o.width, o.height, opt);
+      const Image img = target.read();
+      if (f > 0 || frames == 0) draw_ms += ms_since(t0);  // frame 0 also compiles the shaders
+      t0 = Clock::now();
+      char name[32];
+      std::snprintf(name, sizeof name, "frame_%05lld.png", f);
+      if (!write_png(o.out / name, img)) {
+        std::fprintf(stderr, "wetcloth: error: cannot write %s\n", (o.out / name).c_str());
+        return 1;
+      }
+      png_ms += ms_since(t0);
+      ++written;
+      if (progress) std::fprintf(stderr, "\rframe %lld/%lld", f + 1, frames + 1);
+      if (!ok) {
+        if (progress) std::fprintf(stderr, "\n");
+        std::fprintf(stderr, "wetcloth: %s\nframes so far: %s\n", sim.blow_up_reason().c_str(),
+                     o.out.c_str());
+        return 3;
+      }
+    }
+    if (progress) std::fprintf(stderr, "\n");
+
+    if (o.video) {
+      // yuv420p (what players expect) needs even sizes: pad by a pixel if odd.
+      const int code = spawn_and_wait(
+          {"ffmpeg", "-y", "-loglevel", "error", "-framerate", format_number(fps), "-i",
+           (o.out / "frame_%05d.png").string(), "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-pix_fmt",
+           "yuv420p", (o.out / "video.mp4").string()});
+      if (code != 0) {
+        std::fprintf(stderr, "wetcloth: error: %s\n",
+                     code < 0 ? "cannot run ffmpeg (apt-get install ffmpeg)"
+                              : "ffmpeg failed to make video.mp4");
+        return 1;
+      }
+    }
+    if (!o.quiet)
+      std::printf("%s: %lld frames, %dx%d, in %s%s (%.1f ms per frame to draw, %.1f ms to write)\n",
+                  p.name.c_str(), written, o.width, o.height, o.out.c_str(),
+                  o.video ? " + video.mp4" : "", draw_ms / std::max(1LL, frames), png_ms / written);
+    return 0;
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "wetcloth: error: %s\n", e.what());
+    return 1;
+  }
+}
+
+bool render_contact_sheet(const std::vector<std::pair<std::string, fs::path>>& cases,
+                          const fs::path& png, int tile_w, int tile_h, std::string* error) {
+  auto fail = [&](const std::string& why) {
+    if (error) *error = why;
+    return false;
+  };
+  if (cases.empty()) return fail("contact sheet: no cases");
+  if (tile_w < 16 || tile_h < 16 || tile_w > 8192 || tile_h > 8192)
+    return fail("contact sheet: tile size out of range");
+
+  struct Tile {
+    std::string label;
+    Params params;
+    ClothMesh mesh;
+  };
+  std::vector<Tile> tiles;
+  Vec3f lo = Vec3f::Constant(1e30f), hi = Vec3f::Constant(-1e30f);
+  for (const auto& [label, dir] : cases) {
+    Tile t{label, {}, {}};
+    try {
+      t.params = load_scene((dir / "scene.toml").string());
+    } catch (const std::exception& e) {
+      return fail(label + ": " + e.what());
+    }
+    const fs::path frame = last_frame(dir);
+    if (frame.empty()) return fail(label + ": no frames/frame_*.obj in " + dir.string());
+    if (!read_cloth_obj(frame, t.mesh)) return fail(label + ": cannot read " + frame.string());
+    for (const auto& p : t.mesh.position) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+    const Stage s = stage_from(t.params);
+    if (s.table) lo.z() = std::min(lo.z(), s.ground_z);
+    if (s.ball) {
+      lo = lo.cwiseMin(s.ball_center - Vec3f::Constant(s.ball_radius));
+      hi = hi.cwiseMax(s.ball_center + Vec3f::Constant(s.ball_radius));
+    }
+    tiles.push_back(std::move(t));
+  }
+  // One camera for every tile, so that the tiles compare.
+  const Camera cam = frame_box(lo, hi, static_cast<float>(tile_w) / tile_h);
+
+  // A row for a few cases, a grid for many.
+  const int n = static_cast<int>(tiles.size());
+  const int cols = n <= 6 ? n : static_cast<int>(std::ceil(std::sqrt(static_cast<double>(n))));
+  const int rows = (n + cols - 1) / cols;
+  Image sheet(cols * tile_w, rows * tile_h, 40);
+  const int text_scale = std::max(1, tile_h / 160);
+  try {
+    OffscreenContext context;
+    Renderer renderer;
+    Framebuffer target(tile_w, tile_h);
+    for (int i = 0; i < n; ++i) {
+      DrawOptions opt;
+      opt.wetness = static_cast<float>(tiles[i].params.cloth.humidity);
+      target.bind();
+      renderer.draw(tiles[i].mesh, stage_from(tiles[i].params), cam, tile_w, tile_h, opt);
+      Image tile = target.read();
+      draw_label(tile, 4 * text_scale, 4 * text_scale, tiles[i].label, text_scale);
+      blit(sheet, tile, (i % cols) * tile_w, (i / cols) * tile_h);
+    }
+  } catch (const std::exception& e) {
+    return fail(std::string("contact sheet: ") + e.what());
+  }
+  std::error_code ec;
+  if (png.has_parent_path()) fs::create_directories(png.parent_path(), ec);
+  if (!write_png(png, sheet)) return fail("cannot write " + png.string());
+  return true;
+}
+
+}  // namespace wetcloth::viewer

@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <unordered_map>
 
 #include "detail.hpp"
 
@@ -107,11 +108,28 @@ Model build_model(const Params& p) {
       if (i + 1 < m.nu && j + 1 < m.nv) {
         const int a = m.index(i, j), b = m.index(i + 1, j), cc = m.index(i + 1, j + 1),
                   d = m.index(i, j + 1);
-        m.triangles.push_back({a, b, cc});
-        m.triangles.push_back({a, cc, d});
+        // Diagonals alternate like a chequerboard, so that on an odd grid the
+        // mesh (and the normals) keep the cloth's mirror symmetries.
+        if ((i + j) % 2 == 0) {
+          m.triangles.push_back({a, b, cc});
+          m.triangles.push_back({a, cc, d});
+        } else {
+          m.triangles.push_back({a, b, d});
+          m.triangles.push_back({b, cc, d});
+        }
       }
     }
   }
+  // Triangles sharing an edge (for the wrinkle measure).
+  std::unordered_map<long long, int> first;
+  for (int t = 0; t < static_cast<int>(m.triangles.size()); ++t)
+    for (int e = 0; e < 3; ++e) {
+      const int u = m.triangles[t][e], v = m.triangles[t][(e + 1) % 3];
+      const long long key = static_cast<long long>(std::min(u, v)) * m.n + std::max(u, v);
+      const auto [it, fresh] = first.emplace(key, t);
+      if (!fresh) m.triangle_pairs.push_back({it->second, t});
+    }
+
   if (p.contact.surface == "table" && p.table.enabled) m.contact_surface = SurfaceKind::Table;
   if (p.contact.surface == "ball" && p.ball.enabled) m.contact_surface = SurfaceKind::Ball;
 

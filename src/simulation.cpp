@@ -170,14 +170,14 @@ namespace {
 
 // Largest extent over 8 directions in the table plane: the diagonal of a square
 // footprint, the diameter of a round one.
-double footprint_diameter(const Model& m, const State& s, bool lifted) {
+double footprint_diameter(const Model& m, const State& s) {
   double best = 0;
   for (int d = 0; d < 8; ++d) {
     const double a = d * std::numbers::pi / 8;
     const double cx = std::cos(a), cy = std::sin(a);
     double lo = kInf, hi = -kInf;
     for (int i = 0; i < m.n; ++i) {
-      if (bool(s.contact[i]) == lifted) continue;
+      if (!s.contact[i]) continue;
       const double t = s.x[i].x() * cx + s.x[i].y() * cy;
       lo = std::min(lo, t);
       hi = std::max(hi, t);
@@ -221,8 +221,10 @@ Metrics Simulation::metrics() const {
     r.contact_area_m2 = 0;
     r.lifted_area_m2 = 0;
   } else {
-    r.base_diagonal_m = footprint_diameter(m, s, true);
-    r.outer_diagonal_m = footprint_diameter(m, s, false);
+    // The tent's base as the paper treats the contact region (eq. 11): a square,
+    // here of the lifted area, whose diagonal is √(2 A).
+    r.base_diagonal_m = std::sqrt(2 * r.lifted_area_m2);
+    r.outer_diagonal_m = footprint_diameter(m, s);
   }
   r.inner_pressure_pa = s.inner_pressure;
   r.trapped_air_m3 = s.air_atm_volume;
@@ -231,32 +233,23 @@ Metrics Simulation::metrics() const {
     const double len = (s.x[m.structural.b[e]] - s.x[m.structural.a[e]]).norm();
     r.max_strain = std::max(r.max_strain, len / m.structural.rest[e] - 1.0);
   }
-  // Wrinkles: mean |dihedral angle| across the shared diagonal and the edges
-  // between lifted triangles.
+  // Wrinkles: mean |dihedral angle| over edges between two lifted triangles.
   std::vector<Vec3> tn(m.triangles.size());
   for (std::size_t t = 0; t < m.triangles.size(); ++t) {
     const auto& tr = m.triangles[t];
     tn[t] = (s.x[tr[1]] - s.x[tr[0]]).cross(s.x[tr[2]] - s.x[tr[0]]).normalized();
   }
-  auto lifted = [&](std::size_t t) {
+  auto lifted = [&](int t) {
     const auto& tr = m.triangles[t];
     return !s.contact[tr[0]] && !s.contact[tr[1]] && !s.contact[tr[2]];
   };
   double sum = 0;
   long count = 0;
-  auto add = [&](std::size_t a, std::size_t b) {
-    if (!lifted(a) || !lifted(b)) return;
+  for (const auto& [a, b] : m.triangle_pairs) {
+    if (!lifted(a) || !lifted(b)) continue;
     sum += std::acos(std::clamp(tn[a].dot(tn[b]), -1.0, 1.0));
     ++count;
-  };
-  const int cells_u = m.nu - 1;
-  for (int j = 0; j + 1 < m.nv; ++j)
-    for (int i = 0; i < cells_u; ++i) {
-      const std::size_t c = 2 * static_cast<std::size_t>(j * cells_u + i);
-      add(c, c + 1);                                     // diagonal
-      if (i + 1 < cells_u) add(c, c + 2 + 1);            // right edge: (a,b,c) | next (a,c,d)
-      if (j + 2 < m.nv) add(c + 1, c + 2 * cells_u);     // top edge: (a,c,d) | above (a,b,c)
-    }
+  }
   r.wrinkle_rad = count ? sum / count : 0.0;
   if (m.contact_surface == SurfaceKind::None) r.wrinkle_rad = 0;
   return r;

@@ -73,32 +73,82 @@ void update_strain_order(const Model& m, State& s, Workspace& w) {
                    [&](int a, int b) { return spring_key(a) < spring_key(b); });
 }
 
+// Springs are corrected level by level in the adaptive order; within a level
+// (springs at the same distance from the source) every correction is computed
+// from the same positions and averaged per particle, so that the result does
+// not depend on the order of springs within a level, and a symmetric cloth
+// stays symmetric.
 void limit_strain(const Model& m, State& s, Workspace& w, double dt) {
   const auto& p = m.params.strain_limit;
   if (!p.enabled) return;
   update_strain_order(m, s, w);
   w.x_before = s.x;
+  w.strain_delta.assign(m.n, Vec3::Zero());
+  w.strain_count.assign(m.n, 0);
   const double stretch = 1.0 + p.tau;
   const int ns = static_cast<int>(m.structural.size());
+  auto ends = [&](int e, int& a, int& b) -> const SpringSet& {
+    const SpringSet& set = e < ns ? m.structural : m.shear;
+    const int k = e < ns ? e : e - ns;
+    a = set.a[k];
+    b = set.b[k];
+    return set;
+  };
+  auto level = [&](int e) {
+    int a, b;
+    ends(e, a, b);
+    return std::min(s.source_distance[a], s.source_distance[b]);
+  };
+  const std::size_t count = w.strain_order.size();
   for (int pass = 0; pass < p.passes; ++pass) {
-    for (int e : w.strain_order) {
-      const SpringSet& set = e < ns ? m.structural : m.shear;
-      const int k = e < ns ? e : e - ns;
-      const int a = set.a[k], b = set.b[k];
-      const Vec3 d = s.x[b] - s.x[a];
-      const double len = d.norm(), max_len = stretch * set.rest[k];
-      if (len <= max_len) continue;
-      // The end farther from the source moves; both halves when neither is nearer;
-      // pinned and driven particles never move.
-      double wa = 0.5, wb = 0.5;
-      const int da = s.source_distance[a], db = s.source_distance[b];
-      if (da < db) wa = 0, wb = 1;
-      if (db < da) wa = 1, wb = 0;
-      if (m.driven[a]) wa = 0, wb = m.driven[b] ? 0 : 1;
-      if (m.driven[b]) wb = 0, wa = m.driven[a] ? 0 : 1;
-      const Vec3 corr = d * ((len - max_len) / len);
-      s.x[a] += wa * corr;
-      s.x[b] -= wb * corr;
+    for (std::size_t first = 0; first < count;) {
+      const int key = level(w.strain_order[first]);
+      std::size_t last = first;
+      for (; last < count && level(w.strain_order[last]) == key; ++last) {
+        int a, b;
+        const SpringSet& set = ends(w.strain_order[last], a, b);
+        const Vec3 d = s.x[b] - s.x[a];
+        const double len = d.norm();
+        const double max_len = stretch * set.rest[w.strain_order[last] < ns ? w.strain_order[last]
+                                                                            : w.strain_order[last] - ns];
+        if (len <= max_len) continue;
+        // The end farther from the source moves; both halves when neither is
+        // nearer; pinned and driven particles never move.
+        double wa = 0.5, wb = 0.5;
+        const int da = s.source_distance[a], db = s.source_distance[b];
+        if (da != db) {
+          wa = da < db ? 0.0 : 1.0;
+          wb = 1.0 - wa;
+        }
+        if (m.driven[a]) {
+          wa = 0;
+          wb = m.driven[b] ? 0 : 1;
+        }
+        if (m.driven[b]) {
+          wb = 0;
+          wa = m.driven[a] ? 0 : 1;
+        }
+        const Vec3 corr = d * ((len - max_len) / len);
+        if (wa > 0) {
+          w.strain_delta[a] += wa * corr;
+          ++w.strain_count[a];
+        }
+        if (wb > 0) {
+          w.strain_delta[b] -= wb * corr;
+          ++w.strain_count[b];
+        }
+      }
+      for (std::size_t e = first; e < last; ++e) {
+        int ab[2];
+        ends(w.strain_order[e], ab[0], ab[1]);
+        for (int k : ab) {
+          if (w.strain_count[k] == 0) continue;
+          s.x[k] += w.strain_delta[k] / w.strain_count[k];
+          w.strain_delta[k].setZero();
+          w.strain_count[k] = 0;
+        }
+      }
+      first = last;
     }
   }
   // Velocities follow the corrected positions.

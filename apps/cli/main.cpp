@@ -8,6 +8,7 @@
 
 #include "run.hpp"
 #include "scene_options.hpp"
+#include "sweep.hpp"
 #ifdef WETCLOTH_VIEWER
 #include "../viewer/commands.hpp"
 #endif
@@ -48,6 +49,7 @@ int main(int argc, char** argv) {
   auto* params = app.add_subcommand("params", "every scene parameter: key, unit, default, range, meaning");
   params->add_flag("--markdown", markdown, "as the README's Markdown table");
 
+  auto sweep_command = cli::add_sweep_command(app);
 #ifdef WETCLOTH_VIEWER
   auto viewer_command = viewer::add_commands(app);  // view, render
 #endif
@@ -58,6 +60,7 @@ int main(int argc, char** argv) {
 #ifdef WETCLOTH_VIEWER
     if (auto code = viewer_command()) return *code;
 #endif
+    if (const int code = sweep_command(); code >= 0) return code;
     if (*scenes) {
       for (const auto& s : builtin_scenes()) std::printf("%-14s %s\n", s.name.c_str(), s.description.c_str());
       return 0;

@@ -52,6 +52,7 @@ struct Model {
   std::vector<std::uint8_t> in_wind;    // inside the wind region
   SpringSet structural, shear, bending;
   std::vector<std::array<int, 3>> triangles;
+  std::vector<std::array<int, 2>> triangle_pairs;  // triangles sharing an edge
   std::vector<Handle> handles;
   SurfaceKind contact_surface = SurfaceKind::None;
   int index(int i, int j) const { return j * nu + i; }
@@ -90,6 +91,8 @@ struct Workspace {
   std::vector<Vec3> air_direction;    // A_i n_i of eq. 3 (zero where no air force)
   std::vector<int> queue;
   std::vector<int> strain_order;      // structural then shear springs, ordered
+  std::vector<Vec3> strain_delta;     // strain limiting: summed corrections in a level
+  std::vector<int> strain_count;
   Vec3 handle_force = Vec3::Zero();   // force the first pulling handle exerts, N
   // Self-collision spatial hash (counting sort by cell).
   std::vector<int> cell_start, cell_entries, particle_cell;

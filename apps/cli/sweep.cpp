@@ -1,0 +1,175 @@
+#include "sweep.hpp"
+
+#include <atomic>
+#include <cstdio>
+#include <filesystem>
+#include <mutex>
+#include <sstream>
+#include <thread>
+#include <unistd.h>
+
+#include "run.hpp"
+#include "scene_options.hpp"
+#include "wetcloth/output.hpp"
+#ifdef WETCLOTH_VIEWER
+#include "../viewer/commands.hpp"
+#endif
+
+namespace wetcloth::cli {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+struct Case {
+  std::string name, air_model;
+  double humidity = 0;
+  Params params;
+  RunResult result;
+};
+
+std::string case_name(double omega, const std::string& air, bool several_air_models) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "omega_%.2f", omega);
+  return several_air_models ? air + "_" + buf : buf;
+}
+
+// The plotting script: next to an installed program, or in the source tree.
+fs::path plot_script() {
+  if (const char* env = std::getenv("WETCLOTH_PLOT_SCRIPT")) return env;
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  const fs::path installed = exe.parent_path().parent_path() / "share/wetcloth/plot_sweep.py";
+  if (!ec && fs::exists(installed)) return installed;
+  return fs::path(WETCLOTH_SOURCE_DIR) / "tools/plot_sweep.py";
+}
+
+std::string sweep_csv(const std::vector<Case>& cases) {
+  std::string o = "case,air_model,humidity,status,peak_deficit_pa,time_to_5cm_s";
+  for (const auto& c : metrics_columns()) o += "," + c;
+  o += "\n";
+  for (const auto& c : cases) {
+    o += c.name + "," + c.air_model + "," + format_number(c.humidity) + "," +
+         (c.result.code == kOk ? "ok" : "blew_up") + "," + format_number(c.result.peak_deficit_pa) +
+         "," + format_number(c.result.time_to_5cm_s);
+    for (double v : metrics_values(c.result.final)) o += "," + format_number(v);
+    o += "\n";
+  }
+  return o;
+}
+
+}  // namespace
+
+std::function<int()> add_sweep_command(CLI::App& app) {
+  struct Options {
+    SceneOptions scene;
+    std::vector<double> humidities;
+    std::vector<std::string> air_models;
+    std::string out;
+    unsigned jobs = std::max(1u, std::thread::hardware_concurrency());
+    bool render = false, quiet = false, no_plots = false;
+  };
+  auto o = std::make_shared<Options>();
+  auto* cmd = app.add_subcommand("sweep", "run a scene at several humidities (and air models), in parallel");
+  cmd->add_option("scene", o->scene.scene, "scene: a TOML file, or a built-in name")->required();
+  cmd->add_option("--humidity", o->humidities, "humidities ω to run, e.g. 0,0.3,0.5,0.7,1")
+      ->delimiter(',')
+      ->required()
+      ->check(CLI::Range(0.0, 1.0));
+  cmd->add_option("--air-models", o->air_models, "air models to compare, e.g. exchange,sealed (paper Fig. 8)")
+      ->delimiter(',')
+      ->check(CLI::IsMember({"exchange", "sealed", "vented", "off"}));
+  cmd->add_option("--set", o->scene.sets, "override a parameter, KEY=VALUE (repeatable)")
+      ->allow_extra_args(false);
+  cmd->add_option("--duration", o->scene.duration, "simulated time per case, s");
+  cmd->add_option("--out", o->out, "output folder (default out/<scene>-sweep)");
+  cmd->add_option("--jobs", o->jobs, "cases run at once (default: all cores)")->check(CLI::PositiveNumber);
+  cmd->add_flag("--render", o->render, "also render a contact sheet of the last frames (contact_sheet.png)");
+  cmd->add_flag("--no-plots", o->no_plots, "skip the plots");
+  cmd->add_flag("--quiet", o->quiet, "print nothing but errors");
+  cmd->footer(
+      "Writes DIR/<case>/ (the outputs of `run`) for every case, DIR/sweep.csv (one row per case:\n"
+      "humidity, final metrics, peak pressure deficit, time until the handle first reaches 5 cm)\n"
+      "and plots: fig7 (pulled height and base diagonal against humidity), pressure,\n"
+      "contact_area, handle_height over time, and fig8 with several air models (PNG and SVG).");
+
+  return [cmd, o]() -> int {
+    if (!*cmd) return -1;
+    // Every case is checked before anything is written.
+    std::vector<Case> cases;
+    const bool several = o->air_models.size() > 1;
+    std::vector<std::string> airs = o->air_models;
+    const Params base = o->scene.load();
+    if (airs.empty()) airs.push_back(base.air.model);
+    for (const auto& air : airs)
+      for (double w : o->humidities) {
+        Case c;
+        c.name = case_name(w, air, several);
+        c.air_model = air;
+        c.humidity = w;
+        std::vector<std::string> sets = o->scene.overrides();
+        sets.push_back("cloth.humidity=" + format_number(w));
+        sets.push_back("air.model=\"" + air + "\"");
+        c.params = load_scene(o->scene.scene, sets);
+        cases.push_back(std::move(c));
+      }
+    const fs::path out = o->out.empty() ? fs::path("out") / (base.name + "-sweep") : fs::path(o->out);
+    fs::create_directories(out);
+
+    std::atomic<std::size_t> next{0};
+    std::mutex print;
+    auto worker = [&] {
+      for (std::size_t i; (i = next++) < cases.size();) {
+        Case& c = cases[i];
+        c.result = run_scene(c.params, out / c.name, false);
+        if (o->quiet) continue;
+        std::lock_guard<std::mutex> lock(print);
+        std::printf("%-22s %s  handle %.4f m  contact %.5f m²  peak deficit %.1f Pa  (%.1f s wall)\n",
+                    c.name.c_str(), c.result.code == kOk ? "ok     " : "BLEW UP", c.result.final.handle_height_m,
+                    c.result.final.contact_area_m2, c.result.peak_deficit_pa, c.result.wall_seconds);
+        std::fflush(stdout);
+      }
+    };
+    std::vector<std::thread> pool;
+    for (unsigned t = 0; t < std::min<std::size_t>(o->jobs, cases.size()); ++t) pool.emplace_back(worker);
+    for (auto& t : pool) t.join();
+    write_file_atomic(out / "sweep.csv", sweep_csv(cases));
+
+    int code = kOk;
+    for (const auto& c : cases)
+      if (c.result.code != kOk) {
+        std::fprintf(stderr, "wetcloth: %s: %s\n", c.name.c_str(), c.result.message.c_str());
+        code = kBlowUp;
+      }
+    if (!o->no_plots) {
+      const std::string python = fs::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
+      const std::string cmdline = python + " '" + plot_script().string() + "' '" + out.string() + "'";
+      if (std::system(cmdline.c_str()) != 0) {
+        std::fprintf(stderr, "wetcloth: the plots failed (%s)\n", cmdline.c_str());
+        if (code == kOk) code = kError;
+      }
+    }
+    if (o->render) {
+#ifdef WETCLOTH_VIEWER
+      std::vector<std::pair<std::string, fs::path>> tiles;
+      for (const auto& c : cases) {
+        char label[64];
+        std::snprintf(label, sizeof label, "%s w = %.2f", several ? c.air_model.c_str() : "", c.humidity);
+        tiles.emplace_back(label, out / c.name);
+      }
+      std::string error;
+      if (!viewer::render_contact_sheet(tiles, out / "contact_sheet.png", 480, 360, &error)) {
+        std::fprintf(stderr, "wetcloth: contact sheet: %s\n", error.c_str());
+        if (code == kOk) code = kError;
+      }
+#else
+      std::fprintf(stderr, "wetcloth: --render needs the viewer (build with WETCLOTH_VIEWER=ON)\n");
+      if (code == kOk) code = kError;
+#endif
+    }
+    if (!o->quiet) std::printf("results: %s (sweep.csv, fig7.png, pressure.png, ...)\n", out.c_str());
+    return code;
+  };
+}
+
+}  // namespace wetcloth::cli

@@ -1,0 +1,102 @@
+#!/usr/bin/env bash
+# Self-test of tools/plot_sweep.py and tools/validation_report.py: fabricates
+# tiny sweep folders (the formats of `wetcloth sweep`) in a temporary folder,
+# runs both scripts, checks their outputs, and checks that bad input gives
+# exit code 2 and no figures. Ends with "N passed, M failed".
+# Usage: tests/test_plot_scripts.sh [SOURCE_DIR]   (PYTHON: default /usr/bin/python3)
+set -u
+SRC="${1:-$(cd "$(dirname "$0")/.." && pwd)}"
+PY="${PYTHON:-/usr/bin/python3}"
+PLOT="$SRC/tools/plot_sweep.py"; REPORT="$SRC/tools/validation_report.py"
+T=$(mktemp -d); trap 'rm -rf "$T"' EXIT
+passes=0; fails=0
+ok()  { passes=$((passes + 1)); echo "ok: $1"; }
+bad() { fails=$((fails + 1)); echo "FAIL: $1"; }
+
+METRICS=time_s,handle_height_m,handle_force_n,max_height_m,contact_area_m2,lifted_area_m2,base_diagonal_m,outer_diagonal_m,inner_pressure_pa,trapped_air_m3,air_volume_m3,kinetic_energy_j,max_strain,wrinkle_rad,centroid_x_m,centroid_y_m
+
+# new_sweep DIR: an empty sweep folder with the sweep.csv header.
+new_sweep() { mkdir -p "$1"; echo "case,air_model,humidity,status,peak_deficit_pa,time_to_5cm_s,$METRICS" >"$1/sweep.csv"; }
+
+# add_case DIR CASE HUMIDITY AIR_MODEL STATUS PEAK_DEFICIT: the case's folder
+# (5 frames of metrics, scene.toml, summary.json) and its row of sweep.csv.
+add_case() {
+  local dir=$1 name=$2 w=$3 model=$4 status=$5 peak=$6
+  mkdir -p "$dir/$name"
+  echo "$METRICS" >"$dir/$name/metrics.csv"
+  awk -v w="$w" -v p="$peak" 'BEGIN { for (i = 0; i <= 4; i++) { t = 0.25 * i; h = 0.08 * t / (1 + w)
+    printf "%g,%g,%g,%g,%g,%g,%g,0.42,%g,1e-05,1e-05,0.001,0.01,%g,%g,0\n", t, h, 1 + w, h,
+      0.09 - 0.03 * t / (1 + w), 0.03 * t / (1 + w), 0.3 * t / (1 + w), 101325 - p * t, 0.1 + 0.1 * w * t,
+      0.1 * t * (1 - w) } }' >>"$dir/$name/metrics.csv"
+  printf '[cloth]\nresolution = [5, 5]\nsize = [0.3, 0.3]\n\n[run]\nduration = 1.0\n\n[air]\nmodel = "%s"\np_atm = 101325.0 # Pa\n' \
+    "$model" >"$dir/$name/scene.toml"
+  printf '{"scene": "pull-straight", "status": "%s", "wall_seconds": 0.5, "version": "test"}\n' "$status" \
+    >"$dir/$name/summary.json"
+  echo "$name,$model,$w,$status,$peak,-1,$(tail -1 "$dir/$name/metrics.csv")" >>"$dir/sweep.csv"
+}
+
+# figures DIR: how many figure files (and leftover temporaries) DIR holds.
+figures() { find "$1" -maxdepth 1 \( -name '*.png' -o -name '*.svg' -o -name '*.tmp' \) | wc -l; }
+
+# expect_bad NAME DIR TEXT: plot_sweep.py DIR exits 2, says "plot_sweep.py: error: ...TEXT", writes no figure.
+expect_bad() {
+  "$PY" "$PLOT" "$2" >/dev/null 2>"$T/err"; local code=$?
+  if [ $code -ne 2 ]; then bad "$1: exit code $code, want 2"; return; fi
+  if ! grep -q "^plot_sweep.py: error: .*$3" "$T/err"; then bad "$1: message lacks '$3': $(cat "$T/err")"; return; fi
+  if [ "$(figures "$2")" -ne 0 ]; then bad "$1: wrote figures"; return; fi
+  ok "$1 ($(head -1 "$T/err"))"
+}
+
+# Fixtures: one air model (one case blew up), and two air models.
+ONE="$T/runs/pull-straight"; TWO="$T/runs/air-models"
+new_sweep "$ONE"
+add_case "$ONE" omega_0.30 0.3 exchange ok 400
+add_case "$ONE" omega_1.00 1 exchange "blew up" 900
+new_sweep "$TWO"
+add_case "$TWO" exchange_omega_1.00 1 exchange ok 600
+add_case "$TWO" sealed_omega_1.00 1 sealed ok 5000
+for b in badnum badcol nometrics badrow; do cp -r "$ONE" "$T/$b"; done
+sed -i '2s/,0.3,ok,/,wet,ok,/' "$T/badnum/sweep.csv"
+sed -i '1s/,base_diagonal_m,/,base_diag,/' "$T/badcol/sweep.csv"
+rm "$T/nometrics/omega_1.00/metrics.csv"
+echo "0.5,0.1" >>"$T/badrow/omega_0.30/metrics.csv"
+mkdir -p "$T/empty"
+
+# plot_sweep.py: one air model.
+if "$PY" "$PLOT" "$ONE" --title "self-test" >"$T/out" 2>&1; then ok "plot one air model"; else bad "plot one air model: $(cat "$T/out")"; fi
+for f in fig7 pressure contact_area handle_height; do
+  if [ -s "$ONE/$f.png" ] && [ -s "$ONE/$f.svg" ] && head -c 8 "$ONE/$f.png" | grep -q PNG; then ok "$f.png and .svg"
+  else bad "$f.png/.svg missing or empty"; fi
+done
+if [ ! -e "$ONE/fig8.png" ]; then ok "no fig8 with one air model"; else bad "fig8 with one air model"; fi
+if [ -z "$(find "$ONE" -name '*.tmp')" ]; then ok "no temporaries left"; else bad "temporaries left"; fi
+
+# plot_sweep.py: two air models give fig8 too.
+if "$PY" "$PLOT" "$TWO" >"$T/out" 2>&1 && [ -s "$TWO/fig8.png" ] && [ -s "$TWO/fig8.svg" ]; then ok "fig8 with two air models"
+else bad "fig8 with two air models: $(cat "$T/out")"; fi
+
+# plot_sweep.py: bad input.
+expect_bad "not a number" "$T/badnum" "sweep.csv: line 2: humidity = 'wet' is not a number"
+expect_bad "missing column" "$T/badcol" "sweep.csv: header lacks column(s) base_diagonal_m"
+expect_bad "missing metrics.csv" "$T/nometrics" "omega_1.00/metrics.csv: no such file"
+expect_bad "short row" "$T/badrow" "metrics.csv: line 7: 2 fields"
+expect_bad "no sweep.csv" "$T/empty" "sweep.csv: no such file"
+
+# validation_report.py over the fabricated runs.
+if "$PY" "$REPORT" "$T/runs" "$T/val/report.md" >"$T/out" 2>&1; then ok "report written"; else bad "report: $(cat "$T/out")"; fi
+R="$T/val/report.md"
+if grep -q '^| experiment | the paper reports | we test | we measured | result |' "$R"; then ok "report has the claims table"
+else bad "report lacks the claims table"; fi
+if [ "$(grep -c '^| [a-z-]* | .* | \(\*\*PASS\|\*\*FAIL\|not run\|info\)' "$R")" -eq 12 ]; then ok "12 claims, each with a result"
+else bad "claims without a result"; fi
+if grep -q '^| air-models | Fig. 8: the sealed .*sealed 5000, exchange 600 Pa | \*\*PASS\*\* |' "$R"; then ok "air-models claim computed: PASS"
+else bad "air-models claim not computed as PASS"; fi
+if grep -q '^| pull-oblique | .* | not run | not run |' "$R"; then ok "missing sweep reads 'not run'"; else bad "missing sweep not 'not run'"; fi
+if [ -s "$T/val/figures/pull-straight_fig7.png" ] && grep -q '](figures/pull-straight_fig7.png)' "$R" \
+   && [ -s "$T/val/figures/air-models_fig8.png" ]; then ok "figures copied and linked"; else bad "figures not copied or linked"; fi
+if grep -q '^| 1.00 | blew up |' "$R"; then ok "sweep table shows the blown-up case"; else bad "sweep table lacks the blown-up case"; fi
+if "$PY" "$REPORT" "$T/nowhere" "$T/val2/report.md" >/dev/null 2>&1 && [ "$(grep -c '| not run |$' "$T/val2/report.md")" -eq 12 ]
+then ok "report on no runs: every claim not run"; else bad "report on no runs"; fi
+
+echo "$passes passed, $fails failed"
+[ "$fails" -eq 0 ]

@@ -1,0 +1,288 @@
+// The wet-cloth model of MODEL.md sections 3-7, checked against its formulas.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <set>
+
+#include "common.hpp"
+#include "detail.hpp"
+#include "spatial_hash.hpp"
+
+using namespace wetcloth;
+
+namespace {
+
+// The paper's cloth lying flat on the table, every particle in contact.
+Simulation flat_on_table(double omega, std::vector<std::string> sets = {}) {
+  sets.push_back("cloth.humidity=" + std::to_string(omega));
+  return Simulation(load_scene("drop-table", [&] {
+    sets.insert(sets.begin(), "cloth.center=[0,0,0]");
+    return sets;
+  }()));
+}
+
+// Lifts the particles within `radius` of the centre into a cone of height h.
+void make_tent(Simulation& sim, double h, double radius) {
+  for (auto& x : sim.state().x) {
+    const double r = std::hypot(x.x(), x.y());
+    if (r < radius) x.z() = h * (1 - r / radius);
+  }
+}
+
+}  // namespace
+
+TEST(Adhesion, Equation13AtFullHumidity) {
+  Params p;
+  p.cloth.humidity = 1.0;
+  EXPECT_NEAR(adhesion_total(p, 0.09), 4.653, 1e-3);  // laminate table, θb = 58°
+  p.adhesion.theta_b_deg = 14;                          // glass
+  // γ (S/h (cos 80° + cos 14°) + 2 √S sin 80°) = 7.538 N. (MODEL.md rounds it as 7.549.)
+  EXPECT_NEAR(adhesion_total(p, 0.09), 7.538, 1e-3);
+  p.adhesion.theta_b_deg = 58;
+  p.cloth.humidity = 0.5;
+  EXPECT_NEAR(adhesion_total(p, 0.09), 0.5 * 4.653, 1e-3);  // linear in ω (eq. 13)
+}
+
+TEST(Adhesion, ParticleForcesSumToEquation13) {
+  for (double lift : {0.0, 0.02}) {
+    Simulation sim = flat_on_table(1.0);
+    make_tent(sim, lift, 0.08);  // a contact region with an inner border too
+    Workspace& w = const_cast<Workspace&>(sim.workspace());
+    detail::update_contact(sim.model(), sim.state(), w);
+    std::fill(w.force.begin(), w.force.end(), Vec3::Zero());
+    detail::add_adhesion(sim.model(), sim.state(), w);
+    double s_now = 0;
+    Vec3 total = Vec3::Zero();
+    for (int i = 0; i < sim.model().n; ++i) {
+      if (sim.state().contact[i]) s_now += sim.model().area[i];
+      total += w.force[i];
+    }
+    EXPECT_NEAR(-total.z(), adhesion_total(sim.model().params, s_now), 1e-12);
+    EXPECT_NEAR(total.head<2>().norm(), 0, 1e-12);  // toward the surface, not along the cloth
+    if (lift == 0) EXPECT_NEAR(s_now, 0.09, 1e-12);
+    else EXPECT_LT(s_now, 0.09);
+  }
+}
+
+TEST(Adhesion, SwitchedOffAboveTheLiquidBridge) {
+  Simulation sim = flat_on_table(1.0);
+  for (auto& x : sim.state().x) x.z() = 1.5e-3;  // above h_th = 1 mm
+  Workspace& w = const_cast<Workspace&>(sim.workspace());
+  detail::update_contact(sim.model(), sim.state(), w);
+  detail::add_adhesion(sim.model(), sim.state(), w);
+  for (double a : w.adhesion) EXPECT_EQ(a, 0.0);
+}
+
+TEST(Air, PermeabilityFallsLinearlyWithHumidity) {
+  Params p;
+  p.cloth.humidity = 0;
+  EXPECT_DOUBLE_EQ(permeability(p), 1.0e-3);  // δ(0) = D_δ
+  p.cloth.humidity = 1;
+  EXPECT_NEAR(permeability(p), 1.0e-4, 1e-18);  // δ(1) = D_δ - K_δ
+  p.air.k_delta = 2e-3;
+  EXPECT_EQ(permeability(p), 0.0);  // never negative
+}
+
+TEST(Air, SealedPocketKeepsPressureTimesVolume) {
+  Params p = test::coarse("pull-straight", {"air.model=sealed", "cloth.humidity=0.7"});
+  Simulation sim(p);
+  const double pv0 = p.air.p_atm * sim.state().air_atm_volume;
+  for (int frame = 1; frame <= 10; ++frame) {
+    ASSERT_TRUE(sim.advance_to(0.05 * frame));
+    const State& s = sim.state();
+    if (s.air_volume > 0) EXPECT_NEAR(s.inner_pressure * s.air_volume, pv0, 1e-12 * p.air.p_atm);
+  }
+  EXPECT_GT(sim.state().air_volume, 0);
+  EXPECT_LT(sim.state().inner_pressure, p.air.p_atm - 1000);  // sealed: no breakthrough
+}
+
+TEST(Air, PocketHeldStillRelaxesWithTheModelsTimeConstant) {
+  Simulation sim = flat_on_table(0.5);
+  make_tent(sim, 0.02, 0.08);
+  const Model& m = sim.model();
+  State& s = sim.state();
+  Workspace& w = const_cast<Workspace&>(sim.workspace());
+  detail::update_contact(m, s, w);
+  detail::update_air(m, s, w, 0.0);
+  const double v_sum = s.air_volume;
+  double a_sum = 0;
+  for (int i = 0; i < m.n; ++i)
+    if (!s.contact[i]) a_sum += m.area[i];
+  const double tau = v_sum / (m.params.air.p_atm * permeability(m.params) * a_sum);
+  s.air_atm_volume = v_sum * (1 - 500 / m.params.air.p_atm);  // a 500 Pa deficit, below P_b
+  const double dt = tau / 7;
+  for (int k = 1; k <= 20; ++k) {
+    detail::update_air(m, s, w, dt);
+    const double deficit = m.params.air.p_atm - s.inner_pressure;
+    EXPECT_NEAR(deficit, 500 * std::exp(-k * dt / tau), 1e-9) << k;
+  }
+  EXPECT_LT(tau, 1e-2);
+}
+
+TEST(Air, BreakthroughCapsTheDeficit) {
+  Simulation sim = flat_on_table(1.0);
+  make_tent(sim, 0.02, 0.08);
+  State& s = sim.state();
+  Workspace& w = const_cast<Workspace&>(sim.workspace());
+  detail::update_contact(sim.model(), s, w);
+  s.air_atm_volume = 0;  // all the air gone: P_in would be 0
+  detail::update_air(sim.model(), s, w, 1e-5);
+  EXPECT_NEAR(sim.model().params.air.p_atm - s.inner_pressure, 1000, 1e-6);
+}
+
+// Suction pushes lifted cloth toward the surface, for the table and the ball.
+TEST(Air, ForcePointsTowardTheSurfaceUnderSuction) {
+  for (const char* direction : {"surface", "cloth"}) {
+    Simulation table = flat_on_table(0.5, {std::string("air.force_direction=") + direction});
+    make_tent(table, 0.03, 0.1);
+    Simulation ball(test::coarse("drape-ball", {std::string("air.force_direction=") + direction}));
+    const Params& bp = ball.model().params;
+    for (auto& x : ball.state().x) {  // wrap the cloth 1 cm above the ball's top
+      const Vec3 c = to_vec(bp.ball.center);
+      x = c + (x - c).normalized() * (bp.ball.radius + 0.01);
+    }
+    for (Simulation* sim : {&table, &ball}) {
+      State& s = sim->state();
+      Workspace& w = const_cast<Workspace&>(sim->workspace());
+      compute_normals(sim->model(), s.x, w.normal);
+      detail::update_contact(sim->model(), s, w);
+      std::fill(s.pocket_pressure.begin(), s.pocket_pressure.end(), sim->model().params.air.p_atm - 200);
+      std::fill(w.force.begin(), w.force.end(), Vec3::Zero());
+      detail::add_air_pressure(sim->model(), s, w);
+      int pushed = 0;
+      for (int i = 0; i < sim->model().n; ++i) {
+        if (w.force[i].norm() == 0) continue;
+        EXPECT_LT(w.force[i].dot(w.surface_normal[i]), 0) << direction << " particle " << i;
+        ++pushed;
+      }
+      EXPECT_GT(pushed, 10) << direction;
+    }
+  }
+}
+
+TEST(Friction, NeverReversesOrGrowsAndStopsASlowParticle) {
+  Simulation sim = flat_on_table(1.0);
+  const Model& m = sim.model();
+  State& s = sim.state();
+  Workspace& w = const_cast<Workspace&>(sim.workspace());
+  detail::update_contact(m, s, w);
+  std::fill(w.force.begin(), w.force.end(), Vec3::Zero());
+  detail::add_adhesion(m, s, w);
+  for (int i = 0; i < m.n; ++i) w.normal_force[i] = w.force[i].dot(w.surface_normal[i]);
+  std::vector<std::uint8_t> touched(m.n, 0);
+  const double dt = 5e-5;
+  for (int i = 0; i < m.n; ++i) s.v[i] = Vec3(0.01 * (i % 7) - 0.03, 0.002 * (i % 5), 0);
+  const std::vector<Vec3> before = s.v;
+  detail::apply_friction(m, s, w, touched, dt);
+  int stopped = 0;
+  for (int i = 0; i < m.n; ++i) {
+    EXPECT_LE(s.v[i].norm(), before[i].norm() + 1e-15);
+    EXPECT_GE(s.v[i].dot(before[i]), -1e-15);  // never reversed
+    const double dv = m.params.friction.mu * w.adhesion[i] * dt / m.mass[i];
+    if (before[i].norm() <= dv) {
+      EXPECT_EQ(s.v[i].norm(), 0.0);
+      ++stopped;
+    } else {
+      EXPECT_NEAR(s.v[i].norm(), before[i].norm() - dv, 1e-12);
+    }
+  }
+  EXPECT_GT(stopped, 0);
+}
+
+// The paper's friction uses adhesion alone: a dry cloth would never stop.
+// MODEL.md's default adds the contact load, so its weight holds it.
+TEST(Friction, DryClothStillHasFrictionFromItsWeight) {
+  for (const char* normal : {"contact", "adhesion"}) {
+    Simulation sim = flat_on_table(0.0, {std::string("friction.normal=") + normal, "cloth.resolution=[15,15]"});
+    for (auto& v : sim.state().v) v = Vec3(0.05, 0, 0);
+    ASSERT_TRUE(sim.advance_to(0.2));
+    const double speed = sim.metrics().kinetic_energy_j;
+    if (std::string(normal) == "contact") EXPECT_LT(speed, 1e-12) << normal;
+    else EXPECT_GT(speed, 1e-6) << normal;
+  }
+}
+
+TEST(SelfCollision, HashFindsExactlyTheAllPairsPairs) {
+  std::vector<Vec3> x;
+  std::uint64_t seed = 12345;
+  auto rnd = [&] {
+    seed = seed * 6364136223846793005ULL + 1442695040888963407ULL;
+    return double(seed >> 11) / double(1ULL << 53);
+  };
+  for (int i = 0; i < 3000; ++i) x.emplace_back(0.1 * rnd() - 0.05, 0.1 * rnd(), 0.03 * rnd());
+  const double r = 0.005;
+  Workspace w;
+  detail::build_hash(x, 2 * r, w);
+  auto skip = [](int i, int j) { return (i + j) % 11 == 0; };
+  std::set<std::pair<int, int>> found, expected;
+  detail::for_each_close_pair(x, r, w, skip, [&](int i, int j, const Vec3&, double) {
+    EXPECT_TRUE(found.emplace(i, j).second) << "pair found twice";
+  });
+  for (int i = 0; i < 3000; ++i)
+    for (int j = i + 1; j < 3000; ++j)
+      if (!skip(i, j) && (x[i] - x[j]).norm() < r) expected.emplace(i, j);
+  EXPECT_GT(expected.size(), 100u);
+  EXPECT_EQ(found, expected);
+}
+
+// A cloth folded onto itself on the table: the top layer rests on the bottom one.
+TEST(SelfCollision, KeepsTwoFoldedLayersApart) {
+  for (bool enabled : {true, false}) {
+    // l = 6 mm: d_t = 5 mm exceeds l/√2, as MODEL.md section 7 requires.
+    Params p = load_scene("drop-table", {"cloth.center=[0,0,0]", "cloth.humidity=0.5",
+                                         "cloth.resolution=[26,26]", "cloth.size=[0.15,0.15]"});
+    p.self_collision.enabled = enabled;
+    Simulation sim(p);
+    const Model& m = sim.model();
+    const double d_t = p.self_collision.distance;
+    const int fold = m.nv / 2;  // rows above `fold` are laid back over the rows below
+    const double y_fold = 0.5 * (m.rest_position[m.index(0, fold - 1)].y() + m.rest_position[m.index(0, fold)].y());
+    std::vector<int> top;
+    for (int j = fold; j < m.nv; ++j)
+      for (int i = 0; i < m.nu; ++i) {
+        Vec3& x = sim.state().x[m.index(i, j)];
+        x = Vec3(x.x(), 2 * y_fold - x.y(), 1.2 * d_t);
+        if (j > fold + 1) top.push_back(m.index(i, j));
+      }
+    ASSERT_TRUE(sim.advance_to(0.5)) << sim.blow_up_reason();
+    double lowest = 1;
+    for (int k : top) lowest = std::min(lowest, sim.state().x[k].z());
+    if (enabled) EXPECT_GT(lowest, 0.5 * d_t);
+    else EXPECT_LT(lowest, 0.5 * d_t);  // the test can fail: without it the layers pass
+  }
+}
+
+TEST(Contact, ClothRestingOnTheTableDoesNotDrift) {
+  Simulation sim = flat_on_table(0.5, {"cloth.resolution=[21,21]"});
+  const Metrics m0 = sim.metrics();
+  ASSERT_TRUE(sim.advance_to(1.0));
+  const Metrics m1 = sim.metrics();
+  EXPECT_NEAR(m1.centroid_x_m, m0.centroid_x_m, 1e-9);
+  EXPECT_NEAR(m1.centroid_y_m, m0.centroid_y_m, 1e-9);
+  EXPECT_LT(m1.kinetic_energy_j, 1e-12);
+  EXPECT_NEAR(m1.contact_area_m2, 0.09, 1e-12);
+}
+
+// x -> -x, y -> -y and x <-> y map the straight pull onto itself, and the
+// discretisation keeps that to rounding. (Later, a particle that crosses the
+// liquid-bridge threshold one step earlier on one side than its mirror image
+// turns a rounding difference into a visible one: the contact switch is
+// discontinuous, so the test looks before the first such crossing.)
+TEST(Experiments, StraightPullStaysFourFoldSymmetric) {
+  Simulation sim(test::coarse("pull-straight", {"cloth.humidity=0.7"}));
+  ASSERT_TRUE(sim.advance_to(0.5));
+  const Model& m = sim.model();
+  const auto& x = sim.state().x;
+  double worst = 0;
+  for (int j = 0; j < m.nv; ++j)
+    for (int i = 0; i < m.nu; ++i) {
+      const Vec3& a = x[m.index(i, j)];
+      const Vec3& mx = x[m.index(m.nu - 1 - i, j)];
+      const Vec3& my = x[m.index(i, m.nv - 1 - j)];
+      const Vec3& t = x[m.index(j, i)];
+      worst = std::max({worst, (a - Vec3(-mx.x(), mx.y(), mx.z())).norm(),
+                        (a - Vec3(my.x(), -my.y(), my.z())).norm(), (a - Vec3(t.y(), t.x(), t.z())).norm()});
+    }
+  EXPECT_GT(sim.metrics().handle_height_m, 0.01);
+  EXPECT_LT(worst, 1e-9);  // 10 nm against a 2 cm tent
+}

@@ -1,0 +1,65 @@
+#!/usr/bin/env bash
+# Validates wetcloth against the paper: runs its experiments at full resolution
+# (the scenes' defaults, 51x51), each a `wetcloth sweep` over humidity, into
+# validation/runs/<name>/, then writes validation/report.md with its figures in
+# validation/figures/ (tools/validation_report.py).
+#
+# Usage: tools/validate.sh BUILD_DIR [NAME...]
+#   NAME...  rerun only these sweeps (pull-straight pull-oblique pull-corner
+#            drag-corner drape-ball peel-rig air-models); the report still covers
+#            every sweep in validation/runs.
+# A scene whose `wetcloth check` fails is skipped, with a note in the report.
+# Each sweep's output goes to validation/runs/<name>.log.
+# Environment: PYTHON (default /usr/bin/python3), JOBS (default 2).
+set -u
+NAMES="pull-straight pull-oblique pull-corner drag-corner drape-ball peel-rig air-models"
+COMMAND="tools/validate.sh $*"
+[ $# -ge 1 ] || { echo "usage: tools/validate.sh BUILD_DIR [NAME...]" >&2; exit 2; }
+W="$(cd "$1" 2>/dev/null && pwd)/wetcloth"
+[ -x "$W" ] || { echo "validate.sh: error: $1/wetcloth: no such program (build first)" >&2; exit 2; }
+shift
+for n in "$@"; do
+  [[ " $NAMES " == *" $n "* ]] || { echo "validate.sh: error: unknown sweep '$n' (one of: $NAMES)" >&2; exit 2; }
+done
+ONLY=" $* "; [ $# -gt 0 ] || ONLY=""
+PYTHON=${PYTHON:-/usr/bin/python3}; [ -x "$PYTHON" ] || PYTHON=python3
+JOBS=${JOBS:-2}
+ROOT=$(cd "$(dirname "$0")/.." && pwd)
+cd "$ROOT" || exit 2
+RUNS=validation/runs
+mkdir -p "$RUNS"
+
+# record NAME OUTCOME SECONDS COMMAND: NAME's line in $RUNS/commands.log (tab-separated).
+record() {
+  { grep -v "^$1	" "$RUNS/commands.log" 2>/dev/null; printf '%s\t%s\t%s\t%s\n' "$@"; } >"$RUNS/commands.log.tmp"
+  mv "$RUNS/commands.log.tmp" "$RUNS/commands.log"
+}
+
+# sweep NAME SCENE ARGS...: `wetcloth sweep SCENE ARGS...` into $RUNS/NAME (fresh),
+# recorded in $RUNS/commands.log; or $RUNS/NAME.skipped when the scene fails its check.
+sweep() {
+  local name=$1 scene=$2; shift 2
+  if [ -n "$ONLY" ] && [[ "$ONLY" != *" $name "* ]]; then return; fi
+  rm -rf "${RUNS:?}/$name" "$RUNS/$name.skipped" "$RUNS/$name.log"
+  if ! "$W" check "$scene" >/dev/null 2>"$RUNS/$name.check"; then
+    { echo "\`wetcloth check $scene\` failed: $(head -3 "$RUNS/$name.check")"; } > "$RUNS/$name.skipped"
+    echo "$name: skipped, $(head -1 "$RUNS/$name.check")"
+    record "$name" skipped 0 "$W check $scene"
+    rm -f "$RUNS/$name.check"
+    return
+  fi
+  rm -f "$RUNS/$name.check"
+  local cmd=("$W" sweep "$scene" "$@" --jobs "$JOBS" --out "$RUNS/$name") start=$SECONDS code
+  echo "$name: ${cmd[*]}"
+  "${cmd[@]}" >"$RUNS/$name.log" 2>&1; code=$?
+  echo "$name: exit code $code after $((SECONDS - start)) s (log: $RUNS/$name.log)"
+  record "$name" "$code" "$((SECONDS - start))" "${cmd[*]}"
+}
+
+HUMIDITY=0,0.3,0.5,0.7,1
+for scene in pull-straight pull-oblique pull-corner drag-corner drape-ball peel-rig; do
+  sweep "$scene" "$scene" --humidity "$HUMIDITY"
+done
+sweep air-models pull-straight --air-models exchange,sealed --humidity 0.5,1
+
+"$PYTHON" tools/validation_report.py "$RUNS" validation/report.md --command "$COMMAND"

@@ -1,0 +1,432 @@
+#!/usr/bin/env python3
+"""Write the Markdown validation report of wetcloth against the paper's claims.
+
+Usage: validation_report.py RUNS_DIR REPORT_MD [--command TEXT]
+
+RUNS_DIR holds one `wetcloth sweep` folder per experiment (as tools/validate.sh
+makes them): RUNS_DIR/<name>/sweep.csv, RUNS_DIR/<name>/<case>/{metrics.csv,
+summary.json,scene.toml} and the figures of tools/plot_sweep.py; beside them
+validate.sh may leave <name>.skipped (why it was not run), <name>.log (the
+sweep's output) and commands.log (one line per sweep: name, exit code,
+seconds, command).
+
+REPORT_MD gets: the command that made it, date, machine; a table per
+experiment; its figures (copied to <report dir>/figures/<name>_<fig>.png and
+linked relative to the report; plot_sweep.py is run first if a sweep has
+none); and a table of the paper's claims (docs/model.md section 11), each with the
+paper's statement, our numbers and PASS/FAIL computed from the data. Missing
+data reads "not run"; the script does not fail on it. Needs only the standard
+library (matplotlib only if it has to draw missing figures).
+"""
+import argparse
+import csv
+import datetime
+import json
+import math
+import os
+import platform
+import shutil
+import subprocess
+import sys
+
+EXPERIMENTS = ["pull-straight", "pull-oblique", "pull-corner", "drag-corner", "drape-ball",
+               "peel-rig", "air-models"]
+FIGURES = ["fig7", "fig8", "handle_height", "pressure", "contact_area"]
+TREND = [0.3, 0.5, 0.7, 1.0]  # the humidities the trend claims are tested over
+P_ATM = 101325.0
+HERE = os.path.dirname(os.path.abspath(__file__))
+
+
+# ---------------------------------------------------------------- reading
+
+def number(text):
+    try:
+        return float(text)
+    except (TypeError, ValueError):
+        return None
+
+
+def read_csv(path):
+    """Rows as dicts, numbers parsed where they parse; [] when unreadable."""
+    try:
+        with open(path, newline="", encoding="utf-8") as f:
+            return [{k: (number(v) if number(v) is not None else v) for k, v in row.items() if k}
+                    for row in csv.DictReader(f)]
+    except (OSError, UnicodeDecodeError, csv.Error):
+        return []
+
+
+def read_toml(path):
+    """A flat TOML reader for scene.toml: {section: {key: raw value text}}."""
+    out, section = {}, ""
+    try:
+        with open(path, encoding="utf-8") as f:
+            for line in f:
+                line = line.split("#", 1)[0].strip()
+                if line.startswith("["):
+                    section = line.strip("[] ")
+                elif "=" in line:
+                    key, value = line.split("=", 1)
+                    out.setdefault(section, {})[key.strip()] = value.strip()
+    except (OSError, UnicodeDecodeError):
+        pass
+    return out
+
+
+def read_json(path):
+    try:
+        with open(path, encoding="utf-8") as f:
+            return json.load(f)
+    except (OSError, ValueError):
+        return {}
+
+
+def load_sweep(folder):
+    """The cases of a sweep folder (None without sweep.csv): each the sweep.csv
+    row plus what is derived from its metrics.csv, summary.json and scene.toml."""
+    if not os.path.exists(os.path.join(folder, "sweep.csv")):
+        return None
+    cases = read_csv(os.path.join(folder, "sweep.csv"))
+    for c in cases:
+        case_dir = os.path.join(folder, str(c.get("case", "")))
+        rows = read_csv(os.path.join(case_dir, "metrics.csv"))
+        col = lambda k: [r[k] for r in rows if isinstance(r.get(k), float)]
+        c["summary"] = read_json(os.path.join(case_dir, "summary.json"))
+        c["scene"] = read_toml(os.path.join(case_dir, "scene.toml"))
+        c["ok"] = c.get("status") == "ok"
+        c["peak_force_n"] = max(col("handle_force_n"), default=None)
+        c["slid_m"] = None
+        if rows and all(isinstance(rows[i].get(k), float) for i in (0, -1)
+                        for k in ("centroid_x_m", "centroid_y_m")):
+            c["slid_m"] = math.hypot(rows[-1]["centroid_x_m"] - rows[0]["centroid_x_m"],
+                                     rows[-1]["centroid_y_m"] - rows[0]["centroid_y_m"])
+        t, h = col("time_s"), col("handle_height_m")
+        slopes = [(h[i + 1] - h[i]) / (t[i + 1] - t[i]) for i in range(min(len(t), len(h)) - 1)
+                  if t[i + 1] > t[i]]
+        c["max_slope_m_s"] = max(slopes, default=None)
+    return cases
+
+
+def main_model(cases):
+    models = sorted({c.get("air_model") for c in cases})
+    return "exchange" if "exchange" in models or not models else models[0]
+
+
+def find(cases, w, model=None):
+    """The case at humidity w (and air model, default the sweep's main one)."""
+    model = model or main_model(cases)
+    for c in cases:
+        if isinstance(c.get("humidity"), float) and abs(c["humidity"] - w) < 1e-6 \
+                and c.get("air_model") == model:
+            return c
+    return None
+
+
+# ---------------------------------------------------------------- formatting
+
+def fmt(v, scale=1.0, digits=2):
+    if not isinstance(v, float) or math.isnan(v):
+        return "—"
+    return f"{v * scale:.{digits}f}"
+
+
+def md_table(header, rows):
+    lines = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    lines += ["| " + " | ".join(str(x) for x in row) + " |" for row in rows]
+    return "\n".join(lines)
+
+
+# ---------------------------------------------------------------- the claims
+
+def series(sweeps, name, hums, key, model=None):
+    """([(ω, value)], problem): problem is '' when every case is there and ok."""
+    cases = sweeps.get(name)
+    if cases is None:
+        return [], "not run"
+    found = [(w, find(cases, w, model)) for w in hums]
+    missing = [w for w, c in found if c is None or not isinstance(c.get(key), float)]
+    if missing:
+        return [], "not run (no data at ω = " + ", ".join(f"{w:g}" for w in missing) + ")"
+    bad = [w for w, c in found if not c["ok"]]
+    values = [(w, c[key]) for w, c in found]
+    return values, ("blew up at ω = " + ", ".join(f"{w:g}" for w in bad)) if bad else ""
+
+
+def listed(values, scale, unit, digits=2):
+    return ", ".join(f"ω={w:g}: {fmt(v, scale, digits)}" for w, v in values) + f" {unit}"
+
+
+def verdict(ok, problem):
+    if problem.startswith("not run"):
+        return "not run"
+    if problem:
+        return f"FAIL ({problem}; the numbers alone would {'pass' if ok else 'fail'})"
+    return "PASS" if ok else "FAIL"
+
+
+def trend(sweeps, name, key, scale, unit, test, digits=2):
+    values, problem = series(sweeps, name, TREND, key)
+    if problem.startswith("not run"):
+        return problem, "not run"
+    v = [x for _, x in values]
+    return listed(values, scale, unit, digits), verdict(test(v), problem)
+
+
+def informational(result):
+    measured, outcome = result
+    return measured, "not run" if outcome == "not run" else "info"
+
+
+def falling(v):
+    return all(b < a for a, b in zip(v, v[1:]))
+
+
+def rising(v):
+    return all(b > a for a, b in zip(v, v[1:]))
+
+
+def falling_within(tol):
+    return lambda v: all(b <= a + tol for a, b in zip(v, v[1:])) and v[-1] < v[0]
+
+
+def compare(sweeps, name, key, hums, scale, unit, test, model=None, digits=2):
+    """Measured text and verdict for test(values at hums)."""
+    values, problem = series(sweeps, name, hums, key, model)
+    if problem.startswith("not run"):
+        return problem, "not run"
+    return listed(values, scale, unit, digits), verdict(test([x for _, x in values]), problem)
+
+
+def whole_cloth_lifts(sweeps):
+    cases = sweeps.get("pull-straight")
+    c0, c3 = (find(cases, 0.0), find(cases, 0.3)) if cases else (None, None)
+    if c0 is None or not isinstance(c0.get("contact_area_m2"), float):
+        return "not run (no data at ω = 0)", "not run"
+    size = c0["scene"].get("cloth", {}).get("size", "[0.3, 0.3]").strip("[]").split(",")
+    area = math.prod(number(s) or 0.3 for s in size) if len(size) == 2 else 0.09
+    share = c0["contact_area_m2"] / area
+    text = (f"ω=0: contact {fmt(c0['contact_area_m2'], 1e4, 1)} cm² = {share:.1%} of "
+            f"{area * 1e4:.0f} cm²; handle height {fmt(c0.get('handle_height_m'), 100)} cm "
+            f"(ω=0.3: {fmt(c3.get('handle_height_m') if c3 else None, 100)} cm)")
+    return text, verdict(share < 0.10, "" if c0["ok"] else "blew up at ω = 0")
+
+
+def drape(sweeps):
+    cases = sweeps.get("drape-ball")
+    parts = []
+    for w in (0.0, 1.0):
+        c = find(cases, w) if cases else None
+        if c is None:
+            return f"not run (no data at ω = {w:g})", "not run"
+        parts.append(c)
+    text = "; ".join(f"ω={w:g}: outer {fmt(c.get('outer_diagonal_m'), 100, 1)} cm, base "
+                     f"{fmt(c.get('base_diagonal_m'), 100, 1)} cm, wrinkle {fmt(c.get('wrinkle_rad'), 1, 3)} rad"
+                     for w, c in zip((0, 1), parts))
+    w0, w1 = (c.get("wrinkle_rad") for c in parts)
+    if not (isinstance(w0, float) and isinstance(w1, float)):
+        return text, "not run"
+    bad = [str(w) for w, c in zip((0, 1), parts) if not c["ok"]]
+    return text, verdict(w1 > w0, ("blew up at ω = " + ", ".join(bad)) if bad else "")
+
+
+def air_models(sweeps, key, scale, unit, digits=0):
+    """At each humidity of the air-models sweep: PASS if sealed's value > exchange's."""
+    cases = sweeps.get("air-models")
+    hums = sorted({c["humidity"] for c in cases or [] if isinstance(c.get("humidity"), float)})
+    texts, ok, problems = [], True, []
+    for w in hums:
+        s, e = find(cases, w, "sealed"), find(cases, w, "exchange")
+        if not (s and e and isinstance(s.get(key), float) and isinstance(e.get(key), float)):
+            continue
+        texts.append(f"ω={w:g}: sealed {fmt(s[key], scale, digits)}, exchange {fmt(e[key], scale, digits)} {unit}")
+        ok &= s[key] > e[key]
+        problems += [f"{c['air_model']} ω={w:g}" for c in (s, e) if not c["ok"]]
+    if not texts:
+        return "not run", "not run"
+    return "; ".join(texts), verdict(ok, ("blew up: " + ", ".join(problems)) if problems else "")
+
+
+CLAIMS = [  # (experiment, the paper reports, the test, evaluate(sweeps) -> (measured, verdict))
+    ("pull-straight", "Fig. 7a: the wetter the cloth, the lower it is pulled up",
+     "final handle height strictly decreasing over ω = 0.3, 0.5, 0.7, 1",
+     lambda s: trend(s, "pull-straight", "handle_height_m", 100, "cm", falling)),
+    ("pull-straight", "Fig. 7b: the wetter the cloth, the smaller the base diagonal",
+     "final base diagonal strictly decreasing over ω = 0.3, 0.5, 0.7, 1",
+     lambda s: trend(s, "pull-straight", "base_diagonal_m", 100, "cm", falling)),
+    ("pull-straight", "Fig. 7: below ω ≈ 0.3 the whole cloth lifts",
+     "at ω = 0 the final contact area is < 10 % of the cloth area (handle height shown for reference)",
+     whole_cloth_lifts),
+    ("pull-straight", "Fig. 4: the wetter the cloth, the flatter its surfaces",
+     "informational: final wrinkle_rad at each ω (flatter = smaller)",
+     lambda s: informational(compare(s, "pull-straight", "wrinkle_rad", [0.0] + TREND, 1, "rad",
+                                     lambda v: True, digits=3))),
+    ("pull-oblique", "Fig. 2: a wetter cloth is harder to pull up",
+     "final handle height non-increasing over ω = 0.3 … 1 (ties within 1 mm) and lower at 1 than at 0.3",
+     lambda s: trend(s, "pull-oblique", "handle_height_m", 100, "cm", falling_within(0.001))),
+    ("pull-corner", "Fig. 5: a wetter cloth lifts fewer parts",
+     "final lifted area strictly decreasing over ω = 0.3, 0.5, 0.7, 1",
+     lambda s: trend(s, "pull-corner", "lifted_area_m2", 1e4, "cm²", falling, digits=1)),
+    ("pull-corner", "Fig. 5: a wetter cloth wrinkles more",
+     "final wrinkle_rad at ω = 1 greater than at ω = 0.3",
+     lambda s: compare(s, "pull-corner", "wrinkle_rad", [0.3, 1.0], 1, "rad", lambda v: v[1] > v[0],
+                       digits=3)),
+    ("drag-corner", "sec. 1: a wetter cloth slides less",
+     "slid distance (final centroid from the first) strictly decreasing over ω = 0.3, 0.5, 0.7, 1",
+     lambda s: trend(s, "drag-corner", "slid_m", 100, "cm", falling)),
+    ("drape-ball", "Fig. 6: a wetter cloth contracts more and wrinkles more",
+     "final wrinkle_rad at ω = 1 greater than at ω = 0 (diagonals shown for the contraction)",
+     drape),
+    ("peel-rig", "a wetter cloth is harder to peel",
+     "peak handle force over time strictly increasing over ω = 0.3, 0.5, 0.7, 1",
+     lambda s: trend(s, "peel-rig", "peak_force_n", 1, "N", rising, digits=3)),
+    ("air-models", "Fig. 8: the sealed model traps a larger pressure deficit than air exchange",
+     "peak pressure deficit: sealed > exchange at every ω of the sweep",
+     lambda s: air_models(s, "peak_deficit_pa", 1, "Pa")),
+    ("air-models", "Fig. 8: air exchange gives a gentler slope than Yamada's sealed air",
+     "largest slope of handle height against time (between frames): exchange < sealed at every ω",
+     lambda s: air_models(s, "max_slope_m_s", 100, "cm/s", digits=2)),
+]
+
+
+# ---------------------------------------------------------------- the report
+
+def machine():
+    try:
+        uname = subprocess.run(["uname", "-a"], capture_output=True, text=True).stdout.strip()
+    except OSError:
+        uname = " ".join(platform.uname())
+    cpu = ""
+    try:
+        with open("/proc/cpuinfo") as f:
+            cpu = next((l.split(":", 1)[1].strip() for l in f if l.startswith("model name")), "")
+    except OSError:
+        pass
+    return f"`{uname}`, {os.cpu_count()} cores" + (f" ({cpu})" if cpu else "")
+
+
+def git_commit():
+    try:
+        r = subprocess.run(["git", "-C", HERE, "rev-parse", "--short", "HEAD"], capture_output=True,
+                           text=True)
+        return r.stdout.strip() if r.returncode == 0 else ""
+    except OSError:
+        return ""
+
+
+def sweep_table(name, cases):
+    multi = len({c.get("air_model") for c in cases}) > 1
+    extra = {"drag-corner": ("slid cm", "slid_m", 100, 2), "peel-rig": ("peak force N", "peak_force_n", 1, 3),
+             "drape-ball": ("outer diag. cm", "outer_diagonal_m", 100, 1),
+             "air-models": ("max rise cm/s", "max_slope_m_s", 100, 2)}.get(name)
+    header = (["ω"] + (["air model"] if multi else []) +
+              ["status", "handle height cm", "base diag. cm", "contact cm²", "lifted cm²", "peak deficit Pa",
+               "time to 5 cm s", "wrinkle rad"] + ([extra[0]] if extra else []) + ["wall s"])
+    rows = []
+    for c in sorted(cases, key=lambda c: (str(c.get("air_model")), c.get("humidity") or 0)):
+        t5 = c.get("time_to_5cm_s")
+        rows.append([fmt(c.get("humidity"))] + ([c.get("air_model", "")] if multi else []) + [
+            c.get("status", "—"), fmt(c.get("handle_height_m"), 100), fmt(c.get("base_diagonal_m"), 100),
+            fmt(c.get("contact_area_m2"), 1e4, 1), fmt(c.get("lifted_area_m2"), 1e4, 1),
+            fmt(c.get("peak_deficit_pa"), 1, 0), "never" if t5 == -1 else fmt(t5),
+            fmt(c.get("wrinkle_rad"), 1, 3)] + ([fmt(c.get(extra[1]), extra[2], extra[3])] if extra else []) +
+            [fmt(number(c["summary"].get("wall_seconds")), 1, 0)])
+    return md_table(header, rows)
+
+
+def figures(name, folder, report_dir):
+    """Copy the sweep's PNGs next to the report; Markdown image links to them."""
+    if not any(os.path.exists(os.path.join(folder, f + ".png")) for f in FIGURES):
+        subprocess.run([sys.executable, os.path.join(HERE, "plot_sweep.py"), folder, "--title", name],
+                       capture_output=True)
+    fig_dir = os.path.join(report_dir, "figures")
+    links = []
+    for f in FIGURES:
+        src = os.path.join(folder, f + ".png")
+        if os.path.exists(src):
+            os.makedirs(fig_dir, exist_ok=True)
+            dst = os.path.join(fig_dir, f"{name}_{f}.png")
+            shutil.copyfile(src, dst)
+            links.append(f"![{name} {f}]({os.path.relpath(dst, report_dir)})")
+    return "\n".join(links) if links else "_No figures (tools/plot_sweep.py could not draw them)._"
+
+
+def last_line(path):
+    try:
+        with open(path, encoding="utf-8", errors="replace") as f:
+            lines = [l.strip() for l in f.read().replace("\r", "\n").splitlines() if l.strip()]
+        return lines[-1] if lines else ""
+    except OSError:
+        return ""
+
+
+def report(runs, report_path, command):
+    report_dir = os.path.dirname(os.path.abspath(report_path))
+    others = sorted(d for d in os.listdir(runs) if d not in EXPERIMENTS
+                    and os.path.exists(os.path.join(runs, d, "sweep.csv"))) if os.path.isdir(runs) else []
+    names = EXPERIMENTS + others
+    sweeps = {n: load_sweep(os.path.join(runs, n)) for n in names}
+    version = next((c["summary"].get("version") for cs in sweeps.values() for c in cs or []
+                    if c["summary"].get("version")), "?")
+    results = [(exp, paper, test, *evaluate(sweeps)) for exp, paper, test, evaluate in CLAIMS]
+    count = lambda v: sum(1 for r in results if r[4].startswith(v))
+
+    out = ["# wetcloth validation against the paper", "",
+           f"- made by: `{command}`",
+           f"- date: {datetime.datetime.now().astimezone().isoformat(timespec='seconds')}",
+           f"- machine: {machine()}",
+           f"- wetcloth {version}" + (f", commit {git_commit()}" if git_commit() else ""),
+           f"- runs: `{runs}`", "",
+           f"**Claims: {count('PASS')} pass, {count('FAIL')} fail, {count('not run')} not run** "
+           "(docs/model.md section 11; details below).", "",
+           "## Claims", "",
+           md_table(["experiment", "the paper reports", "we test", "we measured", "result"],
+                    [[e, p, t, m, f"**{v}**" if v.startswith(("PASS", "FAIL")) else v]
+                     for e, p, t, m, v in results]), ""]
+
+    cmd_log = os.path.join(runs, "commands.log")
+    if os.path.exists(cmd_log):
+        rows = [l.rstrip("\n").split("\t") for l in open(cmd_log, encoding="utf-8") if l.strip()]
+        out += ["## Runs", "", md_table(["sweep", "exit code", "wall s", "command"],
+                                        [r[:3] + [f"`{r[3]}`" if len(r) > 3 else ""] for r in rows]), ""]
+
+    for name in names:
+        folder = os.path.join(runs, name)
+        out += [f"## {name}", ""]
+        skipped = os.path.join(runs, name + ".skipped")
+        if os.path.exists(skipped):
+            note = open(skipped, encoding="utf-8", errors="replace").read().strip()
+            out += [f"Not run: skipped. {note}", ""]
+            continue
+        cases = sweeps[name]
+        if cases is None:
+            why = last_line(os.path.join(runs, name + ".log"))
+            out += ["Not run" + (f": the sweep wrote no sweep.csv; its log ends `{why}`." if why else "."), ""]
+            continue
+        first = cases[0]["scene"] if cases else {}
+        out += [f"Resolution {first.get('cloth', {}).get('resolution', '?')}, "
+                f"{first.get('run', {}).get('duration', '?')} s simulated, "
+                f"{len(cases)} cases. Lengths in cm, areas in cm², at the final frame.", "",
+                sweep_table(name, cases), "", figures(name, folder, report_dir), ""]
+
+    os.makedirs(report_dir, exist_ok=True)
+    tmp = report_path + ".tmp"
+    with open(tmp, "w", encoding="utf-8") as f:
+        f.write("\n".join(out))
+    os.replace(tmp, report_path)
+    return count("PASS"), count("FAIL"), count("not run")
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("runs", help="the folder of sweep folders (validation/runs)")
+    parser.add_argument("report", help="the Markdown file to write (validation/report.md)")
+    parser.add_argument("--command", help="the command to credit (default: this one)")
+    args = parser.parse_args()
+    command = args.command or " ".join(["tools/validation_report.py"] + sys.argv[1:])
+    passed, failed, not_run = report(args.runs, args.report, command)
+    print(f"validation_report.py: wrote {args.report}: {passed} pass, {failed} fail, {not_run} not run")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -22,8 +22,11 @@ void collide(const Model& m, State& s, std::vector<std::uint8_t>* touched);
 void update_contact(const Model& m, State& s, Workspace& w);
 
 // forces/*.cpp: each adds its force into w.force.
+// With `damping`, also adds each spring's damping on its own ends' velocities
+// (k_d u uᵀ), which the step takes implicitly.
 void add_spring_forces(const SpringSet& springs, const std::vector<Vec3>& x,
-                       const std::vector<Vec3>& v, std::vector<Vec3>& f);
+                       const std::vector<Vec3>& v, std::vector<Vec3>& f,
+                       std::vector<Mat3>* damping = nullptr);
 void add_gravity(const Model& m, std::vector<Vec3>& f);
 void add_viscous_damping(const Model& m, const State& s, std::vector<Vec3>& f);
 void add_wind(const Model& m, const State& s, const Workspace& w, std::vector<Vec3>& f);

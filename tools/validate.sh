@@ -58,7 +58,7 @@ sweep() {
 
 HUMIDITY=0,0.3,0.5,0.7,1
 for scene in pull-straight pull-oblique pull-corner drag-corner drape-ball peel-rig; do
-  sweep "$scene" "$scene" --humidity "$HUMIDITY"
+  sweep "$scene" "$scene" --humidity "$HUMIDITY" --render  # --render: a contact sheet per scene
 done
 sweep air-models pull-straight --air-models exchange,sealed --humidity 0.5,1
 

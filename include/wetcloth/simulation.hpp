@@ -16,6 +16,7 @@
 namespace wetcloth {
 
 using Vec3 = Eigen::Vector3d;
+using Mat3 = Eigen::Matrix3d;
 
 inline Vec3 to_vec(const Vec3d& a) { return {a[0], a[1], a[2]}; }
 
@@ -81,6 +82,7 @@ struct State {
 // Scratch arrays, reused every step: nothing is allocated per step.
 struct Workspace {
   std::vector<Vec3> force, normal, x_before, surface_normal;
+  std::vector<Mat3> damping;          // each particle's damping on its own velocity, N·s/m
   std::vector<double> distance;       // signed distance to the contact surface
   std::vector<double> adhesion;       // |adhesion force| per particle, N
   std::vector<double> normal_force;   // total force · n_s before friction, N

@@ -4,7 +4,7 @@
 namespace wetcloth::detail {
 
 void add_spring_forces(const SpringSet& s, const std::vector<Vec3>& x, const std::vector<Vec3>& v,
-                       std::vector<Vec3>& f) {
+                       std::vector<Vec3>& f, std::vector<Mat3>* damping) {
   const double k = s.k, kd = s.damping;
   for (std::size_t e = 0; e < s.size(); ++e) {
     const int a = s.a[e], b = s.b[e];
@@ -16,6 +16,11 @@ void add_spring_forces(const SpringSet& s, const std::vector<Vec3>& x, const std
     const Vec3 fa = u * (k * (len - s.rest[e]) + kd * (v[b] - v[a]).dot(u));
     f[a] += fa;
     f[b] -= fa;
+    if (damping) {  // ∂F_a/∂v_a = -k_d u uᵀ, the same for b
+      const Mat3 c = kd * u * u.transpose();
+      (*damping)[a] += c;
+      (*damping)[b] += c;
+    }
   }
 }
 

@@ -41,6 +41,8 @@ void update_air(const Model& m, State& s, Workspace& w, double dt);
 void correct_air_implicitly(const Model& m, State& s, Workspace& w, double dt);
 // handles.cpp: pins, driven particles, height caps; records the rig's force.
 void apply_handle_constraints(const Model& m, State& s, Workspace& w);
+// Keeps the particles of a force handle that reached its height cap where it stopped.
+void hold_stopped_handles(const Model& m, State& s);
 // friction.cpp: eq. 14 on particles in contact.
 void apply_friction(const Model& m, State& s, const Workspace& w,
                     const std::vector<std::uint8_t>& touched, double dt);

@@ -143,7 +143,10 @@ Model build_model(const Params& p) {
     for (int j = std::max(0, cj - r); j <= std::min(m.nv - 1, cj + r); ++j)
       for (int i = std::max(0, ci - r); i <= std::min(m.nu - 1, ci + r); ++i)
         h.particles.push_back(m.index(i, j));
-    h.force_per_particle = to_vec(hp.force) / static_cast<double>(h.particles.size());
+    h.force = to_vec(hp.force);
+    double area = 0;
+    for (int k : h.particles) area += m.area[k];
+    for (int k : h.particles) h.share.push_back(m.area[k] / area);
     h.velocity = to_vec(hp.velocity);
     h.max_height = hp.max_height;
     h.start = hp.start;

@@ -34,6 +34,8 @@ void Simulation::reset() {
   state_.x = model_.rest_position;
   state_.v.assign(n, Vec3::Zero());
   state_.contact.assign(n, 0);
+  state_.held.assign(n, 0);
+  state_.held_at.assign(n, Vec3::Zero());
   state_.air_share.assign(n, 0.0);
   state_.pocket_pressure.assign(n, model_.params.air.p_atm);
   state_.source_distance.assign(n, 0);
@@ -136,6 +138,7 @@ void Simulation::step() {
     limit_strain(m, s, w, dt);
     collide(m, s, nullptr);
   }
+  hold_stopped_handles(m, s);
   update_contact(m, s, w);
   update_air(m, s, w, dt);
   ++s.steps;
@@ -214,7 +217,7 @@ Metrics Simulation::metrics() const {
     double z = 0;
     for (int k : h.particles) z += s.x[k].z();
     r.handle_height_m = z / h.particles.size() - base;
-    const Vec3 dir = h.type == HandleType::Move ? h.velocity : h.force_per_particle;
+    const Vec3 dir = h.type == HandleType::Move ? h.velocity : h.force;
     r.handle_force_n = dir.norm() > 0 ? ws_.handle_force.dot(dir.normalized()) : 0.0;
     break;
   }

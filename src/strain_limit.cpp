@@ -120,13 +120,14 @@ void limit_strain(const Model& m, State& s, Workspace& w, double dt) {
           wa = da < db ? 0.0 : 1.0;
           wb = 1.0 - wa;
         }
-        if (m.driven[a]) {
+        const bool fixed_a = m.driven[a] || s.held[a], fixed_b = m.driven[b] || s.held[b];
+        if (fixed_a) {
           wa = 0;
-          wb = m.driven[b] ? 0 : 1;
+          wb = fixed_b ? 0 : 1;
         }
-        if (m.driven[b]) {
+        if (fixed_b) {
           wb = 0;
-          wa = m.driven[a] ? 0 : 1;
+          wa = fixed_a ? 0 : 1;
         }
         const Vec3 corr = d * ((len - max_len) / len);
         if (wa > 0) {

@@ -2,6 +2,7 @@
 // their options already parsed and the scene loaded.
 #pragma once
 
+#include <chrono>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -11,6 +12,11 @@
 #include "wetcloth/params.hpp"
 
 namespace wetcloth::viewer {
+
+using Clock = std::chrono::steady_clock;
+inline double ms_since(Clock::time_point t) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
+}
 
 struct RenderOptions {
   Params params;

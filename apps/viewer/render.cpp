@@ -29,11 +29,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
-}
-
 // Runs a program (no shell: arguments are passed as they are); its exit status, or
 // -1 if it could not be started.
 int spawn_and_wait(const std::vector<std::string>& args) {

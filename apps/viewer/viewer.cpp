@@ -27,11 +27,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point t) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
-}
-
 std::string glfw_error_text;
 void on_glfw_error(int, const char* text) { glfw_error_text = text; }
 

@@ -34,7 +34,8 @@ struct Handle {
   std::string name;
   HandleType type = HandleType::Force;
   std::vector<int> particles;
-  Vec3 force_per_particle = Vec3::Zero();
+  Vec3 force = Vec3::Zero();         // total; particle e gets share[e] of it
+  std::vector<double> share;         // A_i / Σ A: the same acceleration over the patch
   Vec3 velocity = Vec3::Zero();
   double max_height = 0;
   double start = 0;
@@ -68,6 +69,8 @@ struct State {
   long long steps = 0;
   std::vector<Vec3> x, v;
   std::vector<std::uint8_t> contact;  // 1: within h_th of the contact surface
+  std::vector<std::uint8_t> held;     // 1: held where a capped force handle stopped
+  std::vector<Vec3> held_at;
   double air_atm_volume = 0;          // trapped air at atmospheric pressure V_atm, m³
   double air_volume = 0;              // V_sum, m³
   double inner_pressure = 0;          // P_in, Pa (mean over pockets for `vented`)

@@ -14,13 +14,8 @@ double height(const Model& m, const Vec3& x) {
 
 void add_handle_forces(const Model& m, const State& s, Workspace& w) {
   for (const Handle& h : m.handles) {
-    if (h.type != HandleType::Force || !active(h, s)) continue;
-    for (int k : h.particles) {
-      // A height cap stops the pull where the hand stops.
-      if (h.max_height > 0 && height(m, s.x[k]) >= h.max_height && h.force_per_particle.z() > 0)
-        continue;
-      w.force[k] += h.force_per_particle;
-    }
+    if (h.type != HandleType::Force || !active(h, s) || s.held[h.particles[0]]) continue;
+    for (std::size_t e = 0; e < h.particles.size(); ++e) w.force[h.particles[e]] += h.share[e] * h.force;
   }
   if (w.grab_particle >= 0) {
     const int k = w.grab_particle;
@@ -36,8 +31,23 @@ void apply_handle_constraints(const Model& m, State& s, Workspace& w) {
   bool recorded = false;
   for (const Handle& h : m.handles) {
     if (h.type == HandleType::Force) {
+      if (h.max_height > 0 && !s.held[h.particles[0]]) {
+        // A height cap: the hand stops where the patch reaches it, and holds.
+        double z = 0;
+        for (int k : h.particles) z += height(m, s.x[k]);
+        if (z / h.particles.size() >= h.max_height)
+          for (int k : h.particles) {
+            s.held[k] = 1;
+            s.held_at[k] = s.x[k];
+          }
+      }
       if (!recorded && active(h, s)) {
-        w.handle_force = h.force_per_particle * static_cast<double>(h.particles.size());
+        Vec3 rig = h.force;
+        if (s.held[h.particles[0]]) {  // holding: minus the other forces on the patch
+          rig.setZero();
+          for (int k : h.particles) rig -= w.force[k];
+        }
+        w.handle_force = rig;
         recorded = true;
       }
       continue;
@@ -61,6 +71,15 @@ void apply_handle_constraints(const Model& m, State& s, Workspace& w) {
       recorded = true;
     }
   }
+}
+
+void hold_stopped_handles(const Model& m, State& s) {
+  for (const Handle& h : m.handles)
+    for (int k : h.particles)
+      if (s.held[k]) {
+        s.x[k] = s.held_at[k];
+        s.v[k].setZero();
+      }
 }
 
 }  // namespace wetcloth::detail

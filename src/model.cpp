@@ -149,6 +149,7 @@ Model build_model(const Params& p) {
     for (int k : h.particles) h.share.push_back(m.area[k] / area);
     h.velocity = to_vec(hp.velocity);
     h.max_height = hp.max_height;
+    h.max_travel = hp.max_travel;
     h.start = hp.start;
     for (int k : h.particles) {
       h.anchor.push_back(m.rest_position[k]);

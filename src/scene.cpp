@@ -156,6 +156,8 @@ std::vector<ParamDef> make_defs() {
       handle_field("velocity", "m/s", -1e3, 1e3, "move: velocity of the patch", H(velocity)),
       handle_field("max_height", "m", 0, 1e3, "force: stop pulling up above this height (0: never)",
                    H(max_height)),
+      handle_field("max_travel", "m", 0, 1e3,
+                   "force: stop and hold once the patch has moved this far (0: never)", H(max_travel)),
       handle_field("start", "s", 0, 1e6, "time the handle starts acting", H(start)),
   };
 }

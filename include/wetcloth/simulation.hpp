@@ -37,7 +37,7 @@ struct Handle {
   Vec3 force = Vec3::Zero();         // total; particle e gets share[e] of it
   std::vector<double> share;         // A_i / Σ A: the same acceleration over the patch
   Vec3 velocity = Vec3::Zero();
-  double max_height = 0;
+  double max_height = 0, max_travel = 0;
   double start = 0;
   std::vector<Vec3> anchor;  // positions at t = 0 (move, pin)
 };

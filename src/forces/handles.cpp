@@ -31,11 +31,17 @@ void apply_handle_constraints(const Model& m, State& s, Workspace& w) {
   bool recorded = false;
   for (const Handle& h : m.handles) {
     if (h.type == HandleType::Force) {
-      if (h.max_height > 0 && !s.held[h.particles[0]]) {
-        // A height cap: the hand stops where the patch reaches it, and holds.
+      if ((h.max_height > 0 || h.max_travel > 0) && !s.held[h.particles[0]]) {
+        // A height cap or a travel limit: the hand stops there, and holds.
         double z = 0;
-        for (int k : h.particles) z += height(m, s.x[k]);
-        if (z / h.particles.size() >= h.max_height)
+        Vec3 moved = Vec3::Zero();
+        for (std::size_t e = 0; e < h.particles.size(); ++e) {
+          z += height(m, s.x[h.particles[e]]);
+          moved += s.x[h.particles[e]] - h.anchor[e];
+        }
+        const double n = static_cast<double>(h.particles.size());
+        if ((h.max_height > 0 && z / n >= h.max_height) ||
+            (h.max_travel > 0 && moved.norm() / n >= h.max_travel))
           for (int k : h.particles) {
             s.held[k] = 1;
             s.held_at[k] = s.x[k];

@@ -59,8 +59,11 @@ TEST(Adhesion, ParticleForcesSumToEquation13) {
     }
     EXPECT_NEAR(-total.z(), adhesion_total(sim.model().params, s_now), 1e-12);
     EXPECT_NEAR(total.head<2>().norm(), 0, 1e-12);  // toward the surface, not along the cloth
-    if (lift == 0) EXPECT_NEAR(s_now, 0.09, 1e-12);
-    else EXPECT_LT(s_now, 0.09);
+    if (lift == 0) {
+      EXPECT_NEAR(s_now, 0.09, 1e-12);
+    } else {
+      EXPECT_LT(s_now, 0.09);
+    }
   }
 }
 
@@ -90,7 +93,9 @@ TEST(Air, SealedPocketKeepsPressureTimesVolume) {
   for (int frame = 1; frame <= 10; ++frame) {
     ASSERT_TRUE(sim.advance_to(0.05 * frame));
     const State& s = sim.state();
-    if (s.air_volume > 0) EXPECT_NEAR(s.inner_pressure * s.air_volume, pv0, 1e-12 * p.air.p_atm);
+    if (s.air_volume > 0) {
+      EXPECT_NEAR(s.inner_pressure * s.air_volume, pv0, 1e-12 * p.air.p_atm);
+    }
   }
   EXPECT_GT(sim.state().air_volume, 0);
   EXPECT_LT(sim.state().inner_pressure, p.air.p_atm - 1000);  // sealed: no breakthrough
@@ -197,8 +202,11 @@ TEST(Friction, DryClothStillHasFrictionFromItsWeight) {
     for (auto& v : sim.state().v) v = Vec3(0.05, 0, 0);
     ASSERT_TRUE(sim.advance_to(0.2));
     const double speed = sim.metrics().kinetic_energy_j;
-    if (std::string(normal) == "contact") EXPECT_LT(speed, 1e-12) << normal;
-    else EXPECT_GT(speed, 1e-6) << normal;
+    if (std::string(normal) == "contact") {
+      EXPECT_LT(speed, 1e-12) << normal;
+    } else {
+      EXPECT_GT(speed, 1e-6) << normal;
+    }
   }
 }
 
@@ -247,8 +255,11 @@ TEST(SelfCollision, KeepsTwoFoldedLayersApart) {
     ASSERT_TRUE(sim.advance_to(0.5)) << sim.blow_up_reason();
     double lowest = 1;
     for (int k : top) lowest = std::min(lowest, sim.state().x[k].z());
-    if (enabled) EXPECT_GT(lowest, 0.5 * d_t);
-    else EXPECT_LT(lowest, 0.5 * d_t);  // the test can fail: without it the layers pass
+    if (enabled) {
+      EXPECT_GT(lowest, 0.5 * d_t);
+    } else {
+      EXPECT_LT(lowest, 0.5 * d_t);  // the test can fail: without it the layers pass
+    }
   }
 }
 

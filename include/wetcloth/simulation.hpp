@@ -103,7 +103,6 @@ struct Workspace {
   std::vector<int> cell_start, cell_entries, particle_cell;
   std::vector<std::array<long long, 3>> cell_coord;
   std::vector<std::uint8_t> colliding;
-  int colliding_pairs = 0;
   // Interactive grab (viewer).
   int grab_particle = -1;
   Vec3 grab_target = Vec3::Zero();

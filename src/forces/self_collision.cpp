@@ -9,7 +9,6 @@ namespace wetcloth::detail {
 
 void add_self_collision(const Model& m, const State& s, Workspace& w) {
   const auto& p = m.params.self_collision;
-  w.colliding_pairs = 0;
   if (!p.enabled) return;
   const double dt_dist = p.distance, k = p.k;
   build_hash(s.x, 2 * dt_dist, w);
@@ -26,7 +25,6 @@ void add_self_collision(const Model& m, const State& s, Workspace& w) {
                         w.force[i] += fi;
                         w.force[j] -= fi;
                         colliding[i] = colliding[j] = 1;
-                        ++w.colliding_pairs;
                       });
   // The paper's friction-like damping -k_f v on every colliding particle.
   for (int i = 0; i < m.n; ++i)

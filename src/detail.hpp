@@ -21,24 +21,40 @@ void collide(const Model& m, State& s, std::vector<std::uint8_t>* touched);
 // Distances to the contact surface, contact flags and the contact border.
 void update_contact(const Model& m, State& s, Workspace& w);
 
+// Runs body(r) for r in [0, count) on the step's threads, in fixed static
+// chunks. Bodies write only their own rows, so the result never depends on
+// the number of threads.
+template <class Body>
+void parallel_for(const Model& m, int count, Body&& body) {
+#pragma omp parallel for schedule(static) num_threads(m.threads) if (m.threads > 1)
+  for (int r = 0; r < count; ++r) body(r);
+}
+
 // forces/*.cpp: each adds its force into w.force.
-// With `damping`, also adds each spring's damping on its own ends' velocities
-// (k_d u uᵀ), which the step takes implicitly.
-void add_spring_forces(const SpringSet& springs, const std::vector<Vec3>& x,
-                       const std::vector<Vec3>& v, std::vector<Vec3>& f,
-                       std::vector<Mat3>* damping = nullptr);
+// Springs: with_damping also adds eq. 1's damping and sets w.damping[i] to each
+// particle's damping on its own velocity (Σ k_d u uᵀ), which the symplectic step
+// takes implicitly; without it, only the elastic part (implicit Euler takes the
+// damping into its matrix).
+void add_spring_forces(const Model& m, const State& s, Workspace& w, bool with_damping);
 void add_gravity(const Model& m, std::vector<Vec3>& f);
 void add_viscous_damping(const Model& m, const State& s, std::vector<Vec3>& f);
 void add_wind(const Model& m, const State& s, const Workspace& w, std::vector<Vec3>& f);
 void add_air_pressure(const Model& m, const State& s, Workspace& w);
 void add_adhesion(const Model& m, const State& s, Workspace& w);
-void add_self_collision(const Model& m, const State& s, Workspace& w);
+// Self-collision records its pairs in w.collision_pairs; with_damping adds the
+// -k_f v of colliding particles (implicit Euler takes it into its matrix).
+void add_self_collision(const Model& m, const State& s, Workspace& w, bool with_damping);
 void add_handle_forces(const Model& m, const State& s, Workspace& w);
 
-// air.cpp: advances the trapped air over dt (eqs. 2, 4, 5).
+// air.cpp: the trapped air starts as the volume under the cloth at
+// atmospheric pressure; update_air advances it over dt (eqs. 2, 4, 5).
+void start_air(const Model& m, State& s, Workspace& w);
 void update_air(const Model& m, State& s, Workspace& w, double dt);
 // The air term taken implicitly, after the explicit velocity update.
 void correct_air_implicitly(const Model& m, State& s, Workspace& w, double dt);
+// implicit_euler.cpp: the new velocities by backward Euler (s.v in, s.v out),
+// from the forces in w.force without their damping.
+void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h);
 // handles.cpp: pins, driven particles, height caps; records the rig's force.
 void apply_handle_constraints(const Model& m, State& s, Workspace& w);
 // Keeps the particles of a force handle that reached its height cap where it stopped.

@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cmath>
 #include <numbers>
+#include <omp.h>
 #include <unordered_map>
 
 #include "detail.hpp"
@@ -95,6 +96,20 @@ Model build_model(const Params& p) {
   m.shear.damping = p.springs.shear_damping;
   m.bending.k = p.springs.bending_k;
   m.bending.damping = p.springs.bending_damping;
+  const auto& sp = p.springs;
+  const double ss = sp.structural_k, sd = sp.structural_damping, hs = sp.shear_k,
+               hd = sp.shear_damping, bs = sp.bending_k, bd = sp.bending_damping;
+  const double diag = std::hypot(du, dv);
+  m.stencil = {{{1, 0, ss, sd, du},
+                {0, 1, ss, sd, dv},
+                {1, 1, hs, hd, diag},
+                {-1, 1, hs, hd, diag},
+                {2, 0, bs, bd, 2 * du},
+                {0, 2, bs, bd, 2 * dv},
+                {2, 2, bs, bd, 2 * diag},
+                {-2, 2, bs, bd, 2 * diag}}};
+  m.threads = p.integrator.threads > 0 ? static_cast<int>(p.integrator.threads)
+                                       : std::max(1, omp_get_num_procs());
   for (int j = 0; j < m.nv; ++j) {
     for (int i = 0; i < m.nu; ++i) {
       add_spring(m.structural, m, i, j, i + 1, j);

@@ -45,6 +45,11 @@ void Simulation::reset() {
   for (auto* a : {&ws_.force, &ws_.normal, &ws_.surface_normal, &ws_.x_before, &ws_.air_direction})
     a->assign(n, Vec3::Zero());
   ws_.damping.assign(n, Mat3::Zero());
+  ws_.edge_block.assign(8 * static_cast<std::size_t>(n), Sym{});
+  ws_.diagonal.assign(n, Sym{});
+  ws_.preconditioner.assign(n, Mat3::Identity());
+  for (auto* a : {&ws_.cg_r, &ws_.cg_z, &ws_.cg_p, &ws_.cg_q}) a->assign(n, Vec3::Zero());
+  ws_.row_sums.assign(model_.nv, 0.0);
   ws_.distance.assign(n, kInf);
   ws_.adhesion.assign(n, 0.0);
   ws_.normal_force.assign(n, 0.0);
@@ -53,15 +58,8 @@ void Simulation::reset() {
   ws_.colliding.assign(n, 0);
   touched_.assign(n, 0);
   release();
-  // The trapped air starts as the volume under the cloth at atmospheric pressure.
   update_contact(model_, state_, ws_);
-  for (int i = 0; i < n; ++i)
-    if (ws_.distance[i] > 0 && !state_.contact[i]) state_.air_share[i] = model_.area[i] * ws_.distance[i];
-  update_air(model_, state_, ws_, 0.0);
-  state_.air_atm_volume = state_.air_volume;
-  state_.inner_pressure = model_.params.air.p_atm;
-  std::fill(state_.pocket_pressure.begin(), state_.pocket_pressure.end(), state_.inner_pressure);
-  state_.peak_deficit = 0;
+  start_air(model_, state_, ws_);
   update_strain_order(model_, state_, ws_);
   compute_normals(model_, state_.x, ws_.normal);
 }
@@ -89,40 +87,42 @@ void Simulation::step() {
   const double dt = m.params.integrator.dt;
 
   // 1. Forces, in a fixed order (the order of a float sum is part of the result).
+  // Implicit Euler takes the damping into its matrix, so leaves it out here.
+  const std::string& integrator = m.params.integrator.type;
+  const bool implicit = integrator == "implicit-euler";
   compute_normals(m, s.x, w.normal);
   std::fill(w.force.begin(), w.force.end(), Vec3::Zero());
-  const bool symplectic = m.params.integrator.type != "explicit-euler";
-  std::vector<Mat3>* damping = symplectic ? &w.damping : nullptr;
-  if (symplectic) std::fill(w.damping.begin(), w.damping.end(), Mat3::Zero());
-  add_spring_forces(m.structural, s.x, s.v, w.force, damping);
-  add_spring_forces(m.shear, s.x, s.v, w.force, damping);
-  add_spring_forces(m.bending, s.x, s.v, w.force, damping);
+  add_spring_forces(m, s, w, !implicit);
   add_gravity(m, w.force);
-  add_viscous_damping(m, s, w.force);
+  if (!implicit) add_viscous_damping(m, s, w.force);
   add_wind(m, s, w, w.force);
   add_air_pressure(m, s, w);
   add_adhesion(m, s, w);
-  add_self_collision(m, s, w);
+  add_self_collision(m, s, w, !implicit);
   add_handle_forces(m, s, w);
   for (int i = 0; i < m.n; ++i) w.normal_force[i] = w.force[i].dot(w.surface_normal[i]);
 
   // 2. Integrate.
-  if (m.params.integrator.type == "explicit-euler") {
+  if (integrator == "explicit-euler") {
     for (int i = 0; i < m.n; ++i) {
       s.x[i] += dt * s.v[i];
       s.v[i] += (dt * m.inv_mass[i]) * w.force[i];
     }
     correct_air_implicitly(m, s, w, dt);
-  } else {  // symplectic Euler
-    // Each particle's own damping (springs and viscous) is taken at the end of
-    // the step: v += (I + Δt/m C_i)⁻¹ Δt/m F_i. Explicit, the 0.01 N·s/m of a
-    // few springs on a dry corner particle (1 mg) is unstable at Δt = 5e-5 s.
-    const double c = m.params.forces.viscous_damping;
-    for (int i = 0; i < m.n; ++i) {
-      if (m.inv_mass[i] == 0) continue;
-      const double h = dt * m.inv_mass[i];
-      const Mat3 a = Mat3::Identity() + h * (w.damping[i] + Mat3::Identity() * (c * m.area[i]));
-      s.v[i] += a.inverse() * (h * w.force[i]);
+  } else {
+    if (implicit) {
+      implicit_euler_velocities(m, s, w, dt);
+    } else {  // symplectic Euler
+      // Each particle's own damping (springs and viscous) is taken at the end of
+      // the step: v += (I + Δt/m C_i)⁻¹ Δt/m F_i. Explicit, the 0.01 N·s/m of a
+      // few springs on a dry corner particle (1 mg) is unstable at Δt = 5e-5 s.
+      const double c = m.params.forces.viscous_damping;
+      parallel_for(m, m.n, [&](int i) {
+        if (m.inv_mass[i] == 0) return;
+        const double h = dt * m.inv_mass[i];
+        const Mat3 a = Mat3::Identity() + h * (w.damping[i] + Mat3::Identity() * (c * m.area[i]));
+        s.v[i] += a.inverse() * (h * w.force[i]);
+      });
     }
     correct_air_implicitly(m, s, w, dt);
     for (int i = 0; i < m.n; ++i) s.x[i] += dt * s.v[i];

@@ -98,6 +98,7 @@ struct Params {
     double k_delta = 0.9e-3;          // K_δ, m/(s·Pa)
     double breakthrough_pressure = 1000;  // P_b, Pa
     double band = 0.05;               // ball: air counted within this distance, m
+    double film = 1e-4;               // air film a resting cloth keeps under it, m
     std::string force_direction = "surface";  // surface (n_s) | cloth (the cloth normal)
     bool paper_update_rule = false;
     double paper_threshold = 0.0;     // m³ of growth per step that triggers an update
@@ -111,9 +112,12 @@ struct Params {
   } self_collision;
 
   struct Integrator {
-    std::string type = "symplectic-euler";  // explicit-euler | symplectic-euler
+    std::string type = "symplectic-euler";  // explicit-euler | symplectic-euler | implicit-euler
     double dt = 5e-5;         // s
     double max_speed = 50;    // m/s; faster means the run has blown up
+    long long threads = 0;    // threads of the step; 0 means all cores
+    double cg_tolerance = 1e-3;          // implicit-euler: relative residual
+    long long cg_max_iterations = 300;   // implicit-euler
   } integrator;
 
   struct Run {

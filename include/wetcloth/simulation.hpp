@@ -44,6 +44,13 @@ struct Handle {
 
 enum class SurfaceKind { None, Table, Ball };
 
+// A spring of the grid's stencil, as a forward offset: particle (i, j) is tied
+// to (i + di, j + dj). Eight offsets and their mirror images are all the springs.
+struct StencilEdge {
+  int di = 0, dj = 0;
+  double k = 0, damping = 0, rest = 0;
+};
+
 struct Model {
   Params params;
   int nu = 0, nv = 0, n = 0;
@@ -53,6 +60,8 @@ struct Model {
   std::vector<std::uint8_t> driven;     // pinned or moved: dynamics never moves it
   std::vector<std::uint8_t> in_wind;    // inside the wind region
   SpringSet structural, shear, bending;
+  std::array<StencilEdge, 8> stencil;  // the same springs, by offset (forces/springs.cpp)
+  int threads = 1;                     // threads of the step (integrator.threads resolved)
   std::vector<std::array<int, 3>> triangles;
   std::vector<std::array<int, 2>> triangle_pairs;  // triangles sharing an edge
   std::vector<Handle> handles;
@@ -82,6 +91,16 @@ struct State {
   bool sources_found = false;
 };
 
+// A symmetric 3x3 block as its six entries xx, yy, zz, xy, xz, yz.
+using Sym = std::array<double, 6>;
+
+// Two particles closer than the self-collision distance; u points from j to i.
+struct CollisionPair {
+  int i = 0, j = 0;
+  Vec3 u = Vec3::Zero();
+  Sym block{};  // implicit Euler: its h² k_t u uᵀ
+};
+
 // Scratch arrays, reused every step: nothing is allocated per step.
 struct Workspace {
   std::vector<Vec3> force, normal, x_before, surface_normal;
@@ -103,6 +122,14 @@ struct Workspace {
   std::vector<int> cell_start, cell_entries, particle_cell;
   std::vector<std::array<long long, 3>> cell_coord;
   std::vector<std::uint8_t> colliding;
+  std::vector<CollisionPair> collision_pairs;
+  // Implicit Euler: matrix blocks (8 forward stencil edges per particle), the
+  // block-Jacobi preconditioner, conjugate-gradient vectors, per-row sums.
+  std::vector<Sym> edge_block, diagonal;
+  std::vector<Mat3> preconditioner;
+  std::vector<Vec3> cg_r, cg_z, cg_p, cg_q;
+  std::vector<double> row_sums;
+  int cg_iterations = 0;              // of the last implicit step
   // Interactive grab (viewer).
   int grab_particle = -1;
   Vec3 grab_target = Vec3::Zero();

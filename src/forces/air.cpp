@@ -15,13 +15,16 @@ bool holds_air(const Model& m, double d) {
   return m.contact_surface != SurfaceKind::Ball || d < m.params.air.band;
 }
 
-// The gap counted in V_sum. Around the ball a particle beyond the band counts
-// as a column of the band's height rather than dropping out: V_sum stays
-// continuous as particles cross the band (a jump in V_sum is a jump in
-// pressure, which kicks the cloth).
+// The gap counted in V_sum: the air film a resting cloth keeps in its weave
+// (air.film), plus the height above the surface. Around the ball a particle
+// beyond the band counts as a column of the band's height rather than dropping
+// out: V_sum stays continuous as particles cross the band (a jump in V_sum is a
+// jump in pressure, which kicks the cloth). Without the film a cloth that
+// starts flat traps no air at all, and `sealed` holds a full vacuum.
 double air_gap(const Model& m, double d) {
-  if (d <= 0) return 0.0;
-  return m.contact_surface == SurfaceKind::Ball ? std::min(d, m.params.air.band) : d;
+  const double above = std::max(d, 0.0);
+  return m.params.air.film +
+         (m.contact_surface == SurfaceKind::Ball ? std::min(above, m.params.air.band) : above);
 }
 
 // Advances one pocket's V_atm over dt with V_sum held fixed, exactly (eq. 4 is
@@ -46,18 +49,23 @@ double pressure(const Params& p, double v_atm, double v_sum) {
   return v_sum > 0 ? p.air.p_atm * v_atm / v_sum : p.air.p_atm;  // eq. 2
 }
 
-// How the deficit answers a change of V_sum within one step, dΔP/dV_sum: the
-// air pressure is a stiff spring (a 1 mm film under a 0.2 kg/m² cloth rings at
-// kHz), so the step takes it implicitly (correct_air_implicitly). Permeation
-// over the step relaxes it by e^(-Δt/τ); at the breakthrough cap it is zero.
+// How the deficit at the end of a step answers the change of V_sum over it,
+// dΔP/dΔV, for correct_air_implicitly. With V_sum growing linearly over the step
+// and eq. 4 solved exactly, it is
+//   P_atm (V_atm - V_sum) / V_sum² + (P_atm / V_sum) (τ/Δt)(1 - e^(-Δt/τ)):
+// a gas spring P_atm V_atm / V_sum² when Δt << τ (a 1 mm film under a
+// 0.2 kg/m² cloth rings at kHz), and a damper 1 / (δ A_sum Δt) when Δt >> τ
+// (air seeping through as fast as the tent grows), so that large implicit steps
+// keep the suction that slows a lifting cloth. Sealed air is a pure gas spring;
+// at the breakthrough cap the deficit cannot grow.
 double stiffness(const Params& p, double v_atm, double v_sum, double a_sum, double dt, bool leaks) {
   if (v_sum <= 0) return 0.0;
-  if (leaks && p.air.p_atm - pressure(p, v_atm, v_sum) >= p.air.breakthrough_pressure * (1 - 1e-12))
-    return 0.0;
-  double relax = 1.0;
   const double delta = permeability(p);
-  if (leaks && delta > 0 && a_sum > 0) relax = std::exp(-dt * p.air.p_atm * delta * a_sum / v_sum);
-  return relax * p.air.p_atm * v_atm / (v_sum * v_sum);
+  if (!leaks || delta <= 0 || a_sum <= 0) return p.air.p_atm * v_atm / (v_sum * v_sum);
+  if (p.air.p_atm - pressure(p, v_atm, v_sum) >= p.air.breakthrough_pressure * (1 - 1e-12)) return 0.0;
+  const double x = dt * p.air.p_atm * delta * a_sum / v_sum;  // Δt/τ
+  const double seep = x > 1e-6 ? -std::expm1(-x) / x : 1 - x / 2;
+  return p.air.p_atm * ((v_atm - v_sum) / (v_sum * v_sum) + seep / v_sum);
 }
 
 // `vented`: each connected lifted region is its own pocket; one that reaches the
@@ -81,7 +89,7 @@ void update_vented(const Model& m, State& s, Workspace& w, double dt) {
       const int k = w.queue[q];
       open = open || m.on_border[k];
       v_atm += s.air_share[k];
-      v_sum += m.area[k] * w.distance[k];
+      v_sum += m.area[k] * air_gap(m, w.distance[k]);
       a_sum += m.area[k];
       const int i = k % m.nu, j = k / m.nu;
       const int nb[4][2] = {{i - 1, j}, {i + 1, j}, {i, j - 1}, {i, j + 1}};
@@ -97,7 +105,7 @@ void update_vented(const Model& m, State& s, Workspace& w, double dt) {
     w.pocket_stiffness.push_back(open ? 0.0 : stiffness(p, v_atm, v_sum, a_sum, dt, true));
     const double pin = pressure(p, v_atm, v_sum);
     for (int k : w.queue) {
-      s.air_share[k] = v_sum > 0 ? v_atm * m.area[k] * w.distance[k] / v_sum : 0;
+      s.air_share[k] = v_sum > 0 ? v_atm * m.area[k] * air_gap(m, w.distance[k]) / v_sum : 0;
       s.pocket_pressure[k] = pin;
     }
     total_atm += v_atm;
@@ -155,6 +163,16 @@ void update_air(const Model& m, State& s, Workspace& w, double dt) {
   }
   const double deficit = p.air.p_atm - s.inner_pressure;
   if (deficit > s.peak_deficit) s.peak_deficit = deficit;
+}
+
+void start_air(const Model& m, State& s, Workspace& w) {
+  for (int i = 0; i < m.n; ++i)
+    s.air_share[i] = holds_air(m, w.distance[i]) && !s.contact[i] ? m.area[i] * air_gap(m, w.distance[i]) : 0;
+  update_air(m, s, w, 0.0);
+  s.air_atm_volume = s.air_volume;
+  s.inner_pressure = m.params.air.p_atm;
+  std::fill(s.pocket_pressure.begin(), s.pocket_pressure.end(), s.inner_pressure);
+  s.peak_deficit = 0;
 }
 
 // eq. 3: F_i = -(P_atm - P_in) A_i n_i on lifted particles, so that suction

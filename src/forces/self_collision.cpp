@@ -1,5 +1,7 @@
 // Self-collision (MODEL.md section 7, eq. 15): repulsion springs between particles
 // closer than d_t that are not within two grid steps, found with a spatial hash.
+#include <algorithm>
+#include <cmath>
 #include <cstdlib>
 
 #include "../detail.hpp"
@@ -7,17 +9,23 @@
 
 namespace wetcloth::detail {
 
-void add_self_collision(const Model& m, const State& s, Workspace& w) {
+void add_self_collision(const Model& m, const State& s, Workspace& w, bool with_damping) {
   const auto& p = m.params.self_collision;
   if (!p.enabled) return;
   const double dt_dist = p.distance, k = p.k;
   build_hash(s.x, 2 * dt_dist, w);
+  // Grid neighbours never collide: within two grid steps (MODEL.md), or more
+  // on a grid fine enough that d_t spans more steps, else a flat cloth would
+  // repel itself.
   const int nu = m.nu;
-  auto near_in_grid = [nu](int i, int j) {
-    return std::abs(i % nu - j % nu) <= 2 && std::abs(i / nu - j / nu) <= 2;
+  const double step = std::min(m.params.cloth.size[0] / (m.nu - 1), m.params.cloth.size[1] / (m.nv - 1));
+  const int reach = std::max(2, static_cast<int>(std::ceil(dt_dist / step)));
+  auto near_in_grid = [nu, reach](int i, int j) {
+    return std::abs(i % nu - j % nu) <= reach && std::abs(i / nu - j / nu) <= reach;
   };
   auto& colliding = w.colliding;
   std::fill(colliding.begin(), colliding.end(), 0);
+  w.collision_pairs.clear();
   for_each_close_pair(s.x, dt_dist, w, near_in_grid,
                       [&](int i, int j, const Vec3& d, double len) {
                         // eq. 15: F_i = k_t (d_t - |d_ij|) d_ij / |d_ij|, F_j = -F_i
@@ -25,7 +33,9 @@ void add_self_collision(const Model& m, const State& s, Workspace& w) {
                         w.force[i] += fi;
                         w.force[j] -= fi;
                         colliding[i] = colliding[j] = 1;
+                        w.collision_pairs.push_back({i, j, d / len, {}});
                       });
+  if (!with_damping) return;  // implicit Euler takes it into its matrix
   // The paper's friction-like damping -k_f v on every colliding particle.
   for (int i = 0; i < m.n; ++i)
     if (colliding[i]) w.force[i] -= p.damping * s.v[i];

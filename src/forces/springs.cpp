@@ -1,27 +1,38 @@
 // Provot's springs, eq. 1: Hooke's law plus damping projected on the spring.
+// Gathered per particle over the grid's stencil (Model::stencil, both
+// directions): each particle sums its own springs in a fixed order, so rows are
+// independent, run on any number of threads, and give the same bits on each.
 #include "../detail.hpp"
 
 namespace wetcloth::detail {
 
-void add_spring_forces(const SpringSet& s, const std::vector<Vec3>& x, const std::vector<Vec3>& v,
-                       std::vector<Vec3>& f, std::vector<Mat3>* damping) {
-  const double k = s.k, kd = s.damping;
-  for (std::size_t e = 0; e < s.size(); ++e) {
-    const int a = s.a[e], b = s.b[e];
-    const Vec3 d = x[b] - x[a];
-    const double len = d.norm();
-    if (len <= 0) continue;
-    const Vec3 u = d / len;
-    // F_a = u (k_s (|d| - l0) + k_d (v_b - v_a)·u), F_b = -F_a
-    const Vec3 fa = u * (k * (len - s.rest[e]) + kd * (v[b] - v[a]).dot(u));
-    f[a] += fa;
-    f[b] -= fa;
-    if (damping) {  // ∂F_a/∂v_a = -k_d u uᵀ, the same for b
-      const Mat3 c = kd * u * u.transpose();
-      (*damping)[a] += c;
-      (*damping)[b] += c;
+void add_spring_forces(const Model& m, const State& s, Workspace& w, bool with_damping) {
+  parallel_for(m, m.nv, [&](int j) {
+    for (int i = 0; i < m.nu; ++i) {
+      const int a = m.index(i, j);
+      Vec3 f = Vec3::Zero();
+      Mat3 c = Mat3::Zero();
+      for (const StencilEdge& e : m.stencil)
+        for (const int sign : {1, -1}) {
+          const int bi = i + sign * e.di, bj = j + sign * e.dj;
+          if (bi < 0 || bj < 0 || bi >= m.nu || bj >= m.nv) continue;
+          const int b = m.index(bi, bj);
+          const Vec3 d = s.x[b] - s.x[a];
+          const double len = d.norm();
+          if (len <= 0) continue;
+          const Vec3 u = d / len;
+          // F_a = u (k_s (|d| - l0) + k_d (v_b - v_a)·u)
+          double t = e.k * (len - e.rest);
+          if (with_damping) {
+            t += e.damping * (s.v[b] - s.v[a]).dot(u);
+            c.noalias() += e.damping * u * u.transpose();  // -∂F_a/∂v_a
+          }
+          f += t * u;
+        }
+      w.force[a] += f;
+      if (with_damping) w.damping[a] = c;
     }
-  }
+  });
 }
 
 }  // namespace wetcloth::detail

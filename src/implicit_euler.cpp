@@ -1,0 +1,179 @@
+// Backward Euler for large steps (MODEL.md section 8; Baraff & Witkin 1998).
+// The springs are linearised about the start of the step and solved for the new
+// velocities with preconditioned conjugate gradients, matrix-free on the grid's
+// stencil:
+//   (M + h D + h² K) v' = M v + h f,
+// where f holds every force but the damping (spring, viscous, self-collision),
+// which D takes implicitly; K is the springs' stiffness with the compressed-spring
+// fix (the transverse term dropped when |d| < l0, so K stays positive
+// semi-definite) plus the repulsion of colliding pairs along their line. The air,
+// adhesion, friction and surface contacts are taken at the start of the step.
+// Pinned, driven and held particles keep their velocity (Baraff & Witkin's filter).
+#include <cmath>
+
+#include "detail.hpp"
+
+namespace wetcloth::detail {
+
+namespace {
+
+Sym outer(const Vec3& u, double a, double b) {  // a u uᵀ + b I
+  return {a * u.x() * u.x() + b, a * u.y() * u.y() + b, a * u.z() * u.z() + b,
+          a * u.x() * u.y(),     a * u.x() * u.z(),     a * u.y() * u.z()};
+}
+
+Vec3 times(const Sym& s, const Vec3& x) {
+  return {s[0] * x.x() + s[3] * x.y() + s[4] * x.z(), s[3] * x.x() + s[1] * x.y() + s[5] * x.z(),
+          s[4] * x.x() + s[5] * x.y() + s[2] * x.z()};
+}
+
+Mat3 full(const Sym& s) {
+  Mat3 a;
+  a << s[0], s[3], s[4], s[3], s[1], s[5], s[4], s[5], s[2];
+  return a;
+}
+
+void add_to(Sym& a, const Sym& b) {
+  for (int k = 0; k < 6; ++k) a[k] += b[k];
+}
+
+bool fixed(const Model& m, const State& s, int i) { return m.inv_mass[i] == 0 || s.held[i]; }
+
+// Σ over rows of per-row partial sums, rows summed in order: the same bits for
+// any number of threads.
+template <class Row>
+double ordered_sum(const Model& m, Workspace& w, Row row) {
+  parallel_for(m, m.nv, [&](int j) { w.row_sums[j] = row(j); });
+  double total = 0;
+  for (int j = 0; j < m.nv; ++j) total += w.row_sums[j];
+  return total;
+}
+
+double dot(const Model& m, Workspace& w, const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
+  return ordered_sum(m, w, [&](int j) {
+    double sum = 0;
+    for (int k = j * m.nu; k < (j + 1) * m.nu; ++k) sum += a[k].dot(b[k]);
+    return sum;
+  });
+}
+
+// y = A x over the free particles; fixed ones have identity rows (their x
+// never changes, so their columns only enter through the starting residual).
+void multiply(const Model& m, const State& s, Workspace& w, const std::vector<Vec3>& x,
+              std::vector<Vec3>& y) {
+  parallel_for(m, m.nv, [&](int j) {
+    for (int i = 0; i < m.nu; ++i) {
+      const int a = m.index(i, j);
+      if (fixed(m, s, a)) {
+        y[a] = x[a];
+        continue;
+      }
+      Vec3 sum = times(w.diagonal[a], x[a]);
+      for (int e = 0; e < 8; ++e) {
+        const StencilEdge& st = m.stencil[e];
+        const int fi = i + st.di, fj = j + st.dj, bi = i - st.di, bj = j - st.dj;
+        if (fi >= 0 && fj >= 0 && fi < m.nu && fj < m.nv)
+          sum -= times(w.edge_block[8 * a + e], x[m.index(fi, fj)]);
+        if (bi >= 0 && bj >= 0 && bi < m.nu && bj < m.nv) {
+          const int b = m.index(bi, bj);
+          sum -= times(w.edge_block[8 * b + e], x[b]);
+        }
+      }
+      y[a] = sum;
+    }
+  });
+  for (const CollisionPair& c : w.collision_pairs) {  // few: serial, in pair order
+    if (!fixed(m, s, c.i)) y[c.i] -= times(c.block, x[c.j]);
+    if (!fixed(m, s, c.j)) y[c.j] -= times(c.block, x[c.i]);
+  }
+}
+
+}  // namespace
+
+void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h) {
+  const double h2 = h * h, c = m.params.forces.viscous_damping;
+  const double kf = m.params.self_collision.damping;
+  // Each forward stencil edge's block h k_d u uᵀ + h² K_e.
+  parallel_for(m, m.nv, [&](int j) {
+    for (int i = 0; i < m.nu; ++i) {
+      const int a = m.index(i, j);
+      for (int e = 0; e < 8; ++e) {
+        const StencilEdge& st = m.stencil[e];
+        const int bi = i + st.di, bj = j + st.dj;
+        Sym& block = w.edge_block[8 * a + e];
+        block = {};
+        if (bi < 0 || bj < 0 || bi >= m.nu || bj >= m.nv) continue;
+        const Vec3 d = s.x[m.index(bi, bj)] - s.x[a];
+        const double len = d.norm();
+        if (len <= 0) continue;
+        const Vec3 u = d / len;
+        // K_e = k (u uᵀ + (1 - l0/|d|)(I - u uᵀ)), the transverse part only when stretched.
+        const double transverse = std::max(0.0, 1.0 - st.rest / len) * st.k;
+        block = outer(u, h * st.damping + h2 * (st.k - transverse), h2 * transverse);
+      }
+    }
+  });
+  // Diagonal blocks: mass, viscous and collision damping, and every edge at the particle.
+  parallel_for(m, m.nv, [&](int j) {
+    for (int i = 0; i < m.nu; ++i) {
+      const int a = m.index(i, j);
+      Sym& d = w.diagonal[a];
+      d = outer(Vec3::Zero(), 0, m.mass[a] + h * c * m.area[a] + (w.colliding[a] ? h * kf : 0.0));
+      for (int e = 0; e < 8; ++e) {
+        const StencilEdge& st = m.stencil[e];
+        const int fi = i + st.di, fj = j + st.dj, bi = i - st.di, bj = j - st.dj;
+        if (fi >= 0 && fj >= 0 && fi < m.nu && fj < m.nv) add_to(d, w.edge_block[8 * a + e]);
+        if (bi >= 0 && bj >= 0 && bi < m.nu && bj < m.nv)
+          add_to(d, w.edge_block[8 * m.index(bi, bj) + e]);
+      }
+    }
+  });
+  for (CollisionPair& p : w.collision_pairs) {
+    p.block = outer(p.u, h2 * m.params.self_collision.k, 0);
+    add_to(w.diagonal[p.i], p.block);
+    add_to(w.diagonal[p.j], p.block);
+  }
+
+  // Right-hand side M v + h f, the block-Jacobi preconditioner, and the start
+  // from the current velocities.
+  auto& x = s.v;
+  auto &r = w.cg_r, &z = w.cg_z, &p = w.cg_p, &q = w.cg_q;
+  parallel_for(m, m.n, [&](int a) {
+    if (fixed(m, s, a)) {
+      w.preconditioner[a] = Mat3::Identity();
+      r[a] = x[a];  // b = x: no change
+      return;
+    }
+    w.preconditioner[a] = full(w.diagonal[a]).inverse();
+    r[a] = m.mass[a] * x[a] + h * w.force[a];
+  });
+  const double b_norm = std::sqrt(dot(m, w, r, r));
+  multiply(m, s, w, x, q);
+  parallel_for(m, m.n, [&](int a) {
+    r[a] -= q[a];
+    z[a] = w.preconditioner[a] * r[a];
+    p[a] = z[a];
+  });
+  double rz = dot(m, w, r, z);
+  const double tolerance = m.params.integrator.cg_tolerance * b_norm;
+  int it = 0;
+  for (; it < m.params.integrator.cg_max_iterations; ++it) {
+    if (std::sqrt(dot(m, w, r, r)) <= tolerance) break;
+    multiply(m, s, w, p, q);
+    const double pq = dot(m, w, p, q);
+    if (pq <= 0) break;
+    const double alpha = rz / pq;
+    parallel_for(m, m.n, [&](int a) {
+      x[a] += alpha * p[a];
+      r[a] -= alpha * q[a];
+      z[a] = w.preconditioner[a] * r[a];
+    });
+    const double rz_next = dot(m, w, r, z);
+    const double beta = rz_next / rz;
+    rz = rz_next;
+    parallel_for(m, m.n, [&](int a) { p[a] = z[a] + beta * p[a]; });
+  }
+  w.cg_iterations = it;
+}
+
+}  // namespace wetcloth::detail

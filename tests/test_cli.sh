@@ -70,5 +70,24 @@ else
   bad "README parameter table differs from 'wetcloth params --markdown' (run: make readme-params)"
 fi
 
+# bench: one small grid, JSON out; bad input and a blow-up write nothing. No timing checks.
+"$W" bench --grids 9 --duration 0.002 --repetitions 2 --out "$T/bench.json" >/dev/null; code=$?
+[ $code -eq 0 ] && ok "bench exits 0" || bad "bench exit code $code"
+python3 -c '
+import json, sys
+d = json.load(open(sys.argv[1]))
+g = d["grids"]
+assert len(g) == 1 and g[0]["particles"] == 81 and len(g[0]["wall_s"]) == 2 and d["repetitions"] == 2, d
+' "$T/bench.json" && ok "bench.json: one grid, 81 particles, 2 repetitions" || bad "bench.json"
+expect_bad_bench() {
+  local name="$1" want="$2"; shift 2
+  "$W" bench "$@" --out "$T/bench_$name.json" >/dev/null 2>"$T/err"; local code=$?
+  [ $code -eq "$want" ] && [ ! -e "$T/bench_$name.json" ] && ok "bench $name: exit $want, nothing written" ||
+    bad "bench $name: exit code $code (want $want), $(cat "$T/err")"
+}
+expect_bad_bench grid2   2 --grids 2
+expect_bad_bench scene   2 --scene no-such-scene --grids 9
+expect_bad_bench blow-up 3 --scene hang --set integrator.dt=2e-3 --duration 1 --repetitions 1
+
 echo "$passes passed, $fails failed"
 [ $fails -eq 0 ]

@@ -6,6 +6,7 @@
 #include <optional>
 #include <unistd.h>
 
+#include "bench.hpp"
 #include "run.hpp"
 #include "scene_options.hpp"
 #include "sweep.hpp"
@@ -50,6 +51,7 @@ int main(int argc, char** argv) {
   params->add_flag("--markdown", markdown, "as the README's Markdown table");
 
   auto sweep_command = cli::add_sweep_command(app);
+  auto bench_command = cli::add_bench_command(app);
 #ifdef WETCLOTH_VIEWER
   auto viewer_command = viewer::add_commands(app);  // view, render
 #endif
@@ -61,6 +63,7 @@ int main(int argc, char** argv) {
     if (auto code = viewer_command()) return *code;
 #endif
     if (const int code = sweep_command(); code >= 0) return code;
+    if (const int code = bench_command(); code >= 0) return code;
     if (*scenes) {
       for (const auto& s : builtin_scenes()) std::printf("%-14s %s\n", s.name.c_str(), s.description.c_str());
       return 0;

@@ -1,0 +1,196 @@
+// Micro-benchmarks of the step and of each of its stages (src/detail.hpp) on the
+// pull-straight cloth at 51 x 51 and 201 x 201. `make bench` runs them; items
+// per second are particles per second.
+#include <benchmark/benchmark.h>
+
+#include <map>
+#include <string>
+#include <utility>
+
+#include "src/detail.hpp"
+#include "src/spatial_hash.hpp"
+#include "wetcloth/scene.hpp"
+
+using namespace wetcloth;
+using namespace wetcloth::detail;
+
+namespace {
+
+// Before anything is timed the scene runs until part of the cloth is lifted
+// (the rest still held by adhesion and air), as in a real pull: at 51 x 51 that
+// takes about 300 steps. At 101 and 201 the scene, tuned at 51, over-stretches
+// and leaves the table within ~20 steps, so a fixed count of steps would time a
+// cloth in the air: there is no contact then for adhesion, air or friction.
+constexpr int kMaxWarmSteps = 300;
+constexpr double kLiftedShare = 0.03;
+
+// pull-straight at G x G; `plain` leaves a plain cloth: no adhesion, no trapped
+// air, no self-collision, no handle (no override removes a handle, so Params does).
+Params scene(long long grid, bool plain) {
+  const std::string g = std::to_string(grid);
+  std::vector<std::string> sets{"cloth.resolution=[" + g + "," + g + "]"};
+  if (plain) sets.insert(sets.end(), {"adhesion.enabled=false", "air.model=\"off\"", "self_collision.enabled=false"});
+  Params p = load_scene("pull-straight", sets);
+  if (plain) p.handles.clear();
+  return p;
+}
+
+double lifted_share(const Simulation& sim) {
+  const Metrics m = sim.metrics();
+  return m.lifted_area_m2 / (m.lifted_area_m2 + m.contact_area_m2);
+}
+
+void grids(benchmark::internal::Benchmark* b) { b->Arg(51)->Arg(201)->Unit(benchmark::kMicrosecond); }
+
+// Warmed-up simulations, built once per process and copied by each benchmark:
+// at 201 the warm-up costs more than most benchmarks.
+const Simulation& warmed(long long grid, bool plain) {
+  static std::map<std::pair<long long, bool>, Simulation> cache;
+  auto it = cache.find({grid, plain});
+  if (it == cache.end()) {
+    it = cache.emplace(std::pair{grid, plain}, Simulation(scene(grid, plain))).first;
+    Simulation& sim = it->second;
+    for (int k = 0; k < kMaxWarmSteps && lifted_share(sim) < kLiftedShare; ++k) sim.step();
+  }
+  return it->second;
+}
+
+// limit_strain's input as the step hands it over (after integration, collision
+// and friction): the warm state one step on, taken with strain limiting off.
+const Simulation& before_strain_limit(long long grid) {
+  static std::map<long long, Simulation> cache;
+  auto it = cache.find(grid);
+  if (it == cache.end()) {
+    Simulation sim = warmed(grid, false);
+    Params p = sim.model().params;
+    p.strain_limit.enabled = false;
+    sim.set_params(p);  // same grid: the state is kept
+    sim.step();
+    it = cache.emplace(grid, std::move(sim)).first;
+  }
+  return it->second;
+}
+
+// Particles per second, and the state that was timed (share of the cloth
+// lifted, largest structural strain, a label if it blew up), so that a report
+// shows what it measured: at 201 pull-straight blows up within ~10 steps, and
+// its numbers then are those of a cloth still mostly flat but torn at the handle.
+void report(benchmark::State& st, const Simulation& sim) {
+  st.SetItemsProcessed(st.iterations() * sim.model().n);
+  st.counters["lifted"] = lifted_share(sim);
+  st.counters["max_strain"] = sim.metrics().max_strain;
+  if (!sim.blow_up_reason().empty()) st.SetLabel("blown up");
+}
+
+// One whole step, always from the warm state (restored untimed): stepping on
+// would time a different state every iteration.
+void BM_step(benchmark::State& st, bool plain) {
+  const Simulation& warm = warmed(st.range(0), plain);
+  Simulation sim = warm;
+  for (auto _ : st) {
+    st.PauseTiming();
+    sim = warm;
+    st.ResumeTiming();
+    sim.step();
+    benchmark::DoNotOptimize(sim.state().x.data());
+    benchmark::ClobberMemory();
+  }
+  report(st, warm);
+}
+BENCHMARK_CAPTURE(BM_step, full, false)->Apply(grids);
+BENCHMARK_CAPTURE(BM_step, plain, true)->Apply(grids);
+
+// One stage, fn(model, state, workspace), on copies of `from`'s state and
+// workspace, with the full scene's model (`from` may have a stage turned off). Forces pile up in w.force over the iterations; nothing reads them.
+// With `restore`, positions and velocities go back to `from`'s (untimed) before
+// each call: stages that move particles would otherwise act on their own output.
+template <class Fn>
+void stage(benchmark::State& st, const Simulation& from, bool restore, Fn fn) {
+  const Model& m = warmed(st.range(0), false).model();
+  State s = from.state();
+  Workspace w = from.workspace();
+  benchmark::DoNotOptimize(&s);
+  benchmark::DoNotOptimize(&w);
+  for (auto _ : st) {
+    if (restore) {
+      st.PauseTiming();
+      s.x = from.state().x;
+      s.v = from.state().v;
+      st.ResumeTiming();
+    }
+    fn(m, s, w);
+    benchmark::ClobberMemory();
+  }
+  report(st, from);
+}
+
+const Simulation& warm(const benchmark::State& st) { return warmed(st.range(0), false); }
+
+void BM_springs(benchmark::State& st) {
+  stage(st, warm(st), false, [](const Model& m, State& s, Workspace& w) {
+    // As the symplectic step does: with each spring's damping on its own ends.
+    add_spring_forces(m.structural, s.x, s.v, w.force, &w.damping);
+    add_spring_forces(m.shear, s.x, s.v, w.force, &w.damping);
+    add_spring_forces(m.bending, s.x, s.v, w.force, &w.damping);
+  });
+}
+void BM_gravity(benchmark::State& st) {
+  stage(st, warm(st), false, [](const Model& m, State&, Workspace& w) { add_gravity(m, w.force); });
+}
+void BM_viscous_damping(benchmark::State& st) {
+  stage(st, warm(st), false, [](const Model& m, State& s, Workspace& w) { add_viscous_damping(m, s, w.force); });
+}
+void BM_air(benchmark::State& st) {
+  stage(st, warm(st), false, [](const Model& m, State& s, Workspace& w) {
+    add_air_pressure(m, s, w);
+    update_air(m, s, w, m.params.integrator.dt);
+  });
+}
+void BM_adhesion(benchmark::State& st) {
+  stage(st, warm(st), false, [](const Model& m, State& s, Workspace& w) { add_adhesion(m, s, w); });
+}
+void BM_self_collision(benchmark::State& st) {
+  stage(st, warm(st), false, [](const Model& m, State& s, Workspace& w) { add_self_collision(m, s, w); });
+}
+void BM_build_hash(benchmark::State& st) {
+  stage(st, warm(st), false, [](const Model& m, State& s, Workspace& w) {
+    build_hash(s.x, 2 * m.params.self_collision.distance, w);  // the cell add_self_collision uses
+  });
+}
+void BM_limit_strain(benchmark::State& st) {
+  stage(st, before_strain_limit(st.range(0)), true, [](const Model& m, State& s, Workspace& w) {
+    limit_strain(m, s, w, m.params.integrator.dt);
+  });
+}
+// Nothing is inside the table in the warm state: this times the queries; the
+// projection, a few flops for a particle that is inside, is rarely taken.
+void BM_collide(benchmark::State& st) {
+  stage(st, warm(st), false, [](const Model& m, State& s, Workspace&) { collide(m, s, nullptr); });
+}
+void BM_friction(benchmark::State& st) {
+  // Particles on the contact surface take their load from adhesion and forces;
+  // `touched` (pushed out of another obstacle) does not arise in this scene.
+  std::vector<std::uint8_t> touched(warm(st).model().n, 0);
+  stage(st, warm(st), true, [&touched](const Model& m, State& s, Workspace& w) {
+    apply_friction(m, s, w, touched, m.params.integrator.dt);
+  });
+}
+void BM_normals(benchmark::State& st) {
+  stage(st, warm(st), false, [](const Model& m, State& s, Workspace& w) { compute_normals(m, s.x, w.normal); });
+}
+
+BENCHMARK(BM_springs)->Apply(grids);
+BENCHMARK(BM_gravity)->Apply(grids);
+BENCHMARK(BM_viscous_damping)->Apply(grids);
+BENCHMARK(BM_air)->Apply(grids);
+BENCHMARK(BM_adhesion)->Apply(grids);
+BENCHMARK(BM_self_collision)->Apply(grids);
+BENCHMARK(BM_build_hash)->Apply(grids);
+BENCHMARK(BM_limit_strain)->Apply(grids);
+BENCHMARK(BM_collide)->Apply(grids);
+BENCHMARK(BM_friction)->Apply(grids);
+BENCHMARK(BM_normals)->Apply(grids);
+
+}  // namespace
+
+BENCHMARK_MAIN();

@@ -4,6 +4,7 @@
 #include <benchmark/benchmark.h>
 
 #include <map>
+#include <tuple>
 #include <string>
 #include <utility>
 
@@ -17,20 +18,20 @@ using namespace wetcloth::detail;
 namespace {
 
 // Before anything is timed the scene runs until part of the cloth is lifted
-// (the rest still held by adhesion and air), as in a real pull: at 51 x 51 that
-// takes about 300 steps. At 101 and 201 the scene, tuned at 51, over-stretches
-// and leaves the table within ~20 steps, so a fixed count of steps would time a
-// cloth in the air: there is no contact then for adhesion, air or friction.
+// (the rest still held by adhesion and air), as in a real pull, or for at most
+// 300 steps.
 constexpr int kMaxWarmSteps = 300;
 constexpr double kLiftedShare = 0.03;
 
-// pull-straight at G x G; `plain` leaves a plain cloth: no adhesion, no trapped
-// air, no self-collision, no handle (no override removes a handle, so Params does).
-Params scene(long long grid, bool plain) {
-  const std::string g = std::to_string(grid);
-  std::vector<std::string> sets{"cloth.resolution=[" + g + "," + g + "]"};
+// pull-straight at G x G (the same cloth: wetcloth::at_resolution) on one
+// thread; `plain` leaves a plain cloth: no adhesion, no trapped air, no
+// self-collision, no handle (no override removes a handle, so Params does);
+// `implicit` takes implicit Euler at 1/240 s.
+Params scene(long long grid, bool plain, bool implicit = false) {
+  std::vector<std::string> sets{"integrator.threads=1"};
   if (plain) sets.insert(sets.end(), {"adhesion.enabled=false", "air.model=\"off\"", "self_collision.enabled=false"});
-  Params p = load_scene("pull-straight", sets);
+  if (implicit) sets.insert(sets.end(), {"integrator.type=\"implicit-euler\"", "integrator.dt=0.004166666666666667"});
+  Params p = at_resolution(load_scene("pull-straight", sets), grid);
   if (plain) p.handles.clear();
   return p;
 }
@@ -44,11 +45,11 @@ void grids(benchmark::internal::Benchmark* b) { b->Arg(51)->Arg(201)->Unit(bench
 
 // Warmed-up simulations, built once per process and copied by each benchmark:
 // at 201 the warm-up costs more than most benchmarks.
-const Simulation& warmed(long long grid, bool plain) {
-  static std::map<std::pair<long long, bool>, Simulation> cache;
-  auto it = cache.find({grid, plain});
+const Simulation& warmed(long long grid, bool plain, bool implicit = false) {
+  static std::map<std::tuple<long long, bool, bool>, Simulation> cache;
+  auto it = cache.find({grid, plain, implicit});
   if (it == cache.end()) {
-    it = cache.emplace(std::pair{grid, plain}, Simulation(scene(grid, plain))).first;
+    it = cache.emplace(std::tuple{grid, plain, implicit}, Simulation(scene(grid, plain, implicit))).first;
     Simulation& sim = it->second;
     for (int k = 0; k < kMaxWarmSteps && lifted_share(sim) < kLiftedShare; ++k) sim.step();
   }
@@ -73,8 +74,7 @@ const Simulation& before_strain_limit(long long grid) {
 
 // Particles per second, and the state that was timed (share of the cloth
 // lifted, largest structural strain, a label if it blew up), so that a report
-// shows what it measured: at 201 pull-straight blows up within ~10 steps, and
-// its numbers then are those of a cloth still mostly flat but torn at the handle.
+// shows what it measured.
 void report(benchmark::State& st, const Simulation& sim) {
   st.SetItemsProcessed(st.iterations() * sim.model().n);
   st.counters["lifted"] = lifted_share(sim);
@@ -84,8 +84,8 @@ void report(benchmark::State& st, const Simulation& sim) {
 
 // One whole step, always from the warm state (restored untimed): stepping on
 // would time a different state every iteration.
-void BM_step(benchmark::State& st, bool plain) {
-  const Simulation& warm = warmed(st.range(0), plain);
+void BM_step(benchmark::State& st, bool plain, bool implicit) {
+  const Simulation& warm = warmed(st.range(0), plain, implicit);
   Simulation sim = warm;
   for (auto _ : st) {
     st.PauseTiming();
@@ -97,8 +97,10 @@ void BM_step(benchmark::State& st, bool plain) {
   }
   report(st, warm);
 }
-BENCHMARK_CAPTURE(BM_step, full, false)->Apply(grids);
-BENCHMARK_CAPTURE(BM_step, plain, true)->Apply(grids);
+BENCHMARK_CAPTURE(BM_step, full, false, false)->Apply(grids);
+BENCHMARK_CAPTURE(BM_step, plain, true, false)->Apply(grids);
+// The implicit step is mostly its conjugate-gradient solve.
+BENCHMARK_CAPTURE(BM_step, implicit_full, false, true)->Apply(grids);
 
 // One stage, fn(model, state, workspace), on copies of `from`'s state and
 // workspace, with the full scene's model (`from` may have a stage turned off). Forces pile up in w.force over the iterations; nothing reads them.
@@ -129,9 +131,7 @@ const Simulation& warm(const benchmark::State& st) { return warmed(st.range(0), 
 void BM_springs(benchmark::State& st) {
   stage(st, warm(st), false, [](const Model& m, State& s, Workspace& w) {
     // As the symplectic step does: with each spring's damping on its own ends.
-    add_spring_forces(m.structural, s.x, s.v, w.force, &w.damping);
-    add_spring_forces(m.shear, s.x, s.v, w.force, &w.damping);
-    add_spring_forces(m.bending, s.x, s.v, w.force, &w.damping);
+    add_spring_forces(m, s, w, true);
   });
 }
 void BM_gravity(benchmark::State& st) {
@@ -150,7 +150,7 @@ void BM_adhesion(benchmark::State& st) {
   stage(st, warm(st), false, [](const Model& m, State& s, Workspace& w) { add_adhesion(m, s, w); });
 }
 void BM_self_collision(benchmark::State& st) {
-  stage(st, warm(st), false, [](const Model& m, State& s, Workspace& w) { add_self_collision(m, s, w); });
+  stage(st, warm(st), false, [](const Model& m, State& s, Workspace& w) { add_self_collision(m, s, w, true); });
 }
 void BM_build_hash(benchmark::State& st) {
   stage(st, warm(st), false, [](const Model& m, State& s, Workspace& w) {

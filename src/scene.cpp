@@ -148,8 +148,8 @@ std::vector<ParamDef> make_defs() {
       field("integrator.dt", "s", 1e-9, 1, "time step", P(integrator.dt)),
       field("integrator.threads", "", 0, 1024, "threads of the step (0: all cores)",
             P(integrator.threads)),
-      field("integrator.cg_tolerance", "1", 1e-12, 1,
-            "implicit-euler: conjugate gradients stop at this relative residual",
+      field("integrator.cg_tolerance", "m/s", 1e-12, 1,
+            "implicit-euler: conjugate gradients stop when no velocity is off by more",
             P(integrator.cg_tolerance)),
       field("integrator.cg_max_iterations", "", 1, 100000,
             "implicit-euler: most conjugate-gradient iterations per step", P(integrator.cg_max_iterations)),
@@ -473,6 +473,14 @@ std::string params_markdown() {
       << d.meaning << " |\n";
   }
   return o.str();
+}
+
+Params at_resolution(Params p, long long grid) {
+  const double scale = static_cast<double>(grid - 1) / static_cast<double>(p.cloth.resolution[0] - 1);
+  for (auto& [name, h] : p.handles) h.patch = std::llround(static_cast<double>(h.patch) * scale);
+  if (p.integrator.type != "implicit-euler" && scale > 1) p.integrator.dt /= scale;
+  p.cloth.resolution = {grid, grid};
+  return p;
 }
 
 }  // namespace wetcloth

@@ -100,7 +100,9 @@ void limit_strain(const Model& m, State& s, Workspace& w, double dt) {
     return std::min(s.source_distance[a], s.source_distance[b]);
   };
   const std::size_t count = w.strain_order.size();
+  bool moved = false;
   for (int pass = 0; pass < p.passes; ++pass) {
+    bool corrected = false;  // a pass that corrects nothing ends the passes
     for (std::size_t first = 0; first < count;) {
       const int key = level(w.strain_order[first]);
       std::size_t last = first;
@@ -112,6 +114,7 @@ void limit_strain(const Model& m, State& s, Workspace& w, double dt) {
         const double max_len = stretch * set.rest[w.strain_order[last] < ns ? w.strain_order[last]
                                                                             : w.strain_order[last] - ns];
         if (len <= max_len) continue;
+        corrected = true;
         // The end farther from the source moves; both halves when neither is
         // nearer; pinned and driven particles never move.
         double wa = 0.5, wb = 0.5;
@@ -151,7 +154,10 @@ void limit_strain(const Model& m, State& s, Workspace& w, double dt) {
       }
       first = last;
     }
+    moved = moved || corrected;
+    if (!corrected) break;
   }
+  if (!moved) return;
   // Velocities follow the corrected positions.
   const double inv_dt = 1.0 / dt;
   for (int i = 0; i < m.n; ++i) s.v[i] += (s.x[i] - w.x_before[i]) * inv_dt;

@@ -140,12 +140,19 @@ int run_bench(const Options& o) {
   for (long long size : o.grids) {
     if (size < 3)
       throw SceneError("--grids: " + std::to_string(size) + " is too small; a grid needs at least 3 particles a side");
-    const std::string g = std::to_string(size);
-    std::vector<std::string> sets{"cloth.resolution=[" + g + "," + g + "]"};
+    std::vector<std::string> sets;
     if (o.threads) sets.push_back("integrator.threads=" + std::to_string(*o.threads));
     if (!o.integrator.empty()) sets.push_back("integrator.type=\"" + o.integrator + "\"");
     sets.insert(sets.end(), o.sets.begin(), o.sets.end());
-    Grid grid{size, 0, load_scene(o.scene, sets)};
+    // The same cloth at each grid (wetcloth::at_resolution), unless the user
+    // chose the time step.
+    Params p = load_scene(o.scene, sets);
+    const bool dt_set = std::any_of(o.sets.begin(), o.sets.end(),
+                                    [](const std::string& s) { return s.rfind("integrator.dt=", 0) == 0; });
+    const double dt = p.integrator.dt;
+    p = at_resolution(p, size);
+    if (dt_set) p.integrator.dt = dt;
+    Grid grid{size, 0, p};
     grid.steps = std::llround(o.duration / grid.params.integrator.dt);
     if (grid.steps < 1)
       throw SceneError("--duration " + format_number(o.duration) + " s is shorter than one step (integrator.dt = " +
@@ -158,11 +165,11 @@ int run_bench(const Options& o) {
   const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
   const unsigned threads = o.threads.value_or(cores);
   const std::string cpu = cpu_model();
-  std::printf("wetcloth %s bench: scene %s, integrator %s, dt %g s, %g s simulated per run, %d repetitions, "
+  std::printf("wetcloth %s bench: scene %s, integrator %s, dt %g s (first grid), %g s simulated per run, %d repetitions, "
               "%u threads\nmachine: %u cores, %s\n\n",
               WETCLOTH_VERSION, p0.name.c_str(), p0.integrator.type.c_str(), dt, o.duration, o.repetitions,
               threads, cores, cpu.c_str());
-  std::printf(" grid  particles  springs   steps    wall s    µs/step  ns/particle-step  real-time ×  peak MB  B/particle\n");
+  std::printf(" grid  particles  springs  dt µs   steps    wall s    µs/step  ns/particle-step  real-time ×  peak MB  B/particle\n");
 
   json doc = {{"version", WETCLOTH_VERSION}, {"scene", p0.name},        {"integrator", p0.integrator.type},
               {"dt_s", dt},                  {"threads", threads},      {"duration_s", o.duration},
@@ -180,18 +187,19 @@ int run_bench(const Options& o) {
     for (double w : walls) {
       us_step.push_back(1e6 * w / g.steps);
       ns_particle.push_back(1e9 * w / (static_cast<double>(g.steps) * n));
-      realtime.push_back(g.steps * dt / w);
+      realtime.push_back(g.steps * g.params.integrator.dt / w);
     }
     const double peak_mb = r["peak_bytes"].get<double>() / 1e6;
     // What the grid's simulations added to the process: bytes per particle.
     const double per_particle = (r["peak_bytes"].get<double>() - r["base_bytes"].get<double>()) / n;
-    std::printf("%5lld  %9lld  %7lld  %6lld  %8.3f  %9.1f  %16.1f  %11.4f  %7.1f  %10.0f\n", g.size, n, springs,
-                g.steps, median(walls), median(us_step), median(ns_particle), median(realtime), peak_mb,
+    std::printf("%5lld  %9lld  %7lld  %5.2f  %6lld  %8.3f  %9.1f  %16.1f  %11.4f  %7.1f  %10.0f\n", g.size, n, springs,
+                1e6 * g.params.integrator.dt, g.steps, median(walls), median(us_step), median(ns_particle), median(realtime), peak_mb,
                 per_particle);
     std::fflush(stdout);
     doc["grids"].push_back({{"grid", g.size},
                             {"particles", n},
                             {"springs", springs},
+                            {"dt_s", g.params.integrator.dt},
                             {"steps", g.steps},
                             {"wall_s", walls},
                             {"median",

@@ -116,7 +116,7 @@ struct Params {
     double dt = 5e-5;         // s
     double max_speed = 50;    // m/s; faster means the run has blown up
     long long threads = 0;    // threads of the step; 0 means all cores
-    double cg_tolerance = 1e-3;          // implicit-euler: relative residual
+    double cg_tolerance = 1e-4;          // implicit-euler: largest velocity error, m/s
     long long cg_max_iterations = 300;   // implicit-euler
   } integrator;
 

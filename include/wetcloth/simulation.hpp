@@ -123,6 +123,10 @@ struct Workspace {
   std::vector<std::array<long long, 3>> cell_coord;
   std::vector<std::uint8_t> colliding;
   std::vector<CollisionPair> collision_pairs;
+  // Self-collision candidates within candidates_radius at candidates_anchor.
+  std::vector<std::array<int, 2>> candidates;
+  std::vector<Vec3> candidates_anchor;
+  double candidates_radius = 0;
   // Implicit Euler: matrix blocks (8 forward stencil edges per particle), the
   // block-Jacobi preconditioner, conjugate-gradient vectors, per-row sums.
   std::vector<Sym> edge_block, diagonal;

@@ -13,28 +13,46 @@ void add_self_collision(const Model& m, const State& s, Workspace& w, bool with_
   const auto& p = m.params.self_collision;
   if (!p.enabled) return;
   const double dt_dist = p.distance, k = p.k;
-  build_hash(s.x, 2 * dt_dist, w);
-  // Grid neighbours never collide: within two grid steps (MODEL.md), or more
-  // on a grid fine enough that d_t spans more steps, else a flat cloth would
-  // repel itself.
-  const int nu = m.nu;
-  const double step = std::min(m.params.cloth.size[0] / (m.nu - 1), m.params.cloth.size[1] / (m.nv - 1));
-  const int reach = std::max(2, static_cast<int>(std::ceil(dt_dist / step)));
-  auto near_in_grid = [nu, reach](int i, int j) {
-    return std::abs(i % nu - j % nu) <= reach && std::abs(i / nu - j / nu) <= reach;
-  };
+  // Candidate pairs (a Verlet list): every pair within d_t + margin, rebuilt
+  // with the hash only once some particle has moved margin/2 since the last
+  // build. Until then no pair can have come within d_t unlisted, and a flat or
+  // slowly moving cloth skips the hash for hundreds of steps.
+  const double margin = 0.5 * dt_dist;
+  bool rebuild = w.candidates_radius != dt_dist + margin || w.candidates_anchor.size() != s.x.size();
+  for (int i = 0; i < m.n && !rebuild; ++i)
+    rebuild = (s.x[i] - w.candidates_anchor[i]).squaredNorm() > 0.25 * margin * margin;
+  if (rebuild) {
+    // Grid neighbours never collide: within two grid steps (MODEL.md), or more
+    // on a grid fine enough that d_t spans more steps, else a flat cloth would
+    // repel itself.
+    const int nu = m.nu;
+    const double step = std::min(m.params.cloth.size[0] / (m.nu - 1), m.params.cloth.size[1] / (m.nv - 1));
+    const int reach = std::max(2, static_cast<int>(std::ceil(dt_dist / step)));
+    auto near_in_grid = [nu, reach](int i, int j) {
+      return std::abs(i % nu - j % nu) <= reach && std::abs(i / nu - j / nu) <= reach;
+    };
+    w.candidates_radius = dt_dist + margin;
+    build_hash(s.x, 2 * w.candidates_radius, w);
+    w.candidates.clear();
+    for_each_close_pair(s.x, w.candidates_radius, w, near_in_grid,
+                        [&](int i, int j, const Vec3&, double) { w.candidates.push_back({i, j}); });
+    w.candidates_anchor = s.x;
+  }
   auto& colliding = w.colliding;
   std::fill(colliding.begin(), colliding.end(), 0);
   w.collision_pairs.clear();
-  for_each_close_pair(s.x, dt_dist, w, near_in_grid,
-                      [&](int i, int j, const Vec3& d, double len) {
-                        // eq. 15: F_i = k_t (d_t - |d_ij|) d_ij / |d_ij|, F_j = -F_i
-                        const Vec3 fi = (k * (dt_dist - len) / len) * d;
-                        w.force[i] += fi;
-                        w.force[j] -= fi;
-                        colliding[i] = colliding[j] = 1;
-                        w.collision_pairs.push_back({i, j, d / len, {}});
-                      });
+  for (const auto& [i, j] : w.candidates) {
+    const Vec3 d = s.x[i] - s.x[j];
+    const double len2 = d.squaredNorm();
+    if (len2 >= dt_dist * dt_dist || len2 == 0) continue;
+    const double len = std::sqrt(len2);
+    // eq. 15: F_i = k_t (d_t - |d_ij|) d_ij / |d_ij|, F_j = -F_i
+    const Vec3 fi = (k * (dt_dist - len) / len) * d;
+    w.force[i] += fi;
+    w.force[j] -= fi;
+    colliding[i] = colliding[j] = 1;
+    w.collision_pairs.push_back({i, j, d / len, {}});
+  }
   if (!with_damping) return;  // implicit Euler takes it into its matrix
   // The paper's friction-like damping -k_f v on every colliding particle.
   for (int i = 0; i < m.n; ++i)

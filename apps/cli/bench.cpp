@@ -141,7 +141,7 @@ int run_bench(const Options& o) {
     if (size < 3)
       throw SceneError("--grids: " + std::to_string(size) + " is too small; a grid needs at least 3 particles a side");
     std::vector<std::string> sets;
-    if (o.threads) sets.push_back("integrator.threads=" + std::to_string(*o.threads));
+    sets.push_back("integrator.threads=" + std::to_string(o.threads.value_or(0)));
     if (!o.integrator.empty()) sets.push_back("integrator.type=\"" + o.integrator + "\"");
     sets.insert(sets.end(), o.sets.begin(), o.sets.end());
     // The same cloth at each grid (wetcloth::at_resolution), unless the user
@@ -226,7 +226,7 @@ std::function<int()> add_bench_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--duration", o->duration, "simulated time timed per repetition, s")->capture_default_str();
   cmd->add_option("--threads", o->threads,
-                  "threads of the step (= --set integrator.threads=N; default: the scene's, all cores)");
+                  "threads of the step (default: all cores; = --set integrator.threads=N)");
   cmd->add_option("--integrator", o->integrator, "integrator.type (default: the scene's)");
   cmd->add_option("--repetitions", o->repetitions, "timed runs per grid; the table shows medians")
       ->capture_default_str();

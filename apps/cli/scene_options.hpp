@@ -1,4 +1,5 @@
-// The options every scene-running command takes: SCENE, --set, --humidity, --duration.
+// The options every scene-running command takes: SCENE, --set, --humidity,
+// --duration, --threads.
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -15,6 +16,8 @@ struct SceneOptions {
   std::string scene;
   std::vector<std::string> sets;
   std::optional<double> humidity, duration;
+  std::optional<unsigned> threads;
+  bool all_cores = false;  // with add_to: no --threads means all cores
 
   void add_to(CLI::App* app, bool scene_required = true) {
     auto* s = app->add_option("scene", scene, "scene: a TOML file, or a built-in name (wetcloth scenes)");
@@ -25,10 +28,16 @@ struct SceneOptions {
         ->allow_extra_args(false);
     app->add_option("--humidity", humidity, "cloth humidity ω in [0, 1] (= --set cloth.humidity=W)");
     app->add_option("--duration", duration, "simulated time, s (= --set run.duration=S)");
+    app->add_option("--threads", threads,
+                    "threads of the step (default: all cores; = --set integrator.threads=N, "
+                    "which comes after it)");
+    all_cores = true;
   }
 
   std::vector<std::string> overrides() const {
-    std::vector<std::string> all = sets;
+    std::vector<std::string> all;
+    if (threads || all_cores) all.push_back("integrator.threads=" + std::to_string(threads.value_or(0)));
+    all.insert(all.end(), sets.begin(), sets.end());
     if (humidity) all.push_back("cloth.humidity=" + format_number(*humidity));
     if (duration) all.push_back("run.duration=" + format_number(*duration));
     return all;

@@ -175,6 +175,14 @@ std::string Simulation::blow_up_reason() const {
     o << "a particle reached " << vmax << " m/s, over integrator.max_speed = " << p.integrator.max_speed;
   else
     o << "NaN in the particle state";
+  if (p.integrator.type == "implicit-euler") {
+    // Linearised about a flat cloth the springs hold nothing across it: a force
+    // on a few particles moves them at Δt F / m in one step (docs/model.md §12).
+    o << "). Likely cause: integrator.dt = " << p.integrator.dt
+      << " s with implicit-euler, which cannot yet hold a force on a small patch (handle.*.force, "
+         "handle.*.patch). Lower integrator.dt, or use integrator.type = \"symplectic-euler\".";
+    return o.str();
+  }
   o << "). Likely cause: integrator.dt = " << p.integrator.dt
     << " s is too large for the stiffness springs.structural_k = " << p.springs.structural_k
     << " N/m and the lightest particle (" << m_min << " kg): the explicit limit is about " << limit

@@ -30,6 +30,12 @@ void parallel_for(const Model& m, int count, Body&& body) {
   for (int r = 0; r < count; ++r) body(r);
 }
 
+// The particle at grid cell (i + di, j + dj), or -1 off the grid.
+inline int grid_neighbour(const Model& m, int i, int j, int di, int dj) {
+  const int a = i + di, b = j + dj;
+  return a >= 0 && b >= 0 && a < m.nu && b < m.nv ? m.index(a, b) : -1;
+}
+
 // forces/*.cpp: each adds its force into w.force.
 // Springs: with_damping also adds eq. 1's damping and sets w.damping[i] to each
 // particle's damping on its own velocity (Σ k_d u uᵀ), which the symplectic step

@@ -11,6 +11,7 @@
 // Pinned, driven and held particles keep their velocity (Baraff & Witkin's filter).
 #include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "detail.hpp"
 
@@ -50,18 +51,33 @@ double ordered_sum(const Model& m, Workspace& w, Row row) {
   return total;
 }
 
-template <class Row>
-double ordered_max(const Model& m, Workspace& w, Row row) {
-  parallel_for(m, m.nv, [&](int j) { w.row_sums[j] = row(j); });
-  return *std::max_element(w.row_sums.begin(), w.row_sums.end());
-}
-
 double dot(const Model& m, Workspace& w, const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
   return ordered_sum(m, w, [&](int j) {
     double sum = 0;
     for (int k = j * m.nu; k < (j + 1) * m.nu; ++k) sum += a[k].dot(b[k]);
     return sum;
   });
+}
+
+// z = P r, in one pass with r·z (rows summed in order, as dot does) and the
+// largest |z|, the convergence test. Returns {r·z, max |z|}.
+std::pair<double, double> precondition(const Model& m, Workspace& w) {
+  const auto& r = w.cg_r;
+  const auto& pre = w.preconditioner;
+  auto& z = w.cg_z;
+  parallel_for(m, m.nv, [&](int j) {
+    double rz = 0, worst = 0;
+    for (int k = j * m.nu; k < (j + 1) * m.nu; ++k) {
+      z[k] = pre[k] * r[k];
+      rz += r[k].dot(z[k]);
+      worst = std::max(worst, z[k].norm());
+    }
+    w.row_sums[j] = rz;
+    w.row_max[j] = worst;
+  });
+  double rz = 0;
+  for (int j = 0; j < m.nv; ++j) rz += w.row_sums[j];
+  return {rz, *std::max_element(w.row_max.begin(), w.row_max.end())};
 }
 
 // y = A x over the free particles; fixed ones have identity rows (their x
@@ -78,13 +94,10 @@ void multiply(const Model& m, const State& s, Workspace& w, const std::vector<Ve
       Vec3 sum = times(w.diagonal[a], x[a]);
       for (int e = 0; e < 8; ++e) {
         const StencilEdge& st = m.stencil[e];
-        const int fi = i + st.di, fj = j + st.dj, bi = i - st.di, bj = j - st.dj;
-        if (fi >= 0 && fj >= 0 && fi < m.nu && fj < m.nv)
-          sum -= times(w.edge_block[8 * a + e], x[m.index(fi, fj)]);
-        if (bi >= 0 && bj >= 0 && bi < m.nu && bj < m.nv) {
-          const int b = m.index(bi, bj);
+        if (const int f = grid_neighbour(m, i, j, st.di, st.dj); f >= 0)
+          sum -= times(w.edge_block[8 * a + e], x[f]);
+        if (const int b = grid_neighbour(m, i, j, -st.di, -st.dj); b >= 0)
           sum -= times(w.edge_block[8 * b + e], x[b]);
-        }
       }
       y[a] = sum;
     }
@@ -106,11 +119,11 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
       const int a = m.index(i, j);
       for (int e = 0; e < 8; ++e) {
         const StencilEdge& st = m.stencil[e];
-        const int bi = i + st.di, bj = j + st.dj;
+        const int b = grid_neighbour(m, i, j, st.di, st.dj);
         Sym& block = w.edge_block[8 * a + e];
         block = {};
-        if (bi < 0 || bj < 0 || bi >= m.nu || bj >= m.nv) continue;
-        const Vec3 d = s.x[m.index(bi, bj)] - s.x[a];
+        if (b < 0) continue;
+        const Vec3 d = s.x[b] - s.x[a];
         const double len = d.norm();
         if (len <= 0) continue;
         const Vec3 u = d / len;
@@ -128,10 +141,8 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
       d = outer(Vec3::Zero(), 0, m.mass[a] + h * c * m.area[a] + (w.colliding[a] ? h * kf : 0.0));
       for (int e = 0; e < 8; ++e) {
         const StencilEdge& st = m.stencil[e];
-        const int fi = i + st.di, fj = j + st.dj, bi = i - st.di, bj = j - st.dj;
-        if (fi >= 0 && fj >= 0 && fi < m.nu && fj < m.nv) add_to(d, w.edge_block[8 * a + e]);
-        if (bi >= 0 && bj >= 0 && bi < m.nu && bj < m.nv)
-          add_to(d, w.edge_block[8 * m.index(bi, bj) + e]);
+        if (grid_neighbour(m, i, j, st.di, st.dj) >= 0) add_to(d, w.edge_block[8 * a + e]);
+        if (const int b = grid_neighbour(m, i, j, -st.di, -st.dj); b >= 0) add_to(d, w.edge_block[8 * b + e]);
       }
     }
   });
@@ -155,27 +166,16 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
     r[a] = m.mass[a] * x[a] + h * w.force[a];
   });
   multiply(m, s, w, x, q);
-  parallel_for(m, m.n, [&](int a) {
-    r[a] -= q[a];
-    z[a] = w.preconditioner[a] * r[a];
-    p[a] = z[a];
-  });
-  double rz = dot(m, w, r, z);
+  parallel_for(m, m.n, [&](int a) { r[a] -= q[a]; });
   // Converged when no particle's velocity is off by more than the tolerance:
   // z = P r is the preconditioned residual, a velocity. (A norm over the whole
   // cloth would let the adhesion and weight of thousands of particles drown
   // out the few the hand pulls.)
-  const double tolerance = m.params.integrator.cg_tolerance;
-  auto converged = [&] {
-    return ordered_max(m, w, [&](int j) {
-      double worst = 0;
-      for (int k = j * m.nu; k < (j + 1) * m.nu; ++k) worst = std::max(worst, z[k].norm());
-      return worst;
-    }) <= tolerance;
-  };
+  auto [rz, worst] = precondition(m, w);
+  parallel_for(m, m.n, [&](int a) { p[a] = z[a]; });
   int it = 0;
   for (; it < m.params.integrator.cg_max_iterations; ++it) {
-    if (converged()) break;
+    if (worst <= m.params.integrator.cg_tolerance) break;
     multiply(m, s, w, p, q);
     const double pq = dot(m, w, p, q);
     if (pq <= 0) break;
@@ -183,11 +183,11 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
     parallel_for(m, m.n, [&](int a) {
       x[a] += alpha * p[a];
       r[a] -= alpha * q[a];
-      z[a] = w.preconditioner[a] * r[a];
     });
-    const double rz_next = dot(m, w, r, z);
+    const auto [rz_next, worst_next] = precondition(m, w);
     const double beta = rz_next / rz;
     rz = rz_next;
+    worst = worst_next;
     parallel_for(m, m.n, [&](int a) { p[a] = z[a] + beta * p[a]; });
   }
   w.cg_iterations = it;

@@ -50,6 +50,7 @@ void Simulation::reset() {
   ws_.preconditioner.assign(n, Mat3::Identity());
   for (auto* a : {&ws_.cg_r, &ws_.cg_z, &ws_.cg_p, &ws_.cg_q}) a->assign(n, Vec3::Zero());
   ws_.row_sums.assign(model_.nv, 0.0);
+  ws_.row_max.assign(model_.nv, 0.0);
   ws_.distance.assign(n, kInf);
   ws_.adhesion.assign(n, 0.0);
   ws_.normal_force.assign(n, 0.0);

@@ -15,6 +15,7 @@
 #include <thread>
 
 #include "run.hpp"
+#include "scene_options.hpp"
 #include "wetcloth/output.hpp"
 #include "wetcloth/scene.hpp"
 
@@ -147,8 +148,7 @@ int run_bench(const Options& o) {
     // The same cloth at each grid (wetcloth::at_resolution), unless the user
     // chose the time step.
     Params p = load_scene(o.scene, sets);
-    const bool dt_set = std::any_of(o.sets.begin(), o.sets.end(),
-                                    [](const std::string& s) { return s.rfind("integrator.dt=", 0) == 0; });
+    const bool dt_set = overrides_key(o.sets, "integrator.dt");
     const double dt = p.integrator.dt;
     p = at_resolution(p, size);
     if (dt_set) p.integrator.dt = dt;

@@ -12,6 +12,13 @@
 
 namespace wetcloth::cli {
 
+// Whether one of the KEY=VALUE overrides sets `key`.
+inline bool overrides_key(const std::vector<std::string>& sets, const std::string& key) {
+  for (const auto& s : sets)
+    if (s.rfind(key + "=", 0) == 0) return true;
+  return false;
+}
+
 struct SceneOptions {
   std::string scene;
   std::vector<std::string> sets;

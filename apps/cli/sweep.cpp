@@ -111,10 +111,7 @@ std::function<int()> add_sweep_command(CLI::App& app) {
         std::vector<std::string> sets = o->scene.overrides();
         // The cores are shared out between the cases run at once, unless the
         // user chose the step's threads: more threads than cores only wait.
-        const bool threads_set = std::any_of(sets.begin(), sets.end(), [](const std::string& s) {
-          return s.rfind("integrator.threads=", 0) == 0;
-        });
-        if (!threads_set) {
+        if (!overrides_key(sets, "integrator.threads")) {
           const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
           sets.insert(sets.begin(), "integrator.threads=" + std::to_string(std::max(1u, cores / o->jobs)));
         }

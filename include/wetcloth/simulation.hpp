@@ -132,7 +132,7 @@ struct Workspace {
   std::vector<Sym> edge_block, diagonal;
   std::vector<Mat3> preconditioner;
   std::vector<Vec3> cg_r, cg_z, cg_p, cg_q;
-  std::vector<double> row_sums;
+  std::vector<double> row_sums, row_max;
   int cg_iterations = 0;              // of the last implicit step
   // Interactive grab (viewer).
   int grab_particle = -1;

@@ -14,9 +14,8 @@ void add_spring_forces(const Model& m, const State& s, Workspace& w, bool with_d
       Mat3 c = Mat3::Zero();
       for (const StencilEdge& e : m.stencil)
         for (const int sign : {1, -1}) {
-          const int bi = i + sign * e.di, bj = j + sign * e.dj;
-          if (bi < 0 || bj < 0 || bi >= m.nu || bj >= m.nv) continue;
-          const int b = m.index(bi, bj);
+          const int b = grid_neighbour(m, i, j, sign * e.di, sign * e.dj);
+          if (b < 0) continue;
           const Vec3 d = s.x[b] - s.x[a];
           const double len = d.norm();
           if (len <= 0) continue;

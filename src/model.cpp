@@ -108,8 +108,14 @@ Model build_model(const Params& p) {
                 {0, 2, bs, bd, 2 * dv},
                 {2, 2, bs, bd, 2 * diag},
                 {-2, 2, bs, bd, 2 * diag}}};
-  m.threads = p.integrator.threads > 0 ? static_cast<int>(p.integrator.threads)
-                                       : std::max(1, omp_get_num_procs());
+  // At least kParticlesPerThread particles a thread: on a smaller grid a
+  // thread's share costs less than the barriers that end each stage, and when
+  // processes share the cores (parallel tests, sweeps) a barrier waits for a
+  // descheduled thread. The thread count never changes the result.
+  constexpr int kParticlesPerThread = 1024;
+  const int wanted = p.integrator.threads > 0 ? static_cast<int>(p.integrator.threads)
+                                              : std::max(1, omp_get_num_procs());
+  m.threads = std::clamp(m.n / kParticlesPerThread, 1, wanted);
   for (int j = 0; j < m.nv; ++j) {
     for (int i = 0; i < m.nu; ++i) {
       add_spring(m.structural, m, i, j, i + 1, j);

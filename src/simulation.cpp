@@ -26,6 +26,20 @@ void compute_normals(const Model& m, const std::vector<Vec3>& x, std::vector<Vec
   }
 }
 
+namespace {
+
+// x with a x = b, a symmetric (xx yy zz xy xz yz), by its adjugate.
+Vec3 solve(const Sym& a, const Vec3& b) {
+  const double c00 = a[1] * a[2] - a[5] * a[5], c01 = a[4] * a[5] - a[3] * a[2],
+               c02 = a[3] * a[5] - a[4] * a[1], c11 = a[0] * a[2] - a[4] * a[4],
+               c12 = a[3] * a[4] - a[0] * a[5], c22 = a[0] * a[1] - a[3] * a[3];
+  const double inv_det = 1.0 / (a[0] * c00 + a[3] * c01 + a[4] * c02);
+  return inv_det * Vec3(c00 * b[0] + c01 * b[1] + c02 * b[2], c01 * b[0] + c11 * b[1] + c12 * b[2],
+                        c02 * b[0] + c12 * b[1] + c22 * b[2]);
+}
+
+}  // namespace
+
 Simulation::Simulation(const Params& p) : model_(build_model(p)) { reset(); }
 
 void Simulation::reset() {
@@ -44,7 +58,7 @@ void Simulation::reset() {
   ws_.grab_particle = grab;
   for (auto* a : {&ws_.force, &ws_.normal, &ws_.surface_normal, &ws_.x_before, &ws_.air_direction})
     a->assign(n, Vec3::Zero());
-  ws_.damping.assign(n, Mat3::Zero());
+  ws_.damping.assign(n, Sym{});
   ws_.edge_block.assign(8 * static_cast<std::size_t>(n), Sym{});
   ws_.diagonal.assign(n, Sym{});
   ws_.preconditioner.assign(n, Mat3::Identity());
@@ -118,11 +132,13 @@ void Simulation::step() {
       // the step: v += (I + Δt/m C_i)⁻¹ Δt/m F_i. Explicit, the 0.01 N·s/m of a
       // few springs on a dry corner particle (1 mg) is unstable at Δt = 5e-5 s.
       const double c = m.params.forces.viscous_damping;
-      parallel_for(m, m.n, [&](int i) {
-        if (m.inv_mass[i] == 0) return;
-        const double h = dt * m.inv_mass[i];
-        const Mat3 a = Mat3::Identity() + h * (w.damping[i] + Mat3::Identity() * (c * m.area[i]));
-        s.v[i] += a.inverse() * (h * w.force[i]);
+      parallel_for(m, m.nv, [&](int j) {
+        for (int i = j * m.nu; i < (j + 1) * m.nu; ++i) {
+          const double h = dt * m.inv_mass[i], own = 1 + h * c * m.area[i];
+          const Sym& d = w.damping[i];
+          const Sym a{own + h * d[0], own + h * d[1], own + h * d[2], h * d[3], h * d[4], h * d[5]};
+          s.v[i] += solve(a, h * w.force[i]);  // inv_mass 0: a = I, force times 0
+        }
       });
     }
     correct_air_implicitly(m, s, w, dt);

@@ -104,7 +104,7 @@ struct CollisionPair {
 // Scratch arrays, reused every step: nothing is allocated per step.
 struct Workspace {
   std::vector<Vec3> force, normal, x_before, surface_normal;
-  std::vector<Mat3> damping;          // each particle's damping on its own velocity, N·s/m
+  std::vector<Sym> damping;           // each particle's damping on its own velocity, N·s/m
   std::vector<double> distance;       // signed distance to the contact surface
   std::vector<double> adhesion;       // |adhesion force| per particle, N
   std::vector<double> normal_force;   // total force · n_s before friction, N
@@ -113,6 +113,9 @@ struct Workspace {
   std::vector<double> pocket_stiffness;  // dΔP/dV_sum over one step, per pocket, Pa/m³
   std::vector<double> pocket_sums;    // scratch for the implicit air correction
   std::vector<Vec3> air_direction;    // A_i n_i of eq. 3 (zero where no air force)
+  // Springs (forces/springs.cpp): positions, velocities and each particle's
+  // sums by component, columns the compiler vectorises over.
+  std::vector<double> soa;
   std::vector<int> queue;
   std::vector<int> strain_order;      // structural then shear springs, ordered
   std::vector<Vec3> strain_delta;     // strain limiting: summed corrections in a level

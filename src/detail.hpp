@@ -30,6 +30,24 @@ void parallel_for(const Model& m, int count, Body&& body) {
   for (int r = 0; r < count; ++r) body(r);
 }
 
+// Runs body(i) for every particle, whole rows to each thread.
+template <class Body>
+void for_each_particle(const Model& m, Body&& body) {
+  parallel_for(m, m.nv, [&](int j) {
+    for (int i = j * m.nu; i < (j + 1) * m.nu; ++i) body(i);
+  });
+}
+
+// Σ over rows of row(j), the rows' sums added in order: the same bits for any
+// number of threads. Uses w.row_sums.
+template <class Row>
+double ordered_sum(const Model& m, Workspace& w, Row row) {
+  parallel_for(m, m.nv, [&](int j) { w.row_sums[j] = row(j); });
+  double total = 0;
+  for (int j = 0; j < m.nv; ++j) total += w.row_sums[j];
+  return total;
+}
+
 // The particle at grid cell (i + di, j + dj), or -1 off the grid.
 inline int grid_neighbour(const Model& m, int i, int j, int di, int dj) {
   const int a = i + di, b = j + dj;

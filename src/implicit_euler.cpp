@@ -41,16 +41,6 @@ void add_to(Sym& a, const Sym& b) {
 
 bool fixed(const Model& m, const State& s, int i) { return m.inv_mass[i] == 0 || s.held[i]; }
 
-// Σ over rows of per-row partial sums, rows summed in order: the same bits for
-// any number of threads.
-template <class Row>
-double ordered_sum(const Model& m, Workspace& w, Row row) {
-  parallel_for(m, m.nv, [&](int j) { w.row_sums[j] = row(j); });
-  double total = 0;
-  for (int j = 0; j < m.nv; ++j) total += w.row_sums[j];
-  return total;
-}
-
 double dot(const Model& m, Workspace& w, const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
   return ordered_sum(m, w, [&](int j) {
     double sum = 0;

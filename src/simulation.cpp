@@ -12,18 +12,30 @@ namespace wetcloth {
 
 using namespace detail;
 
-void compute_normals(const Model& m, const std::vector<Vec3>& x, std::vector<Vec3>& normal) {
-  std::fill(normal.begin(), normal.end(), Vec3::Zero());
-  for (const auto& t : m.triangles) {
-    const Vec3 n = (x[t[1]] - x[t[0]]).cross(x[t[2]] - x[t[0]]);  // area-weighted
-    normal[t[0]] += n;
-    normal[t[1]] += n;
-    normal[t[2]] += n;
-  }
-  for (auto& n : normal) {
+// Each triangle's area-weighted normal, then per particle the sum over its
+// triangles in a fixed order: rows are independent in both passes.
+void compute_normals(const Model& m, const std::vector<Vec3>& x, std::vector<Vec3>& normal,
+                     std::vector<Vec3>& triangle_normal) {
+  triangle_normal.resize(m.triangles.size());
+  const int per_row = 2 * (m.nu - 1);  // triangles are made row by row, two per quad
+  parallel_for(m, m.nv - 1, [&](int j) {
+    for (int t = j * per_row; t < (j + 1) * per_row; ++t) {
+      const auto& c = m.triangles[t];
+      triangle_normal[t] = (x[c[1]] - x[c[0]]).cross(x[c[2]] - x[c[0]]);
+    }
+  });
+  for_each_particle(m, [&](int i) {
+    Vec3 n = Vec3::Zero();
+    for (int k = m.particle_triangle_start[i]; k < m.particle_triangle_start[i + 1]; ++k)
+      n += triangle_normal[m.particle_triangles[k]];
     const double len = n.norm();
-    n = len > 0 ? Vec3(n / len) : Vec3::UnitZ();
-  }
+    normal[i] = len > 0 ? Vec3(n / len) : Vec3::UnitZ();
+  });
+}
+
+void compute_normals(const Model& m, const std::vector<Vec3>& x, std::vector<Vec3>& normal) {
+  std::vector<Vec3> triangle_normal;
+  compute_normals(m, x, normal, triangle_normal);
 }
 
 namespace {
@@ -105,7 +117,7 @@ void Simulation::step() {
   // Implicit Euler takes the damping into its matrix, so leaves it out here.
   const std::string& integrator = m.params.integrator.type;
   const bool implicit = integrator == "implicit-euler";
-  compute_normals(m, s.x, w.normal);
+  compute_normals(m, s.x, w.normal, w.triangle_normal);
   std::fill(w.force.begin(), w.force.end(), Vec3::Zero());
   add_spring_forces(m, s, w, !implicit);
   add_gravity(m, w.force);
@@ -115,7 +127,7 @@ void Simulation::step() {
   add_adhesion(m, s, w);
   add_self_collision(m, s, w, !implicit);
   add_handle_forces(m, s, w);
-  for (int i = 0; i < m.n; ++i) w.normal_force[i] = w.force[i].dot(w.surface_normal[i]);
+  for_each_particle(m, [&](int i) { w.normal_force[i] = w.force[i].dot(w.surface_normal[i]); });
 
   // 2. Integrate.
   if (integrator == "explicit-euler") {
@@ -142,7 +154,7 @@ void Simulation::step() {
       });
     }
     correct_air_implicitly(m, s, w, dt);
-    for (int i = 0; i < m.n; ++i) s.x[i] += dt * s.v[i];
+    for_each_particle(m, [&](int i) { s.x[i] += dt * s.v[i]; });
   }
   s.time = (s.steps + 1) * dt;  // no drift from summing dt
   apply_handle_constraints(m, s, w);
@@ -173,14 +185,12 @@ bool Simulation::advance_to(double t) {
 
 std::string Simulation::blow_up_reason() const {
   const Params& p = model_.params;
-  double vmax = 0;
+  double vmax = 0;  // a maximum: the same for any split between threads
+#pragma omp parallel for reduction(max : vmax) num_threads(model_.threads) if (model_.threads > 1)
   for (int i = 0; i < model_.n; ++i) {
     const double v2 = state_.v[i].squaredNorm();
-    if (!std::isfinite(v2) || !state_.x[i].allFinite()) {
-      vmax = std::numeric_limits<double>::infinity();
-      break;
-    }
-    vmax = std::max(vmax, v2);
+    const bool finite = std::isfinite(v2) && state_.x[i].allFinite();
+    vmax = std::max(vmax, finite ? v2 : std::numeric_limits<double>::infinity());
   }
   vmax = std::sqrt(vmax);
   if (vmax <= p.integrator.max_speed) return {};

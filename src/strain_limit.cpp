@@ -2,7 +2,6 @@
 // Vassilev 2003): over-stretched structural and shear springs are shortened back
 // to (1 + τ_c) l0, starting from the particles that move first.
 #include <algorithm>
-#include <numeric>
 
 #include "detail.hpp"
 
@@ -33,18 +32,36 @@ void distances_from(const Model& m, const std::vector<int>& sources, State& s, W
   }
 }
 
+// The structural and shear springs, sorted by level (the smaller distance of
+// their ends), stable so that a level keeps grid order.
+void order_springs(const Model& m, const State& s, Workspace& w) {
+  w.strain_springs.clear();
+  const double stretch = 1.0 + m.params.strain_limit.tau;
+  for (const SpringSet* set : {&m.structural, &m.shear})
+    for (std::size_t k = 0; k < set->size(); ++k) {
+      const int a = set->a[k], b = set->b[k];
+      const int da = s.source_distance[a], db = s.source_distance[b];
+      w.strain_springs.push_back({a, b, stretch * set->rest[k], da == db ? 0 : (da < db ? -1 : 1)});
+    }
+  auto level = [&](const Workspace::StrainSpring& e) {
+    return std::min(s.source_distance[e.a], s.source_distance[e.b]);
+  };
+  std::stable_sort(w.strain_springs.begin(), w.strain_springs.end(),
+                   [&](const auto& x, const auto& y) { return level(x) < level(y); });
+  w.strain_levels.clear();
+  for (std::size_t e = 0; e < w.strain_springs.size(); ++e)
+    if (e == 0 || level(w.strain_springs[e]) != level(w.strain_springs[e - 1]))
+      w.strain_levels.push_back(static_cast<int>(e));
+  w.strain_levels.push_back(static_cast<int>(w.strain_springs.size()));
+}
+
 }  // namespace
 
 // Sources: the handles' particles; in a scene without handles, the first
 // particles to touch an obstacle. Until there are any, every spring is split
 // evenly, in grid order.
 void update_strain_order(const Model& m, State& s, Workspace& w) {
-  const std::size_t ns = m.structural.size(), nsh = m.shear.size();
-  if (w.strain_order.size() != ns + nsh) {
-    w.strain_order.resize(ns + nsh);
-    std::iota(w.strain_order.begin(), w.strain_order.end(), 0);
-  }
-  if (s.sources_found) return;
+  if (s.sources_found && !w.strain_springs.empty()) return;
   std::vector<int> sources;
   for (const Handle& h : m.handles) sources.insert(sources.end(), h.particles.begin(), h.particles.end());
   if (sources.empty()) {
@@ -59,18 +76,12 @@ void update_strain_order(const Model& m, State& s, Workspace& w) {
   }
   if (sources.empty()) {
     s.source_distance.assign(m.n, 0);
+    if (w.strain_springs.empty()) order_springs(m, s, w);
     return;
   }
   s.sources_found = true;
   distances_from(m, sources, s, w);
-  auto spring_key = [&](int e) {
-    const SpringSet& set = e < static_cast<int>(ns) ? m.structural : m.shear;
-    const int k = e < static_cast<int>(ns) ? e : e - static_cast<int>(ns);
-    return std::min(s.source_distance[set.a[k]], s.source_distance[set.b[k]]);
-  };
-  std::iota(w.strain_order.begin(), w.strain_order.end(), 0);
-  std::stable_sort(w.strain_order.begin(), w.strain_order.end(),
-                   [&](int a, int b) { return spring_key(a) < spring_key(b); });
+  order_springs(m, s, w);
 }
 
 // Springs are corrected level by level in the adaptive order; within a level
@@ -82,48 +93,29 @@ void limit_strain(const Model& m, State& s, Workspace& w, double dt) {
   const auto& p = m.params.strain_limit;
   if (!p.enabled) return;
   update_strain_order(m, s, w);
-  w.x_before = s.x;
-  w.strain_delta.assign(m.n, Vec3::Zero());
-  w.strain_count.assign(m.n, 0);
-  const double stretch = 1.0 + p.tau;
-  const int ns = static_cast<int>(m.structural.size());
-  auto ends = [&](int e, int& a, int& b) -> const SpringSet& {
-    const SpringSet& set = e < ns ? m.structural : m.shear;
-    const int k = e < ns ? e : e - ns;
-    a = set.a[k];
-    b = set.b[k];
-    return set;
-  };
-  auto level = [&](int e) {
-    int a, b;
-    ends(e, a, b);
-    return std::min(s.source_distance[a], s.source_distance[b]);
-  };
-  const std::size_t count = w.strain_order.size();
+  w.x_before.resize(m.n);
+  for_each_particle(m, [&](int i) { w.x_before[i] = s.x[i]; });
+  w.strain_delta.resize(m.n, Vec3::Zero());  // zero between levels
+  w.strain_count.resize(m.n, 0);
+  const auto& springs = w.strain_springs;
+  auto fixed = [&](int i) { return m.driven[i] || s.held[i]; };
   bool moved = false;
   for (int pass = 0; pass < p.passes; ++pass) {
     bool corrected = false;  // a pass that corrects nothing ends the passes
-    for (std::size_t first = 0; first < count;) {
-      const int key = level(w.strain_order[first]);
-      std::size_t last = first;
-      for (; last < count && level(w.strain_order[last]) == key; ++last) {
-        int a, b;
-        const SpringSet& set = ends(w.strain_order[last], a, b);
-        const Vec3 d = s.x[b] - s.x[a];
-        const double len = d.norm();
-        const double max_len = stretch * set.rest[w.strain_order[last] < ns ? w.strain_order[last]
-                                                                            : w.strain_order[last] - ns];
-        if (len <= max_len) continue;
-        corrected = true;
+    for (std::size_t l = 0; l + 1 < w.strain_levels.size(); ++l) {
+      const int first = w.strain_levels[l], last = w.strain_levels[l + 1];
+      bool level_corrected = false;
+      for (int e = first; e < last; ++e) {
+        const auto& sp = springs[e];
+        const Vec3 d = s.x[sp.b] - s.x[sp.a];
+        const double len2 = d.squaredNorm();
+        if (len2 <= sp.max_len * sp.max_len) continue;
+        level_corrected = true;
         // The end farther from the source moves; both halves when neither is
         // nearer; pinned and driven particles never move.
-        double wa = 0.5, wb = 0.5;
-        const int da = s.source_distance[a], db = s.source_distance[b];
-        if (da != db) {
-          wa = da < db ? 0.0 : 1.0;
-          wb = 1.0 - wa;
-        }
-        const bool fixed_a = m.driven[a] || s.held[a], fixed_b = m.driven[b] || s.held[b];
+        double wa = sp.nearer == 0 ? 0.5 : (sp.nearer < 0 ? 0.0 : 1.0);
+        double wb = 1.0 - wa;
+        const bool fixed_a = fixed(sp.a), fixed_b = fixed(sp.b);
         if (fixed_a) {
           wa = 0;
           wb = fixed_b ? 0 : 1;
@@ -132,27 +124,26 @@ void limit_strain(const Model& m, State& s, Workspace& w, double dt) {
           wb = 0;
           wa = fixed_a ? 0 : 1;
         }
-        const Vec3 corr = d * ((len - max_len) / len);
+        const double len = std::sqrt(len2);
+        const Vec3 corr = d * ((len - sp.max_len) / len);
         if (wa > 0) {
-          w.strain_delta[a] += wa * corr;
-          ++w.strain_count[a];
+          w.strain_delta[sp.a] += wa * corr;
+          ++w.strain_count[sp.a];
         }
         if (wb > 0) {
-          w.strain_delta[b] -= wb * corr;
-          ++w.strain_count[b];
+          w.strain_delta[sp.b] -= wb * corr;
+          ++w.strain_count[sp.b];
         }
       }
-      for (std::size_t e = first; e < last; ++e) {
-        int ab[2];
-        ends(w.strain_order[e], ab[0], ab[1]);
-        for (int k : ab) {
+      if (!level_corrected) continue;
+      corrected = true;
+      for (int e = first; e < last; ++e)
+        for (const int k : {springs[e].a, springs[e].b}) {
           if (w.strain_count[k] == 0) continue;
           s.x[k] += w.strain_delta[k] / w.strain_count[k];
           w.strain_delta[k].setZero();
           w.strain_count[k] = 0;
         }
-      }
-      first = last;
     }
     moved = moved || corrected;
     if (!corrected) break;
@@ -160,7 +151,7 @@ void limit_strain(const Model& m, State& s, Workspace& w, double dt) {
   if (!moved) return;
   // Velocities follow the corrected positions.
   const double inv_dt = 1.0 / dt;
-  for (int i = 0; i < m.n; ++i) s.v[i] += (s.x[i] - w.x_before[i]) * inv_dt;
+  for_each_particle(m, [&](int i) { s.v[i] += (s.x[i] - w.x_before[i]) * inv_dt; });
 }
 
 }  // namespace wetcloth::detail

@@ -63,6 +63,9 @@ struct Model {
   std::array<StencilEdge, 8> stencil;  // the same springs, by offset (forces/springs.cpp)
   int threads = 1;                     // threads of the step (integrator.threads resolved)
   std::vector<std::array<int, 3>> triangles;
+  // Each particle's triangles, ascending: particle i's are
+  // particle_triangles[particle_triangle_start[i] .. particle_triangle_start[i + 1]).
+  std::vector<int> particle_triangle_start, particle_triangles;
   std::vector<std::array<int, 2>> triangle_pairs;  // triangles sharing an edge
   std::vector<Handle> handles;
   SurfaceKind contact_surface = SurfaceKind::None;
@@ -103,7 +106,7 @@ struct CollisionPair {
 
 // Scratch arrays, reused every step: nothing is allocated per step.
 struct Workspace {
-  std::vector<Vec3> force, normal, x_before, surface_normal;
+  std::vector<Vec3> force, normal, triangle_normal, x_before, surface_normal;
   std::vector<Sym> damping;           // each particle's damping on its own velocity, N·s/m
   std::vector<double> distance;       // signed distance to the contact surface
   std::vector<double> adhesion;       // |adhesion force| per particle, N
@@ -117,8 +120,16 @@ struct Workspace {
   // sums by component, columns the compiler vectorises over.
   std::vector<double> soa;
   std::vector<int> queue;
-  std::vector<int> strain_order;      // structural then shear springs, ordered
-  std::vector<Vec3> strain_delta;     // strain limiting: summed corrections in a level
+  // Strain limiting: structural and shear springs in adaptive order, the first
+  // spring of each level (and the end), summed corrections within a level.
+  struct StrainSpring {
+    int a = 0, b = 0;
+    double max_len = 0;  // (1 + τ_c) l0
+    int nearer = 0;      // -1: a is nearer the source, 1: b is, 0: neither
+  };
+  std::vector<StrainSpring> strain_springs;
+  std::vector<int> strain_levels;
+  std::vector<Vec3> strain_delta;
   std::vector<int> strain_count;
   Vec3 handle_force = Vec3::Zero();   // force the first pulling handle exerts, N
   // Self-collision spatial hash (counting sort by cell).
@@ -128,6 +139,7 @@ struct Workspace {
   std::vector<CollisionPair> collision_pairs;
   // Self-collision candidates within candidates_radius at candidates_anchor.
   std::vector<std::array<int, 2>> candidates;
+  std::vector<std::uint8_t> candidate_close;  // candidate within d_t this step
   std::vector<Vec3> candidates_anchor;
   double candidates_radius = 0;
   // Implicit Euler: matrix blocks (8 forward stencil edges per particle), the
@@ -188,5 +200,8 @@ class Simulation {
 
 // Particle normals, area-weighted over the adjacent triangles.
 void compute_normals(const Model& m, const std::vector<Vec3>& x, std::vector<Vec3>& normal);
+// The same, with a scratch array for the triangles' normals (the step's: no allocation).
+void compute_normals(const Model& m, const std::vector<Vec3>& x, std::vector<Vec3>& normal,
+                     std::vector<Vec3>& triangle_normal);
 
 }  // namespace wetcloth

@@ -15,20 +15,23 @@ void add_adhesion(const Model& m, const State& s, Workspace& w) {
   const double pressure = adhesion_pressure(m.params);
   const double tension = adhesion_edge_tension(m.params);
   if (pressure == 0 && tension == 0) return;
-  double s_now = 0;
-  int border = 0;
-  for (int i = 0; i < m.n; ++i) {
-    if (!s.contact[i]) continue;
-    s_now += m.area[i];
-    border += w.border[i];
-  }
+  const double s_now = ordered_sum(m, w, [&](int j) {
+    double sum = 0;
+    for (int i = j * m.nu; i < (j + 1) * m.nu; ++i) sum += s.contact[i] ? m.area[i] : 0.0;
+    return sum;
+  });
+  const double border = ordered_sum(m, w, [&](int j) {
+    int count = 0;
+    for (int i = j * m.nu; i < (j + 1) * m.nu; ++i) count += s.contact[i] && w.border[i];
+    return static_cast<double>(count);
+  });
   const double edge_each = border > 0 ? 2.0 * std::sqrt(s_now) * tension / border : 0.0;
-  for (int i = 0; i < m.n; ++i) {
-    if (!s.contact[i]) continue;
+  for_each_particle(m, [&](int i) {
+    if (!s.contact[i]) return;
     const double f = pressure * m.area[i] + (w.border[i] ? edge_each : 0.0);
     w.adhesion[i] = f;
     w.force[i] -= f * w.surface_normal[i];
-  }
+  });
 }
 
 }  // namespace wetcloth::detail

@@ -187,8 +187,8 @@ void add_air_pressure(const Model& m, const State& s, Workspace& w) {
   if (m.params.air.model == "off" || m.contact_surface == SurfaceKind::None) return;
   const double p_atm = m.params.air.p_atm;
   const bool along_cloth_normal = m.params.air.force_direction == "cloth";
-  for (int i = 0; i < m.n; ++i) {
-    if (s.contact[i] || !holds_air(m, w.distance[i])) continue;
+  for_each_particle(m, [&](int i) {
+    if (s.contact[i] || !holds_air(m, w.distance[i])) return;
     Vec3 n = w.surface_normal[i];
     if (along_cloth_normal) {
       n = w.normal[i];
@@ -196,7 +196,7 @@ void add_air_pressure(const Model& m, const State& s, Workspace& w) {
     }
     w.air_direction[i] = m.area[i] * n;
     w.force[i] -= (p_atm - s.pocket_pressure[i]) * w.air_direction[i];
-  }
+  });
 }
 
 // Backward Euler for the air term alone. Linearised, the air force is
@@ -219,11 +219,11 @@ void correct_air_implicitly(const Model& m, State& s, Workspace& w, double dt) {
     const double c = dt * dt * w.pocket_stiffness[k];
     w.pocket_sums[2 * k] = c * w.pocket_sums[2 * k] / (1.0 + c * w.pocket_sums[2 * k + 1]);
   }
-  for (int i = 0; i < m.n; ++i) {
+  for_each_particle(m, [&](int i) {
     const int k = w.pocket[i];
-    if (k < 0 || w.pocket_sums[2 * k] == 0) continue;
+    if (k < 0 || w.pocket_sums[2 * k] == 0) return;
     s.v[i] -= (w.pocket_sums[2 * k] * m.inv_mass[i]) * w.air_direction[i];
-  }
+  });
 }
 
 }  // namespace wetcloth::detail

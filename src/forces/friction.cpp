@@ -14,8 +14,8 @@ void apply_friction(const Model& m, State& s, const Workspace& w,
   const double mu = m.params.friction.mu;
   if (mu == 0) return;
   const bool with_load = m.params.friction.normal == "contact";
-  for (int i = 0; i < m.n; ++i) {
-    if (m.driven[i]) continue;
+  for_each_particle(m, [&](int i) {
+    if (m.driven[i]) return;
     double load = 0;
     Vec3 n;
     if (s.contact[i]) {
@@ -27,15 +27,15 @@ void apply_friction(const Model& m, State& s, const Workspace& w,
       n = query_surface(m.params, static_cast<SurfaceKind>(touched[i]), s.x[i]).normal;
       load = std::max(0.0, -w.force[i].dot(n));
     } else {
-      continue;
+      return;
     }
-    if (load <= 0) continue;
+    if (load <= 0) return;
     const Vec3 vt = s.v[i] - s.v[i].dot(n) * n;
     const double speed = vt.norm();
-    if (speed == 0) continue;
+    if (speed == 0) return;
     const double dv = mu * load * dt * m.inv_mass[i];
     s.v[i] -= vt * (std::min(dv, speed) / speed);  // eq. 14
-  }
+  });
 }
 
 }  // namespace wetcloth::detail

@@ -19,8 +19,13 @@ void add_self_collision(const Model& m, const State& s, Workspace& w, bool with_
   // slowly moving cloth skips the hash for hundreds of steps.
   const double margin = 0.5 * dt_dist;
   bool rebuild = w.candidates_radius != dt_dist + margin || w.candidates_anchor.size() != s.x.size();
-  for (int i = 0; i < m.n && !rebuild; ++i)
-    rebuild = (s.x[i] - w.candidates_anchor[i]).squaredNorm() > 0.25 * margin * margin;
+  if (!rebuild) {
+    int moved = 0;
+#pragma omp parallel for reduction(max : moved) num_threads(m.threads) if (m.threads > 1)
+    for (int i = 0; i < m.n; ++i)
+      moved = std::max(moved, int((s.x[i] - w.candidates_anchor[i]).squaredNorm() > 0.25 * margin * margin));
+    rebuild = moved != 0;
+  }
   if (rebuild) {
     // Grid neighbours never collide: within two grid steps (MODEL.md), or more
     // on a grid fine enough that d_t spans more steps, else a flat cloth would
@@ -41,11 +46,19 @@ void add_self_collision(const Model& m, const State& s, Workspace& w, bool with_
   auto& colliding = w.colliding;
   std::fill(colliding.begin(), colliding.end(), 0);
   w.collision_pairs.clear();
-  for (const auto& [i, j] : w.candidates) {
+  // Which candidates are within d_t, in parallel; then the few that are, in order.
+  const int count = static_cast<int>(w.candidates.size());
+  w.candidate_close.resize(count);
+#pragma omp parallel for schedule(static) num_threads(m.threads) if (m.threads > 1)
+  for (int c = 0; c < count; ++c) {
+    const double len2 = (s.x[w.candidates[c][0]] - s.x[w.candidates[c][1]]).squaredNorm();
+    w.candidate_close[c] = len2 < dt_dist * dt_dist && len2 != 0;
+  }
+  for (int c = 0; c < count; ++c) {
+    if (!w.candidate_close[c]) continue;
+    const auto [i, j] = w.candidates[c];
     const Vec3 d = s.x[i] - s.x[j];
-    const double len2 = d.squaredNorm();
-    if (len2 >= dt_dist * dt_dist || len2 == 0) continue;
-    const double len = std::sqrt(len2);
+    const double len = std::sqrt(d.squaredNorm());
     // eq. 15: F_i = k_t (d_t - |d_ij|) d_ij / |d_ij|, F_j = -F_i
     const Vec3 fi = (k * (dt_dist - len) / len) * d;
     w.force[i] += fi;

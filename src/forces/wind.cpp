@@ -8,11 +8,11 @@ void add_wind(const Model& m, const State& s, const Workspace& w, std::vector<Ve
   const double k = m.params.wind.k;
   if (k == 0) return;
   const Vec3 u = to_vec(m.params.wind.velocity);
-  for (int i = 0; i < m.n; ++i) {
+  for_each_particle(m, [&](int i) {
     const Vec3 rel = m.in_wind[i] ? Vec3(u - s.v[i]) : Vec3(-s.v[i]);
     const Vec3& n = w.normal[i];
     f[i] += (k * m.area[i] * rel.dot(n)) * n;
-  }
+  });
 }
 
 }  // namespace wetcloth::detail

@@ -97,6 +97,7 @@ void Simulation::set_params(const Params& p) {
   const bool same_grid = p.cloth.resolution == model_.params.cloth.resolution;
   model_ = build_model(p);
   if (!same_grid) reset();
+  ws_.strain_springs.clear();  // their lengths may have changed: ordered again next step
 }
 
 void Simulation::grab(int particle, const Vec3& target, double stiffness) {

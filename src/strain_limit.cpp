@@ -2,12 +2,16 @@
 // Vassilev 2003): over-stretched structural and shear springs are shortened back
 // to (1 + τ_c) l0, starting from the particles that move first.
 #include <algorithm>
+#include <functional>
 
 #include "detail.hpp"
 
 namespace wetcloth::detail {
 
 namespace {
+
+// Structural and shear springs are the first four offsets of Model::stencil.
+constexpr int kStrainOffsets = 4;
 
 // Breadth-first grid distance (8-neighbourhood) from the source particles.
 void distances_from(const Model& m, const std::vector<int>& sources, State& s, Workspace& w) {
@@ -41,13 +45,26 @@ void order_springs(const Model& m, const State& s, Workspace& w) {
     for (std::size_t k = 0; k < set->size(); ++k) {
       const int a = set->a[k], b = set->b[k];
       const int da = s.source_distance[a], db = s.source_distance[b];
-      w.strain_springs.push_back({a, b, stretch * set->rest[k], da == db ? 0 : (da < db ? -1 : 1)});
+      // Its stencil slot: the lower end and the forward offset, one of the first four.
+      int di = b % m.nu - a % m.nu, dj = b / m.nu - a / m.nu, lower = a;
+      if (dj < 0 || (dj == 0 && di < 0)) {
+        di = -di;
+        dj = -dj;
+        lower = b;
+      }
+      int e = 0;
+      while (m.stencil[e].di != di || m.stencil[e].dj != dj) ++e;
+      w.strain_springs.push_back({a, b, stretch * m.stencil[e].rest,
+                                  da == db ? 0 : (da < db ? -1 : 1), kStrainOffsets * lower + e});
     }
   auto level = [&](const Workspace::StrainSpring& e) {
     return std::min(s.source_distance[e.a], s.source_distance[e.b]);
   };
   std::stable_sort(w.strain_springs.begin(), w.strain_springs.end(),
                    [&](const auto& x, const auto& y) { return level(x) < level(y); });
+  w.strain_index.assign(kStrainOffsets * std::size_t(m.n), -1);
+  for (std::size_t e = 0; e < w.strain_springs.size(); ++e)
+    w.strain_index[w.strain_springs[e].slot] = static_cast<int>(e);
   w.strain_levels.clear();
   for (std::size_t e = 0; e < w.strain_springs.size(); ++e)
     if (e == 0 || level(w.strain_springs[e]) != level(w.strain_springs[e - 1]))
@@ -98,52 +115,124 @@ void limit_strain(const Model& m, State& s, Workspace& w, double dt) {
   w.strain_delta.resize(m.n, Vec3::Zero());  // zero between levels
   w.strain_count.resize(m.n, 0);
   const auto& springs = w.strain_springs;
+  w.strain_stretched.resize(kStrainOffsets * std::size_t(m.n));
+  w.strain_queued.resize(springs.size(), 0);  // zero between passes
   auto fixed = [&](int i) { return m.driven[i] || s.held[i]; };
+  double max_len2[kStrainOffsets];
+  for (int e = 0; e < kStrainOffsets; ++e) {
+    const double l = (1.0 + p.tau) * m.stencil[e].rest;
+    max_len2[e] = l * l;
+  }
+  const auto level_end = [&](int l) { return w.strain_levels[l + 1]; };
+  auto& heap = w.strain_heap;  // springs to look at, a min-heap of their order
+  auto& touched = w.strain_touched;  // particles with a correction in this level
+  // Particle k moved: its springs in later levels than l may now be stretched.
+  auto queue_springs_of = [&](int k, int l) {
+    const int i = k % m.nu, j = k / m.nu;
+    for (int e = 0; e < kStrainOffsets; ++e)
+      for (const int sign : {1, -1}) {
+        const int b = grid_neighbour(m, i, j, sign * m.stencil[e].di, sign * m.stencil[e].dj);
+        if (b < 0) continue;
+        const int order = w.strain_index[kStrainOffsets * (sign > 0 ? k : b) + e];
+        if (order < level_end(l) || w.strain_queued[order]) continue;
+        w.strain_queued[order] = 1;
+        heap.push_back(order);
+        std::push_heap(heap.begin(), heap.end(), std::greater<>());
+      }
+  };
+  // End of level l: each particle moves by the mean of its corrections.
+  auto finish_level = [&](int l) {
+    for (const int k : touched) {
+      s.x[k] += w.strain_delta[k] / w.strain_count[k];
+      w.strain_delta[k].setZero();
+      w.strain_count[k] = 0;
+    }
+    for (const int k : touched) queue_springs_of(k, l);
+    w.strain_moved.insert(w.strain_moved.end(), touched.begin(), touched.end());
+    touched.clear();
+  };
   bool moved = false;
   for (int pass = 0; pass < p.passes; ++pass) {
-    bool corrected = false;  // a pass that corrects nothing ends the passes
-    for (std::size_t l = 0; l + 1 < w.strain_levels.size(); ++l) {
-      const int first = w.strain_levels[l], last = w.strain_levels[l + 1];
-      bool level_corrected = false;
-      for (int e = first; e < last; ++e) {
-        const auto& sp = springs[e];
-        const Vec3 d = s.x[sp.b] - s.x[sp.a];
-        const double len2 = d.squaredNorm();
-        if (len2 <= sp.max_len * sp.max_len) continue;
-        level_corrected = true;
-        // The end farther from the source moves; both halves when neither is
-        // nearer; pinned and driven particles never move.
-        double wa = sp.nearer == 0 ? 0.5 : (sp.nearer < 0 ? 0.0 : 1.0);
-        double wb = 1.0 - wa;
-        const bool fixed_a = fixed(sp.a), fixed_b = fixed(sp.b);
-        if (fixed_a) {
-          wa = 0;
-          wb = fixed_b ? 0 : 1;
+    // The levels run in order, one after the other, but most springs are not
+    // stretched. Only those stretched at the start of a pass, and the springs of
+    // particles moved since, can be; only they are looked at, in the order of
+    // the levels. The first pass finds them in grid order, on every thread; a
+    // later one takes those of the pass before and the springs of the particles
+    // it moved.
+    heap.clear();
+    if (pass > 0) {
+      for (const int k : w.strain_moved) queue_springs_of(k, -1);
+      for (const int e : w.strain_over)
+        if (!w.strain_queued[e]) {
+          w.strain_queued[e] = 1;
+          heap.push_back(e);
+          std::push_heap(heap.begin(), heap.end(), std::greater<>());
         }
-        if (fixed_b) {
-          wb = 0;
-          wa = fixed_a ? 0 : 1;
-        }
-        const double len = std::sqrt(len2);
-        const Vec3 corr = d * ((len - sp.max_len) / len);
-        if (wa > 0) {
-          w.strain_delta[sp.a] += wa * corr;
-          ++w.strain_count[sp.a];
-        }
-        if (wb > 0) {
-          w.strain_delta[sp.b] -= wb * corr;
-          ++w.strain_count[sp.b];
-        }
+    } else {
+      parallel_for(m, m.nv, [&](int j) {
+      const Vec3* x = s.x.data();  // locals: a byte store could alias the vectors
+      std::uint8_t* flag = w.strain_stretched.data() + kStrainOffsets * std::size_t(j) * m.nu;
+      std::fill(flag, flag + kStrainOffsets * m.nu, 0);
+      for (int e = 0; e < kStrainOffsets; ++e) {
+        const StencilEdge& st = m.stencil[e];
+        if (j + st.dj >= m.nv) continue;
+        const int off = st.di + st.dj * m.nu, row = j * m.nu;
+        const double limit = max_len2[e];
+        for (int i = std::max(0, -st.di); i < std::min(m.nu, m.nu - st.di); ++i)
+          flag[kStrainOffsets * i + e] = (x[row + i + off] - x[row + i]).squaredNorm() > limit;
       }
-      if (!level_corrected) continue;
-      corrected = true;
-      for (int e = first; e < last; ++e)
-        for (const int k : {springs[e].a, springs[e].b}) {
-          if (w.strain_count[k] == 0) continue;
-          s.x[k] += w.strain_delta[k] / w.strain_count[k];
-          w.strain_delta[k].setZero();
-          w.strain_count[k] = 0;
+      });
+      for (std::size_t slot = 0; slot < w.strain_stretched.size(); ++slot)
+        if (w.strain_stretched[slot]) heap.push_back(w.strain_index[slot]);
+      std::make_heap(heap.begin(), heap.end(), std::greater<>());
+      for (const int order : heap) w.strain_queued[order] = 1;
+    }
+    if (heap.empty()) break;
+    w.strain_moved.clear();
+    w.strain_over.clear();
+    bool corrected = false;  // a pass that corrects nothing ends the passes
+    for (int l = 0; !heap.empty();) {
+      const int e = heap.front();
+      if (e >= level_end(l)) {
+        if (!touched.empty()) {
+          finish_level(l);  // may queue springs of the levels before e's
+          continue;
         }
+        while (e >= level_end(l)) ++l;
+      }
+      std::pop_heap(heap.begin(), heap.end(), std::greater<>());
+      heap.pop_back();
+      w.strain_queued[e] = 0;
+      const auto& sp = springs[e];
+      const Vec3 d = s.x[sp.b] - s.x[sp.a];
+      const double len2 = d.squaredNorm();
+      if (len2 <= sp.max_len * sp.max_len) continue;
+      corrected = true;
+      w.strain_over.push_back(e);
+      // The end farther from the source moves; both halves when neither is
+      // nearer; pinned and driven particles never move.
+      double wa = sp.nearer == 0 ? 0.5 : (sp.nearer < 0 ? 0.0 : 1.0);
+      double wb = 1.0 - wa;
+      const bool fixed_a = fixed(sp.a), fixed_b = fixed(sp.b);
+      if (fixed_a) {
+        wa = 0;
+        wb = fixed_b ? 0 : 1;
+      }
+      if (fixed_b) {
+        wb = 0;
+        wa = fixed_a ? 0 : 1;
+      }
+      const double len = std::sqrt(len2);
+      const Vec3 corr = d * ((len - sp.max_len) / len);
+      if (wa > 0) {
+        if (w.strain_count[sp.a]++ == 0) touched.push_back(sp.a);
+        w.strain_delta[sp.a] += wa * corr;
+      }
+      if (wb > 0) {
+        if (w.strain_count[sp.b]++ == 0) touched.push_back(sp.b);
+        w.strain_delta[sp.b] -= wb * corr;
+      }
+      if (heap.empty() && !touched.empty()) finish_level(l);
     }
     moved = moved || corrected;
     if (!corrected) break;

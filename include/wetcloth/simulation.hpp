@@ -126,11 +126,17 @@ struct Workspace {
     int a = 0, b = 0;
     double max_len = 0;  // (1 + τ_c) l0
     int nearer = 0;      // -1: a is nearer the source, 1: b is, 0: neither
+    int slot = 0;        // 4 × lower end + stencil offset: its strain_stretched flag
   };
   std::vector<StrainSpring> strain_springs;
   std::vector<int> strain_levels;
   std::vector<Vec3> strain_delta;
   std::vector<int> strain_count;
+  std::vector<int> strain_index;                // stencil slot -> its place in strain_springs
+  std::vector<std::uint8_t> strain_stretched;  // per stencil slot, at the start of a pass
+  std::vector<std::uint8_t> strain_queued;     // per spring: in strain_heap
+  std::vector<int> strain_heap, strain_touched;
+  std::vector<int> strain_moved, strain_over;  // particles moved, springs stretched in a pass
   Vec3 handle_force = Vec3::Zero();   // force the first pulling handle exerts, N
   // Self-collision spatial hash (counting sort by cell).
   std::vector<int> cell_start, cell_entries, particle_cell;

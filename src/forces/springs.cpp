@@ -7,6 +7,8 @@
 // so that a row's particles away from the border, which have all 16 springs,
 // are summed by one loop the compiler vectorises; particles near the border
 // take the same formula one at a time, skipping the springs off the grid.
+#include <omp.h>
+
 #include "../detail.hpp"
 
 namespace wetcloth::detail {
@@ -62,22 +64,25 @@ Springs springs_of(const Model& m, bool with_damping) {
   return s;
 }
 
-// Columns of one array: x, y, z, vx, vy, vz in, then the nine sums of Sum out.
+// Columns x, y, z, vx, vy, vz in; the nine sums of Sum out, for one row
+// (particle i at out[k][i - row]).
 struct Columns {
   const double *px, *py, *pz, *vx, *vy, *vz;
   double* out[9];
+  int row = 0;
 };
 
 inline void store(const Columns& c, int i, const Sum& s) {
-  c.out[0][i] = s.fx;
-  c.out[1][i] = s.fy;
-  c.out[2][i] = s.fz;
-  c.out[3][i] = s.cxx;
-  c.out[4][i] = s.cyy;
-  c.out[5][i] = s.czz;
-  c.out[6][i] = s.cxy;
-  c.out[7][i] = s.cxz;
-  c.out[8][i] = s.cyz;
+  const int r = i - c.row;
+  c.out[0][r] = s.fx;
+  c.out[1][r] = s.fy;
+  c.out[2][r] = s.fz;
+  c.out[3][r] = s.cxx;
+  c.out[4][r] = s.cyy;
+  c.out[5][r] = s.czz;
+  c.out[6][r] = s.cxy;
+  c.out[7][r] = s.cxz;
+  c.out[8][r] = s.cyz;
 }
 
 // Particles [lo, hi) of a row, all of whose springs are on the grid. The
@@ -114,10 +119,9 @@ void sum_border(const Model& m, const Columns& c, const Springs& sp, int i, int 
 
 void add_spring_forces(const Model& m, const State& s, Workspace& w, bool with_damping) {
   const int n = m.n, nu = m.nu;
-  w.soa.resize(15 * std::size_t(n));
+  // The columns, then per thread one row of sums.
+  w.soa.resize(6 * std::size_t(n) + 9 * std::size_t(nu) * m.threads);
   double* const X = w.soa.data();
-  Columns c{X, X + n, X + 2 * n, X + 3 * n, X + 4 * n, X + 5 * n, {}};
-  for (int k = 0; k < 9; ++k) c.out[k] = X + (6 + k) * n;
   const Springs sp = springs_of(m, with_damping);
   constexpr int reach = 2;  // the stencil's longest offset, in grid steps
 
@@ -129,15 +133,18 @@ void add_spring_forces(const Model& m, const State& s, Workspace& w, bool with_d
       }
   });
   parallel_for(m, m.nv, [&](int j) {
+    Columns c{X, X + n, X + 2 * n, X + 3 * n, X + 4 * n, X + 5 * n, {}, j * nu};
+    double* const sums = X + 6 * std::size_t(n) + 9 * std::size_t(nu) * omp_get_thread_num();
+    for (int k = 0; k < 9; ++k) c.out[k] = sums + k * nu;
     const bool inner_row = j >= reach && j < m.nv - reach && nu > 2 * reach;
     const int lo = inner_row ? reach : nu, hi = inner_row ? nu - reach : nu;
     for (int i = 0; i < std::min(lo, nu); ++i) sum_border(m, c, sp, i, j);
     if (inner_row) sum_interior(c, sp, j * nu + lo, j * nu + hi);
     for (int i = hi; i < nu; ++i) sum_border(m, c, sp, i, j);
-    for (int a = j * nu; a < (j + 1) * nu; ++a) {
-      w.force[a] += Vec3(c.out[0][a], c.out[1][a], c.out[2][a]);
-      if (with_damping)
-        w.damping[a] = {c.out[3][a], c.out[4][a], c.out[5][a], c.out[6][a], c.out[7][a], c.out[8][a]};
+    const auto& o = c.out;
+    for (int i = 0; i < nu; ++i) {
+      w.force[j * nu + i] += Vec3(o[0][i], o[1][i], o[2][i]);
+      if (with_damping) w.damping[j * nu + i] = {o[3][i], o[4][i], o[5][i], o[6][i], o[7][i], o[8][i]};
     }
   });
 }

@@ -17,7 +17,11 @@ void add_self_collision(const Model& m, const State& s, Workspace& w, bool with_
   // with the hash only once some particle has moved margin/2 since the last
   // build. Until then no pair can have come within d_t unlisted, and a flat or
   // slowly moving cloth skips the hash for hundreds of steps.
-  const double margin = 0.5 * dt_dist;
+  // The margin is at most 1.5 grid steps: on a fine grid half of d_t spans
+  // many steps, and a flat cloth would list every particle's whole ring of
+  // grid neighbours just past the excluded ones (360 B a particle at 401 x 401).
+  const double step = std::min(m.params.cloth.size[0] / (m.nu - 1), m.params.cloth.size[1] / (m.nv - 1));
+  const double margin = std::min(0.5 * dt_dist, 1.5 * step);
   bool rebuild = w.candidates_radius != dt_dist + margin || w.candidates_anchor.size() != s.x.size();
   if (!rebuild) {
     int moved = 0;
@@ -31,7 +35,6 @@ void add_self_collision(const Model& m, const State& s, Workspace& w, bool with_
     // on a grid fine enough that d_t spans more steps, else a flat cloth would
     // repel itself.
     const int nu = m.nu;
-    const double step = std::min(m.params.cloth.size[0] / (m.nu - 1), m.params.cloth.size[1] / (m.nv - 1));
     const int reach = std::max(2, static_cast<int>(std::ceil(dt_dist / step)));
     auto near_in_grid = [nu, reach](int i, int j) {
       return std::abs(i % nu - j % nu) <= reach && std::abs(i / nu - j / nu) <= reach;

@@ -84,7 +84,8 @@ void multiply(const Model& m, const State& s, Workspace& w, const std::vector<Ve
       for (const int sign : {1, -1}) {
         const int di = sign * st.di, dj = sign * st.dj;
         if (j + dj < 0 || j + dj >= m.nv) continue;
-        const int off = di + dj * m.nu, from = row + std::max(0, -di), to = row + std::min(m.nu, m.nu - di);
+        const int off = di + dj * m.nu, from = row + std::max(0, -di),
+                  to = row + std::min(m.nu, m.nu - di);
         // The block of edge e sits at its lower end: a going forward, a + off going back.
         const int at = sign > 0 ? 0 : off;
         for (int a = from; a < to; ++a) y[a] -= times(w.edge_block[8 * (a + at) + e], x[a + off]);
@@ -133,7 +134,8 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
       for (int e = 0; e < 8; ++e) {
         const StencilEdge& st = m.stencil[e];
         if (grid_neighbour(m, i, j, st.di, st.dj) >= 0) add_to(d, w.edge_block[8 * a + e]);
-        if (const int b = grid_neighbour(m, i, j, -st.di, -st.dj); b >= 0) add_to(d, w.edge_block[8 * b + e]);
+        if (const int b = grid_neighbour(m, i, j, -st.di, -st.dj); b >= 0)
+          add_to(d, w.edge_block[8 * b + e]);
       }
     }
   });

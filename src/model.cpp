@@ -1,8 +1,9 @@
 // The cloth grid of MODEL.md section 1: particles, areas, masses, springs.
+#include <omp.h>
+
 #include <algorithm>
 #include <cmath>
 #include <numbers>
-#include <omp.h>
 #include <unordered_map>
 
 #include "detail.hpp"
@@ -84,7 +85,8 @@ Model build_model(const Params& p) {
       // Voronoi area: l² inside, half on an edge, a quarter at a corner.
       m.area[k] = du * dv * (edge_u ? 0.5 : 1.0) * (edge_v ? 0.5 : 1.0);
       m.on_border[k] = edge_u || edge_v;
-      const double uu = m.nu > 1 ? double(i) / (m.nu - 1) : 0, vv = m.nv > 1 ? double(j) / (m.nv - 1) : 0;
+      const double uu = m.nu > 1 ? double(i) / (m.nu - 1) : 0,
+                   vv = m.nv > 1 ? double(j) / (m.nv - 1) : 0;
       m.in_wind[k] = uu >= p.wind.region_min[0] && uu <= p.wind.region_max[0] &&
                      vv >= p.wind.region_min[1] && vv <= p.wind.region_max[1];
     }
@@ -167,8 +169,9 @@ Model build_model(const Params& p) {
   for (const auto& [name, hp] : p.handles) {
     Handle h;
     h.name = name;
-    h.type = hp.type == "pin" ? HandleType::Pin : hp.type == "move" ? HandleType::Move
-                                                                     : HandleType::Force;
+    h.type = hp.type == "pin"    ? HandleType::Pin
+             : hp.type == "move" ? HandleType::Move
+                                 : HandleType::Force;
     const int ci = nearest(hp.at[0], m.nu), cj = nearest(hp.at[1], m.nv);
     const int r = static_cast<int>(hp.patch);
     for (int j = std::max(0, cj - r); j <= std::min(m.nv - 1, cj + r); ++j)

@@ -200,7 +200,8 @@ std::string Simulation::blow_up_reason() const {
   std::ostringstream o;
   o << "the simulation blew up at t = " << state_.time << " s (";
   if (std::isfinite(vmax))
-    o << "a particle reached " << vmax << " m/s, over integrator.max_speed = " << p.integrator.max_speed;
+    o << "a particle reached " << vmax
+      << " m/s, over integrator.max_speed = " << p.integrator.max_speed;
   else
     o << "NaN in the particle state";
   if (p.integrator.type == "implicit-euler") {
@@ -308,17 +309,21 @@ Metrics Simulation::metrics() const {
 }
 
 std::vector<std::string> metrics_columns() {
-  return {"time_s",          "handle_height_m",   "handle_force_n",   "max_height_m",
-          "contact_area_m2", "lifted_area_m2",    "base_diagonal_m",  "outer_diagonal_m",
-          "inner_pressure_pa", "trapped_air_m3",  "air_volume_m3",    "kinetic_energy_j",
-          "max_strain",      "wrinkle_rad",       "centroid_x_m",     "centroid_y_m"};
+  return {"time_s",          "handle_height_m",  "handle_force_n",
+          "max_height_m",    "contact_area_m2",  "lifted_area_m2",
+          "base_diagonal_m", "outer_diagonal_m", "inner_pressure_pa",
+          "trapped_air_m3",  "air_volume_m3",    "kinetic_energy_j",
+          "max_strain",      "wrinkle_rad",      "centroid_x_m",
+          "centroid_y_m"};
 }
 
 std::vector<double> metrics_values(const Metrics& r) {
-  return {r.time_s,          r.handle_height_m,   r.handle_force_n,  r.max_height_m,
-          r.contact_area_m2, r.lifted_area_m2,    r.base_diagonal_m, r.outer_diagonal_m,
-          r.inner_pressure_pa, r.trapped_air_m3,  r.air_volume_m3,   r.kinetic_energy_j,
-          r.max_strain,      r.wrinkle_rad,       r.centroid_x_m,    r.centroid_y_m};
+  return {r.time_s,          r.handle_height_m,  r.handle_force_n,
+          r.max_height_m,    r.contact_area_m2,  r.lifted_area_m2,
+          r.base_diagonal_m, r.outer_diagonal_m, r.inner_pressure_pa,
+          r.trapped_air_m3,  r.air_volume_m3,    r.kinetic_energy_j,
+          r.max_strain,      r.wrinkle_rad,      r.centroid_x_m,
+          r.centroid_y_m};
 }
 
 }  // namespace wetcloth

@@ -80,7 +80,8 @@ void order_springs(const Model& m, const State& s, Workspace& w) {
 void update_strain_order(const Model& m, State& s, Workspace& w) {
   if (s.sources_found && !w.strain_springs.empty()) return;
   std::vector<int> sources;
-  for (const Handle& h : m.handles) sources.insert(sources.end(), h.particles.begin(), h.particles.end());
+  for (const Handle& h : m.handles)
+    sources.insert(sources.end(), h.particles.begin(), h.particles.end());
   if (sources.empty()) {
     const double h_th = m.params.contact.bridge_height;
     for (int i = 0; i < m.n; ++i) {
@@ -124,8 +125,14 @@ void limit_strain(const Model& m, State& s, Workspace& w, double dt) {
     max_len2[e] = l * l;
   }
   const auto level_end = [&](int l) { return w.strain_levels[l + 1]; };
-  auto& heap = w.strain_heap;  // springs to look at, a min-heap of their order
+  auto& heap = w.strain_heap;        // springs to look at, a min-heap of their order
   auto& touched = w.strain_touched;  // particles with a correction in this level
+  auto queue = [&](int order) {
+    if (w.strain_queued[order]) return;
+    w.strain_queued[order] = 1;
+    heap.push_back(order);
+    std::push_heap(heap.begin(), heap.end(), std::greater<>());
+  };
   // Particle k moved: its springs in later levels than l may now be stretched.
   auto queue_springs_of = [&](int k, int l) {
     const int i = k % m.nu, j = k / m.nu;
@@ -134,10 +141,7 @@ void limit_strain(const Model& m, State& s, Workspace& w, double dt) {
         const int b = grid_neighbour(m, i, j, sign * m.stencil[e].di, sign * m.stencil[e].dj);
         if (b < 0) continue;
         const int order = w.strain_index[kStrainOffsets * (sign > 0 ? k : b) + e];
-        if (order < level_end(l) || w.strain_queued[order]) continue;
-        w.strain_queued[order] = 1;
-        heap.push_back(order);
-        std::push_heap(heap.begin(), heap.end(), std::greater<>());
+        if (order >= level_end(l)) queue(order);
       }
   };
   // End of level l: each particle moves by the mean of its corrections.
@@ -162,25 +166,20 @@ void limit_strain(const Model& m, State& s, Workspace& w, double dt) {
     heap.clear();
     if (pass > 0) {
       for (const int k : w.strain_moved) queue_springs_of(k, -1);
-      for (const int e : w.strain_over)
-        if (!w.strain_queued[e]) {
-          w.strain_queued[e] = 1;
-          heap.push_back(e);
-          std::push_heap(heap.begin(), heap.end(), std::greater<>());
-        }
+      for (const int e : w.strain_over) queue(e);
     } else {
       parallel_for(m, m.nv, [&](int j) {
-      const Vec3* x = s.x.data();  // locals: a byte store could alias the vectors
-      std::uint8_t* flag = w.strain_stretched.data() + kStrainOffsets * std::size_t(j) * m.nu;
-      std::fill(flag, flag + kStrainOffsets * m.nu, 0);
-      for (int e = 0; e < kStrainOffsets; ++e) {
-        const StencilEdge& st = m.stencil[e];
-        if (j + st.dj >= m.nv) continue;
-        const int off = st.di + st.dj * m.nu, row = j * m.nu;
-        const double limit = max_len2[e];
-        for (int i = std::max(0, -st.di); i < std::min(m.nu, m.nu - st.di); ++i)
-          flag[kStrainOffsets * i + e] = (x[row + i + off] - x[row + i]).squaredNorm() > limit;
-      }
+        const Vec3* x = s.x.data();  // locals: a byte store could alias the vectors
+        std::uint8_t* flag = w.strain_stretched.data() + kStrainOffsets * std::size_t(j) * m.nu;
+        std::fill(flag, flag + kStrainOffsets * m.nu, 0);
+        for (int e = 0; e < kStrainOffsets; ++e) {
+          const StencilEdge& st = m.stencil[e];
+          if (j + st.dj >= m.nv) continue;
+          const int off = st.di + st.dj * m.nu, row = j * m.nu;
+          const double limit = max_len2[e];
+          for (int i = std::max(0, -st.di); i < std::min(m.nu, m.nu - st.di); ++i)
+            flag[kStrainOffsets * i + e] = (x[row + i + off] - x[row + i]).squaredNorm() > limit;
+        }
       });
       for (std::size_t slot = 0; slot < w.strain_stretched.size(); ++slot)
         if (w.strain_stretched[slot]) heap.push_back(w.strain_index[slot]);

@@ -34,8 +34,8 @@ struct Handle {
   std::string name;
   HandleType type = HandleType::Force;
   std::vector<int> particles;
-  Vec3 force = Vec3::Zero();         // total; particle e gets share[e] of it
-  std::vector<double> share;         // A_i / Σ A: the same acceleration over the patch
+  Vec3 force = Vec3::Zero();  // total; particle e gets share[e] of it
+  std::vector<double> share;  // A_i / Σ A: the same acceleration over the patch
   Vec3 velocity = Vec3::Zero();
   double max_height = 0, max_travel = 0;
   double start = 0;
@@ -83,14 +83,14 @@ struct State {
   std::vector<std::uint8_t> contact;  // 1: within h_th of the contact surface
   std::vector<std::uint8_t> held;     // 1: held where a capped force handle stopped
   std::vector<Vec3> held_at;
-  double air_atm_volume = 0;          // trapped air at atmospheric pressure V_atm, m³
-  double air_volume = 0;              // V_sum, m³
-  double inner_pressure = 0;          // P_in, Pa (mean over pockets for `vented`)
-  double peak_deficit = 0;            // max over time of P_atm - P_in, Pa
-  std::vector<double> air_share;      // vented: V_atm carried by each particle, m³
+  double air_atm_volume = 0;            // trapped air at atmospheric pressure V_atm, m³
+  double air_volume = 0;                // V_sum, m³
+  double inner_pressure = 0;            // P_in, Pa (mean over pockets for `vented`)
+  double peak_deficit = 0;              // max over time of P_atm - P_in, Pa
+  std::vector<double> air_share;        // vented: V_atm carried by each particle, m³
   std::vector<double> pocket_pressure;  // P_in under each particle, Pa
   // Strain limiting's adaptive order (MODEL.md section 2).
-  std::vector<int> source_distance;   // grid steps from the first-moving particles
+  std::vector<int> source_distance;  // grid steps from the first-moving particles
   bool sources_found = false;
 };
 
@@ -107,15 +107,15 @@ struct CollisionPair {
 // Scratch arrays, reused every step: nothing is allocated per step.
 struct Workspace {
   std::vector<Vec3> force, normal, triangle_normal, x_before, surface_normal;
-  std::vector<Sym> damping;           // each particle's damping on its own velocity, N·s/m
-  std::vector<double> distance;       // signed distance to the contact surface
-  std::vector<double> adhesion;       // |adhesion force| per particle, N
-  std::vector<double> normal_force;   // total force · n_s before friction, N
-  std::vector<std::uint8_t> border;   // border of the contact region
-  std::vector<int> pocket;            // air pocket of each particle, -1 none
+  std::vector<Sym> damping;              // each particle's damping on its own velocity, N·s/m
+  std::vector<double> distance;          // signed distance to the contact surface
+  std::vector<double> adhesion;          // |adhesion force| per particle, N
+  std::vector<double> normal_force;      // total force · n_s before friction, N
+  std::vector<std::uint8_t> border;      // border of the contact region
+  std::vector<int> pocket;               // air pocket of each particle, -1 none
   std::vector<double> pocket_stiffness;  // dΔP/dV_sum over one step, per pocket, Pa/m³
-  std::vector<double> pocket_sums;    // scratch for the implicit air correction
-  std::vector<Vec3> air_direction;    // A_i n_i of eq. 3 (zero where no air force)
+  std::vector<double> pocket_sums;       // scratch for the implicit air correction
+  std::vector<Vec3> air_direction;       // A_i n_i of eq. 3 (zero where no air force)
   // Springs (forces/springs.cpp): positions, velocities and each particle's
   // sums by component, columns the compiler vectorises over.
   std::vector<double> soa;
@@ -132,12 +132,12 @@ struct Workspace {
   std::vector<int> strain_levels;
   std::vector<Vec3> strain_delta;
   std::vector<int> strain_count;
-  std::vector<int> strain_index;                // stencil slot -> its place in strain_springs
+  std::vector<int> strain_index;               // stencil slot -> its place in strain_springs
   std::vector<std::uint8_t> strain_stretched;  // per stencil slot, at the start of a pass
   std::vector<std::uint8_t> strain_queued;     // per spring: in strain_heap
   std::vector<int> strain_heap, strain_touched;
   std::vector<int> strain_moved, strain_over;  // particles moved, springs stretched in a pass
-  Vec3 handle_force = Vec3::Zero();   // force the first pulling handle exerts, N
+  Vec3 handle_force = Vec3::Zero();            // force the first pulling handle exerts, N
   // Self-collision spatial hash (counting sort by cell).
   std::vector<int> cell_start, cell_entries, particle_cell;
   std::vector<std::array<long long, 3>> cell_coord;
@@ -154,7 +154,7 @@ struct Workspace {
   std::vector<Mat3> preconditioner;
   std::vector<Vec3> cg_r, cg_z, cg_p, cg_q;
   std::vector<double> row_sums, row_max;
-  int cg_iterations = 0;              // of the last implicit step
+  int cg_iterations = 0;  // of the last implicit step
   // Interactive grab (viewer).
   int grab_particle = -1;
   Vec3 grab_target = Vec3::Zero();
@@ -166,8 +166,7 @@ struct Metrics {
   double time_s = 0, handle_height_m = 0, handle_force_n = 0, max_height_m = 0;
   double contact_area_m2 = 0, lifted_area_m2 = 0, base_diagonal_m = 0, outer_diagonal_m = 0;
   double inner_pressure_pa = 0, trapped_air_m3 = 0, air_volume_m3 = 0;
-  double kinetic_energy_j = 0, max_strain = 0, wrinkle_rad = 0, centroid_x_m = 0,
-         centroid_y_m = 0;
+  double kinetic_energy_j = 0, max_strain = 0, wrinkle_rad = 0, centroid_x_m = 0, centroid_y_m = 0;
 };
 std::vector<std::string> metrics_columns();
 std::vector<double> metrics_values(const Metrics& m);

@@ -62,7 +62,8 @@ double stiffness(const Params& p, double v_atm, double v_sum, double a_sum, doub
   if (v_sum <= 0) return 0.0;
   const double delta = permeability(p);
   if (!leaks || delta <= 0 || a_sum <= 0) return p.air.p_atm * v_atm / (v_sum * v_sum);
-  if (p.air.p_atm - pressure(p, v_atm, v_sum) >= p.air.breakthrough_pressure * (1 - 1e-12)) return 0.0;
+  if (p.air.p_atm - pressure(p, v_atm, v_sum) >= p.air.breakthrough_pressure * (1 - 1e-12))
+    return 0.0;
   const double x = dt * p.air.p_atm * delta * a_sum / v_sum;  // Δt/τ
   const double seep = x > 1e-6 ? -std::expm1(-x) / x : 1 - x / 2;
   return p.air.p_atm * ((v_atm - v_sum) / (v_sum * v_sum) + seep / v_sum);
@@ -167,7 +168,8 @@ void update_air(const Model& m, State& s, Workspace& w, double dt) {
 
 void start_air(const Model& m, State& s, Workspace& w) {
   for (int i = 0; i < m.n; ++i)
-    s.air_share[i] = holds_air(m, w.distance[i]) && !s.contact[i] ? m.area[i] * air_gap(m, w.distance[i]) : 0;
+    s.air_share[i] =
+        holds_air(m, w.distance[i]) && !s.contact[i] ? m.area[i] * air_gap(m, w.distance[i]) : 0;
   update_air(m, s, w, 0.0);
   s.air_atm_volume = s.air_volume;
   s.inner_pressure = m.params.air.p_atm;

@@ -20,14 +20,17 @@ void add_self_collision(const Model& m, const State& s, Workspace& w, bool with_
   // The margin is at most 1.5 grid steps: on a fine grid half of d_t spans
   // many steps, and a flat cloth would list every particle's whole ring of
   // grid neighbours just past the excluded ones (360 B a particle at 401 x 401).
-  const double step = std::min(m.params.cloth.size[0] / (m.nu - 1), m.params.cloth.size[1] / (m.nv - 1));
+  const double step =
+      std::min(m.params.cloth.size[0] / (m.nu - 1), m.params.cloth.size[1] / (m.nv - 1));
   const double margin = std::min(0.5 * dt_dist, 1.5 * step);
-  bool rebuild = w.candidates_radius != dt_dist + margin || w.candidates_anchor.size() != s.x.size();
+  bool rebuild =
+      w.candidates_radius != dt_dist + margin || w.candidates_anchor.size() != s.x.size();
   if (!rebuild) {
     int moved = 0;
 #pragma omp parallel for reduction(max : moved) num_threads(m.threads) if (m.threads > 1)
     for (int i = 0; i < m.n; ++i)
-      moved = std::max(moved, int((s.x[i] - w.candidates_anchor[i]).squaredNorm() > 0.25 * margin * margin));
+      moved = std::max(
+          moved, int((s.x[i] - w.candidates_anchor[i]).squaredNorm() > 0.25 * margin * margin));
     rebuild = moved != 0;
   }
   if (rebuild) {
@@ -43,7 +46,9 @@ void add_self_collision(const Model& m, const State& s, Workspace& w, bool with_
     build_hash(s.x, 2 * w.candidates_radius, w);
     w.candidates.clear();
     for_each_close_pair(s.x, w.candidates_radius, w, near_in_grid,
-                        [&](int i, int j, const Vec3&, double) { w.candidates.push_back({i, j}); });
+                        [&](int i, int j, const Vec3&, double) {
+                          w.candidates.push_back({i, j});
+                        });
     w.candidates_anchor = s.x;
   }
   auto& colliding = w.colliding;

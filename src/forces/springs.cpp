@@ -144,7 +144,8 @@ void add_spring_forces(const Model& m, const State& s, Workspace& w, bool with_d
     const auto& o = c.out;
     for (int i = 0; i < nu; ++i) {
       w.force[j * nu + i] += Vec3(o[0][i], o[1][i], o[2][i]);
-      if (with_damping) w.damping[j * nu + i] = {o[3][i], o[4][i], o[5][i], o[6][i], o[7][i], o[8][i]};
+      if (with_damping)
+        w.damping[j * nu + i] = {o[3][i], o[4][i], o[5][i], o[6][i], o[7][i], o[8][i]};
     }
   });
 }

@@ -1,6 +1,7 @@
 // Internal: the stages of one step (MODEL.md section 8), one file each.
 #pragma once
 
+#include <algorithm>
 #include <limits>
 
 #include "wetcloth/simulation.hpp"
@@ -36,6 +37,16 @@ void for_each_particle(const Model& m, Body&& body) {
   parallel_for(m, m.nv, [&](int j) {
     for (int i = j * m.nu; i < (j + 1) * m.nu; ++i) body(i);
   });
+}
+
+// The largest value(i) over the particles: a maximum, so the same for any
+// split between threads.
+template <class Value>
+double max_over_particles(const Model& m, Value&& value) {
+  double worst = -std::numeric_limits<double>::infinity();
+#pragma omp parallel for reduction(max : worst) num_threads(m.threads) if (m.threads > 1)
+  for (int i = 0; i < m.n; ++i) worst = std::max(worst, value(i));
+  return worst;
 }
 
 // Σ over rows of row(j), the rows' sums added in order: the same bits for any

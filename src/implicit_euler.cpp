@@ -149,7 +149,7 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
   // from the current velocities.
   auto& x = s.v;
   auto &r = w.cg_r, &z = w.cg_z, &p = w.cg_p, &q = w.cg_q;
-  parallel_for(m, m.n, [&](int a) {
+  for_each_particle(m, [&](int a) {
     if (fixed(m, s, a)) {
       w.preconditioner[a] = Mat3::Identity();
       r[a] = x[a];  // b = x: no change
@@ -159,13 +159,13 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
     r[a] = m.mass[a] * x[a] + h * w.force[a];
   });
   multiply(m, s, w, x, q);
-  parallel_for(m, m.n, [&](int a) { r[a] -= q[a]; });
+  for_each_particle(m, [&](int a) { r[a] -= q[a]; });
   // Converged when no particle's velocity is off by more than the tolerance:
   // z = P r is the preconditioned residual, a velocity. (A norm over the whole
   // cloth would let the adhesion and weight of thousands of particles drown
   // out the few the hand pulls.)
   auto [rz, worst] = precondition(m, w);
-  parallel_for(m, m.n, [&](int a) { p[a] = z[a]; });
+  for_each_particle(m, [&](int a) { p[a] = z[a]; });
   int it = 0;
   for (; it < m.params.integrator.cg_max_iterations; ++it) {
     if (worst <= m.params.integrator.cg_tolerance) break;
@@ -173,7 +173,7 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
     const double pq = dot(m, w, p, q);
     if (pq <= 0) break;
     const double alpha = rz / pq;
-    parallel_for(m, m.n, [&](int a) {
+    for_each_particle(m, [&](int a) {
       x[a] += alpha * p[a];
       r[a] -= alpha * q[a];
     });
@@ -181,7 +181,7 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
     const double beta = rz_next / rz;
     rz = rz_next;
     worst = worst_next;
-    parallel_for(m, m.n, [&](int a) { p[a] = z[a] + beta * p[a]; });
+    for_each_particle(m, [&](int a) { p[a] = z[a] + beta * p[a]; });
   }
   w.cg_iterations = it;
 }

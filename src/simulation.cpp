@@ -186,14 +186,12 @@ bool Simulation::advance_to(double t) {
 
 std::string Simulation::blow_up_reason() const {
   const Params& p = model_.params;
-  double vmax = 0;  // a maximum: the same for any split between threads
-#pragma omp parallel for reduction(max : vmax) num_threads(model_.threads) if (model_.threads > 1)
-  for (int i = 0; i < model_.n; ++i) {
-    const double v2 = state_.v[i].squaredNorm();
-    const bool finite = std::isfinite(v2) && state_.x[i].allFinite();
-    vmax = std::max(vmax, finite ? v2 : std::numeric_limits<double>::infinity());
-  }
-  vmax = std::sqrt(vmax);
+  const double vmax =
+      std::sqrt(std::max(0.0, max_over_particles(model_, [&](int i) {
+                           const double v2 = state_.v[i].squaredNorm();
+                           const bool finite = std::isfinite(v2) && state_.x[i].allFinite();
+                           return finite ? v2 : std::numeric_limits<double>::infinity();
+                         })));
   if (vmax <= p.integrator.max_speed) return {};
   const double m_min = *std::min_element(model_.mass.begin(), model_.mass.end());
   const double limit = 2.0 / std::sqrt(8.0 * p.springs.structural_k / m_min);

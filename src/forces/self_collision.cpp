@@ -25,14 +25,10 @@ void add_self_collision(const Model& m, const State& s, Workspace& w, bool with_
   const double margin = std::min(0.5 * dt_dist, 1.5 * step);
   bool rebuild =
       w.candidates_radius != dt_dist + margin || w.candidates_anchor.size() != s.x.size();
-  if (!rebuild) {
-    int moved = 0;
-#pragma omp parallel for reduction(max : moved) num_threads(m.threads) if (m.threads > 1)
-    for (int i = 0; i < m.n; ++i)
-      moved = std::max(
-          moved, int((s.x[i] - w.candidates_anchor[i]).squaredNorm() > 0.25 * margin * margin));
-    rebuild = moved != 0;
-  }
+  if (!rebuild)
+    rebuild = max_over_particles(m, [&](int i) {
+                return (s.x[i] - w.candidates_anchor[i]).squaredNorm();
+              }) > 0.25 * margin * margin;
   if (rebuild) {
     // Grid neighbours never collide: within two grid steps (MODEL.md), or more
     // on a grid fine enough that d_t spans more steps, else a flat cloth would
@@ -57,11 +53,10 @@ void add_self_collision(const Model& m, const State& s, Workspace& w, bool with_
   // Which candidates are within d_t, in parallel; then the few that are, in order.
   const int count = static_cast<int>(w.candidates.size());
   w.candidate_close.resize(count);
-#pragma omp parallel for schedule(static) num_threads(m.threads) if (m.threads > 1)
-  for (int c = 0; c < count; ++c) {
+  parallel_for(m, count, [&](int c) {
     const double len2 = (s.x[w.candidates[c][0]] - s.x[w.candidates[c][1]]).squaredNorm();
     w.candidate_close[c] = len2 < dt_dist * dt_dist && len2 != 0;
-  }
+  });
   for (int c = 0; c < count; ++c) {
     if (!w.candidate_close[c]) continue;
     const auto [i, j] = w.candidates[c];
@@ -76,8 +71,9 @@ void add_self_collision(const Model& m, const State& s, Workspace& w, bool with_
   }
   if (!with_damping) return;  // implicit Euler takes it into its matrix
   // The paper's friction-like damping -k_f v on every colliding particle.
-  for (int i = 0; i < m.n; ++i)
+  for_each_particle(m, [&](int i) {
     if (colliding[i]) w.force[i] -= p.damping * s.v[i];
+  });
 }
 
 }  // namespace wetcloth::detail

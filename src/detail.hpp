@@ -90,6 +90,11 @@ void correct_air_implicitly(const Model& m, State& s, Workspace& w, double dt);
 // implicit_euler.cpp: the new velocities by backward Euler (s.v in, s.v out),
 // from the forces in w.force without their damping.
 void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h);
+// The largest change of a structural or shear spring over a step of h at the
+// velocities s.v, relative to its rest length: the step control's measure.
+double step_strain(const Model& m, const State& s, double h);
+// The most halvings of dt the step control makes: substeps of dt / 1024.
+constexpr int kMostHalvings = 10;
 // handles.cpp: pins, driven particles, height caps; records the rig's force.
 void apply_handle_constraints(const Model& m, State& s, Workspace& w);
 // Keeps the particles of a force handle that reached its height cap where it stopped.

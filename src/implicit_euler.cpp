@@ -186,4 +186,21 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
   w.cg_iterations = it;
 }
 
+// Where a spring turns or stretches by a good part of its length within one
+// step, its linearisation at the start of the step no longer holds: about a
+// flat cloth, springs at rest have no stiffness across it, and a force on a
+// few particles would move them at h F / m.
+double step_strain(const Model& m, const State& s, double h) {
+  return max_over_particles(m, [&](int a) {
+    const int i = a % m.nu, j = a / m.nu;
+    double worst = 0;
+    for (int e = 0; e < 4; ++e) {  // structural and shear
+      const StencilEdge& st = m.stencil[e];
+      if (const int b = grid_neighbour(m, i, j, st.di, st.dj); b >= 0)
+        worst = std::max(worst, h * (s.v[b] - s.v[a]).norm() / st.rest);
+    }
+    return worst;
+  });
+}
+
 }  // namespace wetcloth::detail

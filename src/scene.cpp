@@ -153,6 +153,10 @@ std::vector<ParamDef> make_defs() {
             P(integrator.cg_tolerance)),
       field("integrator.cg_max_iterations", "", 1, 100000,
             "implicit-euler: most conjugate-gradient iterations per step", P(integrator.cg_max_iterations)),
+      field("integrator.max_step_strain", "1", 1e-3, 10,
+            "implicit-euler: a step is halved when a spring changes by more than this times its rest "
+            "length in it",
+            P(integrator.max_step_strain)),
       field("integrator.max_speed", "m/s", 1e-3, 1e6, "speed taken as a blow-up", P(integrator.max_speed)),
       field("run.duration", "s", 0, 1e6, "simulated time", P(run.duration)),
       field("run.fps", "1/s", 1e-3, 1e5, "output frames per simulated second", P(run.fps)),

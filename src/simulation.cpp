@@ -63,12 +63,14 @@ void Simulation::reset() {
   state_.held.assign(n, 0);
   state_.held_at.assign(n, Vec3::Zero());
   state_.air_share.assign(n, 0.0);
+  state_.air_gap.assign(n, 0.0);
   state_.pocket_pressure.assign(n, model_.params.air.p_atm);
   state_.source_distance.assign(n, 0);
   const int grab = ws_.grab_particle;
   ws_ = Workspace{};
   ws_.grab_particle = grab;
-  for (auto* a : {&ws_.force, &ws_.normal, &ws_.surface_normal, &ws_.x_before, &ws_.air_direction})
+  for (auto* a : {&ws_.force, &ws_.normal, &ws_.surface_normal, &ws_.x_before, &ws_.air_direction,
+                  &ws_.v_start})
     a->assign(n, Vec3::Zero());
   ws_.damping.assign(n, Sym{});
   ws_.edge_block.assign(8 * static_cast<std::size_t>(n), Sym{});
@@ -108,16 +110,12 @@ void Simulation::grab(int particle, const Vec3& target, double stiffness) {
 
 void Simulation::release() { ws_.grab_particle = -1; }
 
-void Simulation::step() {
+// 1. Forces, in a fixed order (the order of a float sum is part of the result).
+// Implicit Euler takes the damping into its matrix, so leaves it out here.
+void Simulation::accumulate_forces(bool implicit) {
   const Model& m = model_;
   State& s = state_;
   Workspace& w = ws_;
-  const double dt = m.params.integrator.dt;
-
-  // 1. Forces, in a fixed order (the order of a float sum is part of the result).
-  // Implicit Euler takes the damping into its matrix, so leaves it out here.
-  const std::string& integrator = m.params.integrator.type;
-  const bool implicit = integrator == "implicit-euler";
   compute_normals(m, s.x, w.normal, w.triangle_normal);
   std::fill(w.force.begin(), w.force.end(), Vec3::Zero());
   add_spring_forces(m, s, w, !implicit);
@@ -129,17 +127,42 @@ void Simulation::step() {
   add_self_collision(m, s, w, !implicit);
   add_handle_forces(m, s, w);
   for_each_particle(m, [&](int i) { w.normal_force[i] = w.force[i].dot(w.surface_normal[i]); });
+}
 
-  // 2. Integrate.
-  if (integrator == "explicit-euler") {
-    for (int i = 0; i < m.n; ++i) {
-      s.x[i] += dt * s.v[i];
-      s.v[i] += (dt * m.inv_mass[i]) * w.force[i];
+void Simulation::step() {
+  const Model& m = model_;
+  State& s = state_;
+  Workspace& w = ws_;
+  const double dt = m.params.integrator.dt;
+  const std::string& integrator = m.params.integrator.type;
+
+  if (integrator == "implicit-euler") {
+    // Baraff & Witkin's step control (their section 5.5): a substep whose
+    // springs change too much for their linearisation is taken again at half
+    // the size; after a substep that held, the next one tries twice the size.
+    // Substeps are dt / 2^k and start on a multiple of their size, so they end
+    // exactly on the step.
+    constexpr long long kWhole = 1LL << kMostHalvings;
+    long long done = 0;  // in units of dt / 2^kMostHalvings
+    while (done < kWhole) {
+      int k = w.halvings;
+      while (done % (kWhole >> k) != 0) ++k;
+      const int tried = k;
+      accumulate_forces(true);
+      const double h = implicit_substep(dt, k);
+      w.halvings = k == tried ? std::max(0, k - 1) : k;
+      done += kWhole >> k;
+      s.time = (static_cast<double>(s.steps) + static_cast<double>(done) / kWhole) * dt;
+      finish_step(h);
     }
-    correct_air_implicitly(m, s, w, dt);
   } else {
-    if (implicit) {
-      implicit_euler_velocities(m, s, w, dt);
+    accumulate_forces(false);
+    if (integrator == "explicit-euler") {
+      for (int i = 0; i < m.n; ++i) {
+        s.x[i] += dt * s.v[i];
+        s.v[i] += (dt * m.inv_mass[i]) * w.force[i];
+      }
+      correct_air_implicitly(m, s, w, dt);
     } else {  // symplectic Euler
       // Each particle's own damping (springs and viscous) is taken at the end of
       // the step: v += (I + Δt/m C_i)⁻¹ Δt/m F_i. Explicit, the 0.01 N·s/m of a
@@ -153,25 +176,54 @@ void Simulation::step() {
           s.v[i] += solve(a, h * w.force[i]);  // inv_mass 0: a = I, force times 0
         }
       });
+      correct_air_implicitly(m, s, w, dt);
+      for_each_particle(m, [&](int i) { s.x[i] += dt * s.v[i]; });
     }
-    correct_air_implicitly(m, s, w, dt);
-    for_each_particle(m, [&](int i) { s.x[i] += dt * s.v[i]; });
+    s.time = (s.steps + 1) * dt;  // no drift from summing dt
+    ++w.substeps;
+    finish_step(dt);
   }
-  s.time = (s.steps + 1) * dt;  // no drift from summing dt
-  apply_handle_constraints(m, s, w);
+  ++s.steps;
+}
 
-  // 3. Collide; 4. friction; 5. strain limiting (then no particle may be left
-  // inside a surface); 6. contact state and air.
+// 2. Integrate by backward Euler over dt / 2^k, halving while the springs
+// change more than integrator.max_step_strain; returns the substep taken.
+double Simulation::implicit_substep(double dt, int& k) {
+  const Model& m = model_;
+  State& s = state_;
+  Workspace& w = ws_;
+  w.v_start = s.v;
+  for (;;) {
+    const double h = std::ldexp(dt, -k);
+    implicit_euler_velocities(m, s, w, h);
+    if (k == kMostHalvings || step_strain(m, s, h) <= m.params.integrator.max_step_strain) {
+      ++w.substeps;
+      correct_air_implicitly(m, s, w, h);
+      for_each_particle(m, [&](int i) { s.x[i] += h * s.v[i]; });
+      return h;
+    }
+    s.v = w.v_start;
+    ++k;
+  }
+}
+
+// After integrating over h: handles; 3. collide; 4. friction; 5. strain
+// limiting (then no particle may be left inside a surface); 6. contact state
+// and air.
+void Simulation::finish_step(double h) {
+  const Model& m = model_;
+  State& s = state_;
+  Workspace& w = ws_;
+  apply_handle_constraints(m, s, w);
   collide(m, s, &touched_);
-  apply_friction(m, s, w, touched_, dt);
+  apply_friction(m, s, w, touched_, h);
   if (m.params.strain_limit.enabled) {
-    limit_strain(m, s, w, dt);
+    limit_strain(m, s, w, h);
     collide(m, s, nullptr);
   }
   hold_stopped_handles(m, s);
   update_contact(m, s, w);
-  update_air(m, s, w, dt);
-  ++s.steps;
+  update_air(m, s, w, h);
 }
 
 bool Simulation::advance_to(double t) {
@@ -203,11 +255,12 @@ std::string Simulation::blow_up_reason() const {
   else
     o << "NaN in the particle state";
   if (p.integrator.type == "implicit-euler") {
-    // Linearised about a flat cloth the springs hold nothing across it: a force
-    // on a few particles moves them at Δt F / m in one step (docs/model.md §12).
-    o << "). Likely cause: integrator.dt = " << p.integrator.dt
-      << " s with implicit-euler, which cannot yet hold a force on a small patch (handle.*.force, "
-         "handle.*.patch). Lower integrator.dt, or use integrator.type = \"symplectic-euler\".";
+    o << "). Likely cause: integrator.max_step_strain = " << p.integrator.max_step_strain
+      << " lets a substep's springs change too much for their linearisation, or "
+         "integrator.cg_max_iterations = "
+      << p.integrator.cg_max_iterations
+      << " stops the solve short. Lower integrator.max_step_strain, or raise "
+         "integrator.cg_max_iterations.";
     return o.str();
   }
   o << "). Likely cause: integrator.dt = " << p.integrator.dt

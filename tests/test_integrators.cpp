@@ -18,7 +18,8 @@ double max_spring_strain(const Simulation& sim) {
   const Model& m = sim.model();
   for (const SpringSet* set : {&m.structural, &m.shear})
     for (std::size_t e = 0; e < set->size(); ++e)
-      worst = std::max(worst, (sim.state().x[set->b[e]] - sim.state().x[set->a[e]]).norm() / set->rest[e] - 1);
+      worst = std::max(
+          worst, (sim.state().x[set->b[e]] - sim.state().x[set->a[e]]).norm() / set->rest[e] - 1);
   return worst;
 }
 
@@ -46,6 +47,7 @@ TEST(ImplicitEuler, StretchedSpringRelaxesTowardRest) {
   p.integrator.type = "implicit-euler";
   p.integrator.dt = 1e-3;
   p.integrator.cg_tolerance = 1e-12;
+  p.integrator.max_step_strain = 10;  // one backward-Euler step, not halved
   Simulation sim(p);
   sim.state().x[1].x() += 0.002;  // stretch the bottom structural spring by 2 mm
   const double before = (sim.state().x[1] - sim.state().x[0]).norm();
@@ -56,9 +58,29 @@ TEST(ImplicitEuler, StretchedSpringRelaxesTowardRest) {
   EXPECT_LT(sim.workspace().cg_iterations, 50);
 }
 
+// Baraff & Witkin's step control. Linearised about the flat cloth, springs at
+// rest hold nothing across it, and the hand's 1 N would move its 9 particles at
+// h F / m, about 60 m/s, in one 1/240 s step: the step is taken in halves
+// instead, ends exactly on dt, and nothing moves at that speed. A cloth falling
+// freely is taken in whole steps.
+TEST(ImplicitEuler, HalvesTheStepWhereTheSpringsLinearisationFails) {
+  Simulation pull(load_scene("pull-straight", {kImplicit, kLargeStep}));
+  pull.step();
+  EXPECT_EQ(pull.state().time, pull.model().params.integrator.dt);
+  EXPECT_GE(pull.workspace().substeps, 5);
+  double fastest = 0;
+  for (const Vec3& v : pull.state().v) fastest = std::max(fastest, v.norm());
+  EXPECT_LT(fastest, 2.0);
+
+  Simulation drop(load_scene("drop-table", {kImplicit, kLargeStep}));
+  for (int k = 0; k < 10; ++k) drop.step();
+  EXPECT_EQ(drop.workspace().substeps, 10);
+  EXPECT_EQ(drop.state().time, 10 * drop.model().params.integrator.dt);
+}
+
 // The pulled cloth at 1/240 s with every effect on (air, adhesion, friction,
-// self-collision, a handle) stays stable and strain-limited. (It does not yet
-// agree with the explicit step: see docs/model.md, section 12.)
+// self-collision, a handle) stays stable and strain-limited. (It agrees with
+// the explicit step only to 5-15 %: see docs/model.md, section 12.)
 TEST(ImplicitEuler, RunsThePullWithEveryEffectOn) {
   Simulation sim(test::coarse("pull-straight", {kImplicit, kLargeStep, "cloth.humidity=1"}));
   ASSERT_TRUE(sim.advance_to(1.0)) << sim.blow_up_reason();
@@ -68,18 +90,17 @@ TEST(ImplicitEuler, RunsThePullWithEveryEffectOn) {
 
 // Every force is gathered per particle and every sum is taken in a fixed
 // order, so the thread count never changes a bit. At the paper's 51 x 51: a
-// smaller grid runs on one thread whatever it asks for. Implicit Euler drapes
-// the ball (it cannot yet take the pull's force at this grid).
+// smaller grid runs on one thread whatever it asks for.
 TEST(Threads, TwoThreadsGiveTheSameBitsAsOne) {
   for (const bool implicit : {false, true}) {
     const char* integrator = implicit ? kImplicit : "integrator.type=symplectic-euler";
     const char* dt = implicit ? kLargeStep : "integrator.dt=5e-5";
     std::vector<Simulation> sims;
     for (const char* threads : {"integrator.threads=1", "integrator.threads=2"})
-      sims.emplace_back(load_scene(implicit ? "drape-ball" : "pull-straight",
-                                   {integrator, dt, threads, "cloth.humidity=0.5"}));
+      sims.emplace_back(
+          load_scene("pull-straight", {integrator, dt, threads, "cloth.humidity=0.5"}));
     ASSERT_EQ(sims[1].model().threads, 2);
-    const double t = implicit ? 0.2 : 0.02;
+    const double t = 0.02;
     for (auto& sim : sims) ASSERT_TRUE(sim.advance_to(t));
     for (int i = 0; i < sims[0].model().n; ++i) {
       ASSERT_EQ(sims[0].state().x[i], sims[1].state().x[i]) << integrator << " particle " << i;

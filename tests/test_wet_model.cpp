@@ -35,7 +35,7 @@ TEST(Adhesion, Equation13AtFullHumidity) {
   Params p;
   p.cloth.humidity = 1.0;
   EXPECT_NEAR(adhesion_total(p, 0.09), 4.653, 1e-3);  // laminate table, θb = 58°
-  p.adhesion.theta_b_deg = 14;                          // glass
+  p.adhesion.theta_b_deg = 14;                        // glass
   // γ (S/h (cos 80° + cos 14°) + 2 √S sin 80°) = 7.538 N. (MODEL.md rounds it as 7.549.)
   EXPECT_NEAR(adhesion_total(p, 0.09), 7.538, 1e-3);
   p.adhesion.theta_b_deg = 58;
@@ -124,6 +124,42 @@ TEST(Air, PocketHeldStillRelaxesWithTheModelsTimeConstant) {
   EXPECT_LT(tau, 1e-2);
 }
 
+// A tent growing at a steady rate r holds a lag V_sum - V_atm = r τ (eq. 4
+// with V_sum rising linearly over each step), whether the step is far shorter
+// than τ (explicit) or far longer (implicit Euler's 1/240 s).
+TEST(Air, GrowingTentLagsByRateTimesTimeConstant) {
+  for (const double steps_per_tau : {10.0, 0.1}) {
+    Simulation sim = flat_on_table(0.5);
+    const Model& m = sim.model();
+    State& s = sim.state();
+    Workspace& w = const_cast<Workspace&>(sim.workspace());
+    double h = 0.02;
+    make_tent(sim, h, 0.08);
+    detail::update_contact(m, s, w);
+    detail::update_air(m, s, w, 0.0);
+    s.air_atm_volume = s.air_volume;
+    auto tau = [&] {
+      double a_sum = 0;
+      for (int i = 0; i < m.n; ++i)
+        if (!s.contact[i]) a_sum += m.area[i];
+      return s.air_volume / (m.params.air.p_atm * permeability(m.params) * a_sum);
+    };
+    const double tau0 = tau(), dt = tau0 / steps_per_tau, rise = 1e-3 * h / tau0;  // ~100 Pa
+    double v_before = 0;
+    for (int k = 0; k * dt < 30 * tau0; ++k) {
+      v_before = s.air_volume;
+      h += rise * dt;
+      make_tent(sim, h, 0.08);
+      detail::update_contact(m, s, w);
+      detail::update_air(m, s, w, dt);
+    }
+    const double lag = (s.air_volume - v_before) / dt * tau();
+    const double deficit = m.params.air.p_atm - s.inner_pressure;
+    EXPECT_NEAR(deficit, m.params.air.p_atm * lag / s.air_volume, 0.02 * deficit) << steps_per_tau;
+    EXPECT_GT(deficit, 20) << steps_per_tau;
+  }
+}
+
 TEST(Air, BreakthroughCapsTheDeficit) {
   Simulation sim = flat_on_table(1.0);
   make_tent(sim, 0.02, 0.08);
@@ -151,7 +187,8 @@ TEST(Air, ForcePointsTowardTheSurfaceUnderSuction) {
       Workspace& w = const_cast<Workspace&>(sim->workspace());
       compute_normals(sim->model(), s.x, w.normal);
       detail::update_contact(sim->model(), s, w);
-      std::fill(s.pocket_pressure.begin(), s.pocket_pressure.end(), sim->model().params.air.p_atm - 200);
+      std::fill(s.pocket_pressure.begin(), s.pocket_pressure.end(),
+                sim->model().params.air.p_atm - 200);
       std::fill(w.force.begin(), w.force.end(), Vec3::Zero());
       detail::add_air_pressure(sim->model(), s, w);
       int pushed = 0;
@@ -198,7 +235,8 @@ TEST(Friction, NeverReversesOrGrowsAndStopsASlowParticle) {
 // MODEL.md's default adds the contact load, so its weight holds it.
 TEST(Friction, DryClothStillHasFrictionFromItsWeight) {
   for (const char* normal : {"contact", "adhesion"}) {
-    Simulation sim = flat_on_table(0.0, {std::string("friction.normal=") + normal, "cloth.resolution=[15,15]"});
+    Simulation sim =
+        flat_on_table(0.0, {std::string("friction.normal=") + normal, "cloth.resolution=[15,15]"});
     for (auto& v : sim.state().v) v = Vec3(0.05, 0, 0);
     ASSERT_TRUE(sim.advance_to(0.2));
     const double speed = sim.metrics().kinetic_energy_j;
@@ -244,7 +282,8 @@ TEST(SelfCollision, KeepsTwoFoldedLayersApart) {
     const Model& m = sim.model();
     const double d_t = p.self_collision.distance;
     const int fold = m.nv / 2;  // rows above `fold` are laid back over the rows below
-    const double y_fold = 0.5 * (m.rest_position[m.index(0, fold - 1)].y() + m.rest_position[m.index(0, fold)].y());
+    const double y_fold =
+        0.5 * (m.rest_position[m.index(0, fold - 1)].y() + m.rest_position[m.index(0, fold)].y());
     std::vector<int> top;
     for (int j = fold; j < m.nv; ++j)
       for (int i = 0; i < m.nu; ++i) {
@@ -292,7 +331,8 @@ TEST(Experiments, StraightPullStaysFourFoldSymmetric) {
       const Vec3& my = x[m.index(i, m.nv - 1 - j)];
       const Vec3& t = x[m.index(j, i)];
       worst = std::max({worst, (a - Vec3(-mx.x(), mx.y(), mx.z())).norm(),
-                        (a - Vec3(my.x(), -my.y(), my.z())).norm(), (a - Vec3(t.y(), t.x(), t.z())).norm()});
+                        (a - Vec3(my.x(), -my.y(), my.z())).norm(),
+                        (a - Vec3(t.y(), t.x(), t.z())).norm()});
     }
   EXPECT_GT(sim.metrics().handle_height_m, 0.01);
   EXPECT_LT(worst, 1e-9);  // 10 nm against a 2 cm tent

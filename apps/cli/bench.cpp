@@ -75,9 +75,12 @@ json measure(const Grid& g, int repetitions) {
   for (int rep = 0; rep < repetitions; ++rep) {
     Simulation sim(g.params);
     sim.step();
+    const long long substeps = sim.workspace().substeps;
     const auto start = std::chrono::steady_clock::now();
     for (long long k = 0; k < g.steps; ++k) sim.step();
     wall.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+    // Implicit Euler's step control may take a step in substeps; the others never.
+    r["substeps_per_step"] = static_cast<double>(sim.workspace().substeps - substeps) / g.steps;
     // Checked after the clock stops: the check costs a pass over the particles.
     if (const std::string why = sim.blow_up_reason(); !why.empty()) return {{"blow_up", why}};
     const Model& m = sim.model();
@@ -118,13 +121,15 @@ json measure_in_child(const Grid& g, int repetitions) {
   close(fd[1]);
   std::string msg;
   char buf[4096];
-  for (ssize_t k; (k = read(fd[0], buf, sizeof buf)) > 0;) msg.append(buf, static_cast<std::size_t>(k));
+  for (ssize_t k; (k = read(fd[0], buf, sizeof buf)) > 0;)
+    msg.append(buf, static_cast<std::size_t>(k));
   close(fd[0]);
   int status = 0;
   waitpid(pid, &status, 0);
   if (!WIFEXITED(status) || WEXITSTATUS(status) != 0 || msg.empty())
-    throw std::runtime_error("bench: the process timing grid " + std::to_string(g.size) + " died" +
-                             (WIFSIGNALED(status) ? " (signal " + std::to_string(WTERMSIG(status)) + ")" : ""));
+    throw std::runtime_error(
+        "bench: the process timing grid " + std::to_string(g.size) + " died" +
+        (WIFSIGNALED(status) ? " (signal " + std::to_string(WTERMSIG(status)) + ")" : ""));
   json r = json::parse(msg);
   if (r.contains("error")) throw std::runtime_error(r["error"].get<std::string>());
   return r;
@@ -140,7 +145,8 @@ int run_bench(const Options& o) {
   std::vector<Grid> grids;
   for (long long size : o.grids) {
     if (size < 3)
-      throw SceneError("--grids: " + std::to_string(size) + " is too small; a grid needs at least 3 particles a side");
+      throw SceneError("--grids: " + std::to_string(size) +
+                       " is too small; a grid needs at least 3 particles a side");
     std::vector<std::string> sets;
     sets.push_back("integrator.threads=" + std::to_string(o.threads.value_or(0)));
     if (!o.integrator.empty()) sets.push_back("integrator.type=\"" + o.integrator + "\"");
@@ -155,7 +161,8 @@ int run_bench(const Options& o) {
     Grid grid{size, 0, p};
     grid.steps = std::llround(o.duration / grid.params.integrator.dt);
     if (grid.steps < 1)
-      throw SceneError("--duration " + format_number(o.duration) + " s is shorter than one step (integrator.dt = " +
+      throw SceneError("--duration " + format_number(o.duration) +
+                       " s is shorter than one step (integrator.dt = " +
                        format_number(grid.params.integrator.dt) + " s)");
     grids.push_back(std::move(grid));
   }
@@ -165,20 +172,30 @@ int run_bench(const Options& o) {
   const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
   const unsigned threads = o.threads.value_or(cores);
   const std::string cpu = cpu_model();
-  std::printf("wetcloth %s bench: scene %s, integrator %s, dt %g s (first grid), %g s simulated per run, %d repetitions, "
-              "%u threads\nmachine: %u cores, %s\n\n",
-              WETCLOTH_VERSION, p0.name.c_str(), p0.integrator.type.c_str(), dt, o.duration, o.repetitions,
-              threads, cores, cpu.c_str());
-  std::printf(" grid  particles  springs  dt µs   steps    wall s    µs/step  ns/particle-step  real-time ×  peak MB  B/particle\n");
+  std::printf(
+      "wetcloth %s bench: scene %s, integrator %s, dt %g s (first grid), %g s simulated per run, "
+      "%d repetitions, "
+      "%u threads\nmachine: %u cores, %s\n\n",
+      WETCLOTH_VERSION, p0.name.c_str(), p0.integrator.type.c_str(), dt, o.duration, o.repetitions,
+      threads, cores, cpu.c_str());
+  std::printf(
+      " grid  particles  springs  dt µs   steps  substeps/step    wall s    µs/step  "
+      "ns/particle-step  real-time ×  peak MB  B/particle\n");
 
-  json doc = {{"version", WETCLOTH_VERSION}, {"scene", p0.name},        {"integrator", p0.integrator.type},
-              {"dt_s", dt},                  {"threads", threads},      {"duration_s", o.duration},
-              {"repetitions", o.repetitions}, {"machine", {{"cores", cores}, {"cpu", cpu}}},
+  json doc = {{"version", WETCLOTH_VERSION},
+              {"scene", p0.name},
+              {"integrator", p0.integrator.type},
+              {"dt_s", dt},
+              {"threads", threads},
+              {"duration_s", o.duration},
+              {"repetitions", o.repetitions},
+              {"machine", {{"cores", cores}, {"cpu", cpu}}},
               {"grids", json::array()}};
   for (const Grid& g : grids) {
     const json r = measure_in_child(g, o.repetitions);
     if (r.contains("blow_up")) {
-      std::fprintf(stderr, "wetcloth: grid %lld: %s\nnothing written\n", g.size, r["blow_up"].get<std::string>().c_str());
+      std::fprintf(stderr, "wetcloth: grid %lld: %s\nnothing written\n", g.size,
+                   r["blow_up"].get<std::string>().c_str());
       return kBlowUp;
     }
     const auto walls = r["wall_s"].get<std::vector<double>>();
@@ -192,15 +209,18 @@ int run_bench(const Options& o) {
     const double peak_mb = r["peak_bytes"].get<double>() / 1e6;
     // What the grid's simulations added to the process: bytes per particle.
     const double per_particle = (r["peak_bytes"].get<double>() - r["base_bytes"].get<double>()) / n;
-    std::printf("%5lld  %9lld  %7lld  %5.2f  %6lld  %8.3f  %9.1f  %16.1f  %11.4f  %7.1f  %10.0f\n", g.size, n, springs,
-                1e6 * g.params.integrator.dt, g.steps, median(walls), median(us_step), median(ns_particle), median(realtime), peak_mb,
-                per_particle);
+    const double substeps = r["substeps_per_step"];  // the last repetition's: the same in each
+    std::printf(
+        "%5lld  %9lld  %7lld  %5.2f  %6lld  %13.2f  %8.3f  %9.1f  %16.1f  %11.4f  %7.1f  %10.0f\n",
+        g.size, n, springs, 1e6 * g.params.integrator.dt, g.steps, substeps, median(walls),
+        median(us_step), median(ns_particle), median(realtime), peak_mb, per_particle);
     std::fflush(stdout);
     doc["grids"].push_back({{"grid", g.size},
                             {"particles", n},
                             {"springs", springs},
                             {"dt_s", g.params.integrator.dt},
                             {"steps", g.steps},
+                            {"substeps_per_step", substeps},
                             {"wall_s", walls},
                             {"median",
                              {{"wall_s", median(walls)},
@@ -219,24 +239,30 @@ int run_bench(const Options& o) {
 
 std::function<int()> add_bench_command(CLI::App& app) {
   auto o = std::make_shared<Options>();
-  auto* cmd = app.add_subcommand("bench", "time the step of a scene at several grid sizes, with peak memory");
-  cmd->add_option("--scene", o->scene, "scene: a TOML file, or a built-in name")->capture_default_str();
+  auto* cmd = app.add_subcommand(
+      "bench", "time the step of a scene at several grid sizes, with peak memory");
+  cmd->add_option("--scene", o->scene, "scene: a TOML file, or a built-in name")
+      ->capture_default_str();
   cmd->add_option("--grids", o->grids, "cloth grids G (G x G particles), e.g. 51,101,201")
       ->delimiter(',')
       ->capture_default_str();
-  cmd->add_option("--duration", o->duration, "simulated time timed per repetition, s")->capture_default_str();
+  cmd->add_option("--duration", o->duration, "simulated time timed per repetition, s")
+      ->capture_default_str();
   cmd->add_option("--threads", o->threads,
                   "threads of the step (default: all cores; = --set integrator.threads=N)");
   cmd->add_option("--integrator", o->integrator, "integrator.type (default: the scene's)");
   cmd->add_option("--repetitions", o->repetitions, "timed runs per grid; the table shows medians")
       ->capture_default_str();
-  cmd->add_option("--set", o->sets, "override a parameter, KEY=VALUE (repeatable)")->allow_extra_args(false);
+  cmd->add_option("--set", o->sets, "override a parameter, KEY=VALUE (repeatable)")
+      ->allow_extra_args(false);
   cmd->add_option("--out", o->out, "the results as JSON")->capture_default_str();
   cmd->footer(
-      "Each grid runs in a process of its own (its peak memory is its own); each repetition builds\n"
+      "Each grid runs in a process of its own (its peak memory is its own); each repetition "
+      "builds\n"
       "the simulation afresh, takes one untimed step, then times round(duration / dt) steps.\n"
       "Writes FILE (every repetition's wall time, the medians, the machine).\n"
-      "Exit codes: 0 ok, 2 bad input (nothing written), 3 the simulation blew up (nothing written).");
+      "Exit codes: 0 ok, 2 bad input (nothing written), 3 the simulation blew up (nothing "
+      "written).");
   return [cmd, o]() -> int { return *cmd ? run_bench(*o) : -1; };
 }
 

@@ -91,6 +91,7 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress) {
   s["status"] = r.code == kOk ? "ok" : "blew up";
   if (r.code != kOk) s["message"] = r.message;
   s["steps"] = r.steps;
+  s["substeps"] = sim.workspace().substeps;  // more than steps where implicit Euler halved some
   s["particles"] = sim.model().n;
   s["simulated_seconds"] = sim.state().time;
   s["wall_seconds"] = r.wall_seconds;

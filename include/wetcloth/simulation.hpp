@@ -88,6 +88,7 @@ struct State {
   double inner_pressure = 0;            // P_in, Pa (mean over pockets for `vented`)
   double peak_deficit = 0;              // max over time of P_atm - P_in, Pa
   std::vector<double> air_share;        // vented: V_atm carried by each particle, m³
+  std::vector<double> air_gap;          // vented: each particle's part of V_sum, m³
   std::vector<double> pocket_pressure;  // P_in under each particle, Pa
   // Strain limiting's adaptive order (MODEL.md section 2).
   std::vector<int> source_distance;  // grid steps from the first-moving particles
@@ -104,6 +105,12 @@ struct CollisionPair {
   Sym block{};  // implicit Euler: its h² k_t u uᵀ
 };
 
+// How a pocket's deficit answers a change of V_sum over a step of Δt (air.cpp):
+// dΔP/dV_sum = gas + spring (1 - e^(-Δt/τ)) τ/Δt, with 1/τ the seep rate.
+struct PocketAir {
+  double gas = 0, spring = 0, seep_rate = 0;  // Pa/m³, Pa/m³, 1/s
+};
+
 // Scratch arrays, reused every step: nothing is allocated per step.
 struct Workspace {
   std::vector<Vec3> force, normal, triangle_normal, x_before, surface_normal;
@@ -113,7 +120,7 @@ struct Workspace {
   std::vector<double> normal_force;      // total force · n_s before friction, N
   std::vector<std::uint8_t> border;      // border of the contact region
   std::vector<int> pocket;               // air pocket of each particle, -1 none
-  std::vector<double> pocket_stiffness;  // dΔP/dV_sum over one step, per pocket, Pa/m³
+  std::vector<PocketAir> pocket_air;     // per pocket: how its deficit answers V_sum
   std::vector<double> pocket_sums;       // scratch for the implicit air correction
   std::vector<Vec3> air_direction;       // A_i n_i of eq. 3 (zero where no air force)
   // Springs (forces/springs.cpp): positions, velocities and each particle's
@@ -155,6 +162,12 @@ struct Workspace {
   std::vector<Vec3> cg_r, cg_z, cg_p, cg_q;
   std::vector<double> row_sums, row_max;
   int cg_iterations = 0;  // of the last implicit step
+  // Implicit Euler's step control: velocities at the start of a try, the
+  // halvings of dt the next substep tries; substeps taken since reset (one a
+  // step for the other integrators).
+  std::vector<Vec3> v_start;
+  int halvings = 0;
+  long long substeps = 0;
   // Interactive grab (viewer).
   int grab_particle = -1;
   Vec3 grab_target = Vec3::Zero();
@@ -175,7 +188,9 @@ class Simulation {
  public:
   explicit Simulation(const Params& p);
 
-  void step();  // one time step of MODEL.md section 8
+  // One time step of MODEL.md section 8. Implicit Euler may take it in
+  // substeps of dt / 2^k (Baraff & Witkin's step control).
+  void step();
   // Advances to time t; returns false (and stops) if the run blew up.
   bool advance_to(double t);
   void reset();
@@ -201,6 +216,10 @@ class Simulation {
   State state_;
   Workspace ws_;
   std::vector<std::uint8_t> touched_;  // obstacle each particle was pushed out of this step
+
+  void accumulate_forces(bool implicit);
+  double implicit_substep(double dt, int& halvings);
+  void finish_step(double h);
 };
 
 // Particle normals, area-weighted over the adjacent triangles.

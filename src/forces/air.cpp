@@ -27,16 +27,20 @@ double air_gap(const Model& m, double d) {
          (m.contact_surface == SurfaceKind::Ball ? std::min(above, m.params.air.band) : above);
 }
 
-// Advances one pocket's V_atm over dt with V_sum held fixed, exactly (eq. 4 is
-// stiff: its time constant is well under a millisecond), then lets air break
-// through the wet pores when the deficit exceeds P_b.
-double exchange(const Params& p, double v_atm, double v_sum, double a_sum, double dt,
+// Advances one pocket's V_atm over dt while V_sum grows linearly from v_old
+// to v_sum, exactly: the lag L = V_sum - V_atm obeys dL/dt = r - L/τ (eq. 4,
+// r = dV_sum/dt), so L ends at rτ + (L0 - rτ) e^(-dt/τ). (Taking V_sum at its
+// new value for the whole step would let a step much longer than τ, the
+// implicit one, seep away the whole lag, and with it the suction.) Then lets
+// air break through the wet pores when the deficit exceeds P_b.
+double exchange(const Params& p, double v_atm, double v_old, double v_sum, double a_sum, double dt,
                 bool breakthrough) {
   const double delta = permeability(p);
   if (v_sum <= 0) return 0.0;
-  if (delta > 0 && a_sum > 0) {
+  if (delta > 0 && a_sum > 0 && dt > 0) {
     const double tau = v_sum / (p.air.p_atm * delta * a_sum);
-    v_atm = v_sum + (v_atm - v_sum) * std::exp(-dt / tau);
+    const double r_tau = (v_sum - v_old) / dt * tau, lag = v_old - v_atm;
+    v_atm = v_sum - (r_tau + (lag - r_tau) * std::exp(-dt / tau));
   }
   if (breakthrough) {
     const double v_min = v_sum * (p.air.p_atm - p.air.breakthrough_pressure) / p.air.p_atm;
@@ -50,23 +54,30 @@ double pressure(const Params& p, double v_atm, double v_sum) {
 }
 
 // How the deficit at the end of a step answers the change of V_sum over it,
-// dΔP/dΔV, for correct_air_implicitly. With V_sum growing linearly over the step
-// and eq. 4 solved exactly, it is
+// dΔP/dΔV, for correct_air_implicitly, in parts that do not depend on the
+// step (the next step may be a substep of another length). With V_sum growing
+// linearly over the step and eq. 4 solved exactly, it is
 //   P_atm (V_atm - V_sum) / V_sum² + (P_atm / V_sum) (τ/Δt)(1 - e^(-Δt/τ)):
 // a gas spring P_atm V_atm / V_sum² when Δt << τ (a 1 mm film under a
 // 0.2 kg/m² cloth rings at kHz), and a damper 1 / (δ A_sum Δt) when Δt >> τ
 // (air seeping through as fast as the tent grows), so that large implicit steps
-// keep the suction that slows a lifting cloth. Sealed air is a pure gas spring;
-// at the breakthrough cap the deficit cannot grow.
-double stiffness(const Params& p, double v_atm, double v_sum, double a_sum, double dt, bool leaks) {
-  if (v_sum <= 0) return 0.0;
+// keep the suction that slows a lifting cloth. Sealed air is a pure gas spring
+// (1/τ = 0); at the breakthrough cap the deficit cannot grow.
+PocketAir pocket_air(const Params& p, double v_atm, double v_sum, double a_sum, bool leaks) {
+  if (v_sum <= 0) return {};
   const double delta = permeability(p);
-  if (!leaks || delta <= 0 || a_sum <= 0) return p.air.p_atm * v_atm / (v_sum * v_sum);
+  if (!leaks || delta <= 0 || a_sum <= 0)
+    return {p.air.p_atm * (v_atm - v_sum) / (v_sum * v_sum), p.air.p_atm / v_sum, 0.0};
   if (p.air.p_atm - pressure(p, v_atm, v_sum) >= p.air.breakthrough_pressure * (1 - 1e-12))
-    return 0.0;
-  const double x = dt * p.air.p_atm * delta * a_sum / v_sum;  // Δt/τ
+    return {};
+  return {p.air.p_atm * (v_atm - v_sum) / (v_sum * v_sum), p.air.p_atm / v_sum,
+          p.air.p_atm * delta * a_sum / v_sum};
+}
+
+double stiffness(const PocketAir& a, double dt) {
+  const double x = dt * a.seep_rate;  // Δt/τ
   const double seep = x > 1e-6 ? -std::expm1(-x) / x : 1 - x / 2;
-  return p.air.p_atm * ((v_atm - v_sum) / (v_sum * v_sum) + seep / v_sum);
+  return a.gas + a.spring * seep;
 }
 
 // `vented`: each connected lifted region is its own pocket; one that reaches the
@@ -74,7 +85,7 @@ double stiffness(const Params& p, double v_atm, double v_sum, double a_sum, doub
 void update_vented(const Model& m, State& s, Workspace& w, double dt) {
   const Params& p = m.params;
   std::fill(w.pocket.begin(), w.pocket.end(), -1);
-  w.pocket_stiffness.clear();
+  w.pocket_air.clear();
   double total_atm = 0, total_sum = 0;
   int pockets = 0;
   for (int seed = 0; seed < m.n; ++seed) {
@@ -85,11 +96,12 @@ void update_vented(const Model& m, State& s, Workspace& w, double dt) {
     w.queue.push_back(seed);
     w.pocket[seed] = id;
     bool open = false;
-    double v_atm = 0, v_sum = 0, a_sum = 0;
+    double v_atm = 0, v_old = 0, v_sum = 0, a_sum = 0;
     for (std::size_t q = 0; q < w.queue.size(); ++q) {
       const int k = w.queue[q];
       open = open || m.on_border[k];
       v_atm += s.air_share[k];
+      v_old += s.air_gap[k];
       v_sum += m.area[k] * air_gap(m, w.distance[k]);
       a_sum += m.area[k];
       const int i = k % m.nu, j = k / m.nu;
@@ -102,8 +114,8 @@ void update_vented(const Model& m, State& s, Workspace& w, double dt) {
         w.queue.push_back(kk);
       }
     }
-    v_atm = open ? v_sum : exchange(p, v_atm, v_sum, a_sum, dt, true);
-    w.pocket_stiffness.push_back(open ? 0.0 : stiffness(p, v_atm, v_sum, a_sum, dt, true));
+    v_atm = open ? v_sum : exchange(p, v_atm, v_old, v_sum, a_sum, dt, true);
+    w.pocket_air.push_back(open ? PocketAir{} : pocket_air(p, v_atm, v_sum, a_sum, true));
     const double pin = pressure(p, v_atm, v_sum);
     for (int k : w.queue) {
       s.air_share[k] = v_sum > 0 ? v_atm * m.area[k] * air_gap(m, w.distance[k]) / v_sum : 0;
@@ -117,6 +129,7 @@ void update_vented(const Model& m, State& s, Workspace& w, double dt) {
     s.air_share[k] = 0;  // the liquid film holds no air
     s.pocket_pressure[k] = p.air.p_atm;
   }
+  for (int k = 0; k < m.n; ++k) s.air_gap[k] = m.area[k] * air_gap(m, w.distance[k]);
   s.air_atm_volume = total_atm;
   s.air_volume = total_sum;
   s.inner_pressure = pressure(p, total_atm, total_sum);
@@ -127,7 +140,7 @@ void update_vented(const Model& m, State& s, Workspace& w, double dt) {
 void update_air(const Model& m, State& s, Workspace& w, double dt) {
   const Params& p = m.params;
   const std::string& model = p.air.model;
-  w.pocket_stiffness.clear();
+  w.pocket_air.clear();
   if (m.contact_surface == SurfaceKind::None) {  // no surface, no trapped air
     std::fill(w.pocket.begin(), w.pocket.end(), -1);
     s.air_atm_volume = s.air_volume = 0;
@@ -151,13 +164,13 @@ void update_air(const Model& m, State& s, Workspace& w, double dt) {
       s.air_atm_volume = v_sum;
     } else if (model == "exchange") {
       const bool update = !p.air.paper_update_rule || grown > p.air.paper_threshold;
-      s.air_atm_volume = update ? exchange(p, s.air_atm_volume, v_sum, a_sum, dt, true)
-                                : exchange(p, s.air_atm_volume, v_sum, 0, dt, true);
+      s.air_atm_volume =
+          exchange(p, s.air_atm_volume, s.air_volume, v_sum, update ? a_sum : 0, dt, true);
     }
     // `sealed` (Yamada et al. 2013): the amount of air never changes.
     const bool trapped = model != "off" && s_now > 0;
-    w.pocket_stiffness.push_back(
-        trapped ? stiffness(p, s.air_atm_volume, v_sum, a_sum, dt, model == "exchange") : 0.0);
+    w.pocket_air.push_back(
+        trapped ? pocket_air(p, s.air_atm_volume, v_sum, a_sum, model == "exchange") : PocketAir{});
     s.air_volume = v_sum;
     s.inner_pressure = pressure(p, s.air_atm_volume, v_sum);
     std::fill(s.pocket_pressure.begin(), s.pocket_pressure.end(), s.inner_pressure);
@@ -207,7 +220,7 @@ void add_air_pressure(const Model& m, const State& s, Workspace& w) {
 // exactly by Sherman-Morrison in O(n). Without it the air film's kHz ringing
 // and the follower direction of eq. 3 make explicit steps blow up.
 void correct_air_implicitly(const Model& m, State& s, Workspace& w, double dt) {
-  const std::size_t pockets = w.pocket_stiffness.size();
+  const std::size_t pockets = w.pocket_air.size();
   if (pockets == 0) return;
   w.pocket_sums.assign(2 * pockets, 0.0);
   for (int i = 0; i < m.n; ++i) {
@@ -218,7 +231,7 @@ void correct_air_implicitly(const Model& m, State& s, Workspace& w, double dt) {
     w.pocket_sums[2 * k + 1] += m.inv_mass[i] * b.dot(w.air_direction[i]);
   }
   for (std::size_t k = 0; k < pockets; ++k) {
-    const double c = dt * dt * w.pocket_stiffness[k];
+    const double c = dt * dt * stiffness(w.pocket_air[k], dt);
     w.pocket_sums[2 * k] = c * w.pocket_sums[2 * k] / (1.0 + c * w.pocket_sums[2 * k + 1]);
   }
   for_each_particle(m, [&](int i) {

@@ -176,8 +176,7 @@ void Simulation::step() {
           s.v[i] += solve(a, h * w.force[i]);  // inv_mass 0: a = I, force times 0
         }
       });
-      correct_air_implicitly(m, s, w, dt);
-      for_each_particle(m, [&](int i) { s.x[i] += dt * s.v[i]; });
+      move_at_new_velocities(dt);
     }
     s.time = (s.steps + 1) * dt;  // no drift from summing dt
     ++w.substeps;
@@ -198,13 +197,18 @@ double Simulation::implicit_substep(double dt, int& k) {
     implicit_euler_velocities(m, s, w, h);
     if (k == kMostHalvings || step_strain(m, s, h) <= m.params.integrator.max_step_strain) {
       ++w.substeps;
-      correct_air_implicitly(m, s, w, h);
-      for_each_particle(m, [&](int i) { s.x[i] += h * s.v[i]; });
+      move_at_new_velocities(h);
       return h;
     }
     s.v = w.v_start;
     ++k;
   }
+}
+
+// The air term taken implicitly on the new velocities, then x += h v.
+void Simulation::move_at_new_velocities(double h) {
+  correct_air_implicitly(model_, state_, ws_, h);
+  for_each_particle(model_, [&](int i) { state_.x[i] += h * state_.v[i]; });
 }
 
 // After integrating over h: handles; 3. collide; 4. friction; 5. strain

@@ -114,15 +114,15 @@ struct PocketAir {
 // Scratch arrays, reused every step: nothing is allocated per step.
 struct Workspace {
   std::vector<Vec3> force, normal, triangle_normal, x_before, surface_normal;
-  std::vector<Sym> damping;              // each particle's damping on its own velocity, N·s/m
-  std::vector<double> distance;          // signed distance to the contact surface
-  std::vector<double> adhesion;          // |adhesion force| per particle, N
-  std::vector<double> normal_force;      // total force · n_s before friction, N
-  std::vector<std::uint8_t> border;      // border of the contact region
-  std::vector<int> pocket;               // air pocket of each particle, -1 none
-  std::vector<PocketAir> pocket_air;     // per pocket: how its deficit answers V_sum
-  std::vector<double> pocket_sums;       // scratch for the implicit air correction
-  std::vector<Vec3> air_direction;       // A_i n_i of eq. 3 (zero where no air force)
+  std::vector<Sym> damping;           // each particle's damping on its own velocity, N·s/m
+  std::vector<double> distance;       // signed distance to the contact surface
+  std::vector<double> adhesion;       // |adhesion force| per particle, N
+  std::vector<double> normal_force;   // total force · n_s before friction, N
+  std::vector<std::uint8_t> border;   // border of the contact region
+  std::vector<int> pocket;            // air pocket of each particle, -1 none
+  std::vector<PocketAir> pocket_air;  // per pocket: how its deficit answers V_sum
+  std::vector<double> pocket_sums;    // scratch for the implicit air correction
+  std::vector<Vec3> air_direction;    // A_i n_i of eq. 3 (zero where no air force)
   // Springs (forces/springs.cpp): positions, velocities and each particle's
   // sums by component, columns the compiler vectorises over.
   std::vector<double> soa;
@@ -219,6 +219,7 @@ class Simulation {
 
   void accumulate_forces(bool implicit);
   double implicit_substep(double dt, int& halvings);
+  void move_at_new_velocities(double h);
   void finish_step(double h);
 };
 

@@ -1,6 +1,8 @@
 // Internal: the stages of one step (MODEL.md section 8), one file each.
 #pragma once
 
+#include <omp.h>
+
 #include <algorithm>
 #include <limits>
 
@@ -29,6 +31,17 @@ template <class Body>
 void parallel_for(const Model& m, int count, Body&& body) {
 #pragma omp parallel for schedule(static) num_threads(m.threads) if (m.threads > 1)
   for (int r = 0; r < count; ++r) body(r);
+}
+
+// Runs body(j0, j1, thread) on each of the step's threads, for its own block
+// of rows [j0, j1): for passes that carry something from row to row.
+template <class Body>
+void for_each_row_block(const Model& m, Body&& body) {
+#pragma omp parallel num_threads(m.threads) if (m.threads > 1)
+  {
+    const int t = omp_get_thread_num(), count = omp_get_num_threads();
+    body(m.nv * t / count, m.nv * (t + 1) / count, t);
+  }
 }
 
 // Runs body(i) for every particle, whole rows to each thread.

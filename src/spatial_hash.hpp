@@ -37,20 +37,21 @@ inline void build_hash(const std::vector<Vec3>& x, double cell, Workspace& w) {
   for (std::size_t c = 0; c < size; ++c) w.cell_start[c + 1] += w.cell_start[c];
   std::vector<int>& fill = w.queue;  // reuse as a cursor per bucket
   fill.assign(w.cell_start.begin(), w.cell_start.end() - 1);
-  for (std::size_t i = 0; i < n; ++i) w.cell_entries[fill[w.particle_cell[i]]++] = static_cast<int>(i);
+  for (std::size_t i = 0; i < n; ++i)
+    w.cell_entries[fill[w.particle_cell[i]]++] = static_cast<int>(i);
 }
 
 // Calls fn(i, j, d_ij, |d_ij|) once for every pair i < j closer than `radius`
-// that `skip(i, j)` does not exclude. The hash must have been built with
-// cell = 2 radius: the ball of radius r around a particle then meets at most
-// 2 x 2 x 2 cells.
+// that `skip(i, j)` does not exclude, with i in [first, last) (all particles by
+// default), in order of i. The hash must have been built with cell = 2 radius:
+// the ball of radius r around a particle then meets at most 2 x 2 x 2 cells.
 template <class Skip, class Fn>
-void for_each_close_pair(const std::vector<Vec3>& x, double radius, const Workspace& w,
-                         Skip skip, Fn fn) {
+void for_each_close_pair(const std::vector<Vec3>& x, double radius, const Workspace& w, Skip skip,
+                         Fn fn, int first = 0, int last = -1) {
   const auto mask = static_cast<std::uint32_t>(w.cell_start.size() - 2);
   const double r2 = radius * radius;
-  for (std::size_t ii = 0; ii < x.size(); ++ii) {
-    const int i = static_cast<int>(ii);
+  if (last < 0) last = static_cast<int>(x.size());
+  for (int i = first; i < last; ++i) {
     const double cell = 2 * radius;
     const long long cx = std::llround(std::floor((x[i].x() - radius) / cell));
     const long long cy = std::llround(std::floor((x[i].y() - radius) / cell));
@@ -66,10 +67,10 @@ void for_each_close_pair(const std::vector<Vec3>& x, double radius, const Worksp
             // A bucket may hold other cells too: take j only in the cell visited,
             // so that no pair is found twice.
             const auto& cj = w.cell_coord[j];
-            if (cj[0] != ox || cj[1] != oy || cj[2] != oz || skip(i, j)) continue;
+            if (cj[0] != ox || cj[1] != oy || cj[2] != oz) continue;
             const Vec3 d = x[i] - x[j];
             const double len2 = d.squaredNorm();
-            if (len2 >= r2 || len2 == 0) continue;
+            if (len2 >= r2 || len2 == 0 || skip(i, j)) continue;  // skip last: it may cost most
             fn(i, j, d, std::sqrt(len2));
           }
         }

@@ -152,6 +152,8 @@ struct Workspace {
   std::vector<CollisionPair> collision_pairs;
   // Self-collision candidates within candidates_radius at candidates_anchor.
   std::vector<std::array<int, 2>> candidates;
+  std::vector<std::vector<std::array<int, 2>>>
+      thread_candidates;                      // each thread's share of the search
   std::vector<std::uint8_t> candidate_close;  // candidate within d_t this step
   std::vector<Vec3> candidates_anchor;
   double candidates_radius = 0;

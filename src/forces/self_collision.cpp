@@ -40,11 +40,22 @@ void add_self_collision(const Model& m, const State& s, Workspace& w, bool with_
     };
     w.candidates_radius = dt_dist + margin;
     build_hash(s.x, 2 * w.candidates_radius, w);
+    // The search, the costly part, by blocks of rows on the step's threads;
+    // the blocks' lists joined in order are the list one thread would make.
+    w.thread_candidates.resize(m.threads);
+    for_each_row_block(m, [&](int j0, int j1, int t) {
+      auto& list = w.thread_candidates[t];
+      list.clear();
+      for_each_close_pair(
+          s.x, w.candidates_radius, w, near_in_grid,
+          [&](int i, int j, const Vec3&, double) {
+            list.push_back({i, j});
+          },
+          j0 * nu, j1 * nu);
+    });
     w.candidates.clear();
-    for_each_close_pair(s.x, w.candidates_radius, w, near_in_grid,
-                        [&](int i, int j, const Vec3&, double) {
-                          w.candidates.push_back({i, j});
-                        });
+    for (const auto& list : w.thread_candidates)
+      w.candidates.insert(w.candidates.end(), list.begin(), list.end());
     w.candidates_anchor = s.x;
   }
   auto& colliding = w.colliding;

@@ -1,13 +1,18 @@
 // Provot's springs, eq. 1: Hooke's law plus damping projected on the spring.
 //
-// Gathered per particle over the grid's stencil (Model::stencil, both
-// directions): each particle sums its own 16 springs in a fixed order, so rows
-// are independent, run on any number of threads and give the same bits on each.
-// Positions and velocities are first copied to columns (x, y, z, vx, vy, vz)
-// so that a row's particles away from the border, which have all 16 springs,
-// are summed by one loop the compiler vectorises; particles near the border
-// take the same formula one at a time, skipping the springs off the grid.
+// Each spring is evaluated once, as a forward edge of the grid's stencil
+// (Model::stencil): particle (i, j) to (i + di, j + dj). A row's edges go into
+// rows of numbers (force on the lower end; k_d u uᵀ), zero where the spring is
+// off the grid, and each particle then gathers its 16 springs from them in a
+// fixed order: forward edge of an offset, then the backward one (minus the
+// force stored at its other end). Rows are independent, so any number of
+// threads gives the same bits, and both passes are loops over a row the
+// compiler vectorises. Positions and velocities are first copied to columns
+// (x, y, z, vx, vy, vz). Edge rows live in a ring of three per thread: a
+// particle's backward springs start at most two rows back.
 #include <omp.h>
+
+#include <functional>
 
 #include "../detail.hpp"
 
@@ -15,115 +20,85 @@ namespace wetcloth::detail {
 
 namespace {
 
-// Σ over a particle's springs of its force and of its damping on its own
-// velocity, Σ k_d u uᵀ (xx yy zz xy xz yz).
-struct Sum {
-  double fx = 0, fy = 0, fz = 0, cxx = 0, cyy = 0, czz = 0, cxy = 0, cxz = 0, cyz = 0;
-};
+constexpr int kReach = 2;          // the stencil's longest offset, in grid steps
+constexpr int kRing = kReach + 1;  // edge rows a thread keeps
+constexpr int kEdges = 8;          // forward offsets of the stencil
+constexpr int kFields = 9;         // force on the lower end (x y z), k_d u uᵀ (xx yy zz xy xz yz)
 
-// Adds the spring with d = x_b - x_a, dv = v_b - v_a:
-// F_a = u (k_s (|d| - l0) + k_d dv·u).
-inline void add_spring(Sum& s, double dx, double dy, double dz, double dvx, double dvy, double dvz,
-                       double k, double rest, double kd) {
-  const double len = std::sqrt(dx * dx + dy * dy + dz * dz);
-  const double inv = len > 0 ? 1.0 / len : 0.0;  // a zero-length spring pulls nowhere
-  const double ux = dx * inv, uy = dy * inv, uz = dz * inv;
-  const double t = k * (len - rest) + kd * (dvx * ux + dvy * uy + dvz * uz);
-  s.fx += t * ux;
-  s.fy += t * uy;
-  s.fz += t * uz;
-  const double kx = kd * ux, ky = kd * uy;
-  s.cxx += kx * ux;
-  s.cyy += ky * uy;
-  s.czz += kd * uz * uz;
-  s.cxy += kx * uy;
-  s.cxz += kx * uz;
-  s.cyz += ky * uz;
-}
-
-// The 16 springs of a particle, in summation order: per stencil offset the
-// forward spring, then the backward one.
-struct Springs {
-  int di[16], dj[16], off[16];
-  double k[16], rest[16], kd[16];
-};
-
-Springs springs_of(const Model& m, bool with_damping) {
-  Springs s{};
-  for (int e = 0; e < 8; ++e)
-    for (int side = 0; side < 2; ++side) {
-      const StencilEdge& st = m.stencil[e];
-      const int q = 2 * e + side, sign = side == 0 ? 1 : -1;
-      s.di[q] = sign * st.di;
-      s.dj[q] = sign * st.dj;
-      s.off[q] = s.di[q] + s.dj[q] * m.nu;
-      s.k[q] = st.k;
-      s.rest[q] = st.rest;
-      s.kd[q] = with_damping ? st.damping : 0.0;
-    }
-  return s;
-}
-
-// Columns x, y, z, vx, vy, vz in; the nine sums of Sum out, for one row
-// (particle i at out[k][i - row]).
 struct Columns {
   const double *px, *py, *pz, *vx, *vy, *vz;
-  double* out[9];
-  int row = 0;
 };
 
-inline void store(const Columns& c, int i, const Sum& s) {
-  const int r = i - c.row;
-  c.out[0][r] = s.fx;
-  c.out[1][r] = s.fy;
-  c.out[2][r] = s.fz;
-  c.out[3][r] = s.cxx;
-  c.out[4][r] = s.cyy;
-  c.out[5][r] = s.czz;
-  c.out[6][r] = s.cxy;
-  c.out[7][r] = s.cxz;
-  c.out[8][r] = s.cyz;
+// The particles i of a row whose spring at offset e is on the grid (given
+// that row j + dj is): the edge rows are zero outside, set once per call.
+inline std::pair<int, int> edge_span(const Model& m, const StencilEdge& st) {
+  return {std::max(0, -st.di), std::min(m.nu, m.nu - st.di)};
 }
 
-// Particles [lo, hi) of a row, all of whose springs are on the grid. The
-// columns never overlap where the loop reads and writes; `ivdep` tells GCC so,
-// which it cannot prove itself.
-void sum_interior(const Columns& c, const Springs& sp, int lo, int hi) {
+// One offset's edges starting in row j (j + dj < nv), into out[k][i].
+template <bool damped>
+void edge_row(const Model& m, const Columns& c, const StencilEdge& st, int j,
+              double* const out[kFields]) {
+  const int nu = m.nu;
+  const auto [lo, hi] = edge_span(m, st);
+  const int off = st.di + st.dj * nu, base = j * nu;
+  const double k_s = st.k, rest = st.rest, kd = damped ? st.damping : 0.0;
 #pragma GCC ivdep
   for (int i = lo; i < hi; ++i) {
-    Sum s;
-#pragma GCC unroll 16
-    for (int q = 0; q < 16; ++q) {
-      const int b = i + sp.off[q];
-      add_spring(s, c.px[b] - c.px[i], c.py[b] - c.py[i], c.pz[b] - c.pz[i], c.vx[b] - c.vx[i],
-                 c.vy[b] - c.vy[i], c.vz[b] - c.vz[i], sp.k[q], sp.rest[q], sp.kd[q]);
+    const int a = base + i, b = a + off;
+    const double dx = c.px[b] - c.px[a], dy = c.py[b] - c.py[a], dz = c.pz[b] - c.pz[a];
+    const double len = std::sqrt(dx * dx + dy * dy + dz * dz);
+    const double inv = len > 0 ? 1.0 / len : 0.0;  // a zero-length spring pulls nowhere
+    const double ux = dx * inv, uy = dy * inv, uz = dz * inv;
+    double t = k_s * (len - rest);
+    if constexpr (damped)
+      t += kd * ((c.vx[b] - c.vx[a]) * ux + (c.vy[b] - c.vy[a]) * uy + (c.vz[b] - c.vz[a]) * uz);
+    out[0][i] = t * ux;
+    out[1][i] = t * uy;
+    out[2][i] = t * uz;
+    if constexpr (damped) {
+      const double kx = kd * ux, ky = kd * uy;
+      out[3][i] = kx * ux;
+      out[4][i] = ky * uy;
+      out[5][i] = kd * uz * uz;
+      out[6][i] = kx * uy;
+      out[7][i] = kx * uz;
+      out[8][i] = ky * uz;
     }
-    store(c, i, s);
   }
 }
 
-// Particle (i, j) near the border: the same sum without the springs off the grid.
-void sum_border(const Model& m, const Columns& c, const Springs& sp, int i, int j) {
-  const int a = m.index(i, j);
-  Sum s;
-  for (int q = 0; q < 16; ++q) {
-    if (grid_neighbour(m, i, j, sp.di[q], sp.dj[q]) < 0) continue;
-    const int b = a + sp.off[q];
-    add_spring(s, c.px[b] - c.px[a], c.py[b] - c.py[a], c.pz[b] - c.pz[a], c.vx[b] - c.vx[a],
-               c.vy[b] - c.vy[a], c.vz[b] - c.vz[a], sp.k[q], sp.rest[q], sp.kd[q]);
-  }
-  store(c, a, s);
+// Each particle of a row sums its springs: per offset the forward edge (+F)
+// and the backward one (-F, the same k_d u uᵀ), into sums[k][i].
+template <bool damped>
+void gather_row(const double* const fwd[kEdges][kFields], const double* const bwd[kEdges][kFields],
+                const int nu, double* const sums[kFields]) {
+  const auto sum = [&](int k, auto sign) {
+    double* __restrict out = sums[k];
+#pragma GCC ivdep
+    for (int i = 0; i < nu; ++i) {
+      double total = 0;
+#pragma GCC unroll 8
+      for (int e = 0; e < kEdges; ++e) total = sign(total + fwd[e][k][i], bwd[e][k][i]);
+      out[i] = total;
+    }
+  };
+  for (int k = 0; k < 3; ++k) sum(k, std::minus<>());
+  if constexpr (damped)
+    for (int k = 3; k < kFields; ++k) sum(k, std::plus<>());
 }
 
-}  // namespace
-
-void add_spring_forces(const Model& m, const State& s, Workspace& w, bool with_damping) {
-  const int n = m.n, nu = m.nu;
-  // The columns, then per thread one row of sums.
-  w.soa.resize(6 * std::size_t(n) + 9 * std::size_t(nu) * m.threads);
+template <bool damped>
+void add_spring_forces(const Model& m, const State& s, Workspace& w) {
+  const int n = m.n, nu = m.nu, stride = nu + 2 * kReach;
+  const std::size_t per_row = std::size_t(kEdges) * kFields * stride;
+  const std::size_t per_thread = kRing * per_row + kFields * stride;  // edge rows, then sums
+  w.soa.resize(6 * std::size_t(n) + kFields * stride + per_thread * m.threads);
   double* const X = w.soa.data();
-  const Springs sp = springs_of(m, with_damping);
-  constexpr int reach = 2;  // the stencil's longest offset, in grid steps
+  double* const zero_row = X + 6 * std::size_t(n);  // stands for edges above the first row
+  std::fill(zero_row, zero_row + kFields * stride, 0.0);
+  const Columns c{X, X + n, X + 2 * n, X + 3 * n, X + 4 * n, X + 5 * n};
+  constexpr int fields = damped ? kFields : 3;
 
   parallel_for(m, m.nv, [&](int j) {
     for (int a = j * nu; a < (j + 1) * nu; ++a)
@@ -132,22 +107,60 @@ void add_spring_forces(const Model& m, const State& s, Workspace& w, bool with_d
         X[(k + 3) * n + a] = s.v[a][k];
       }
   });
-  parallel_for(m, m.nv, [&](int j) {
-    Columns c{X, X + n, X + 2 * n, X + 3 * n, X + 4 * n, X + 5 * n, {}, j * nu};
-    double* const sums = X + 6 * std::size_t(n) + 9 * std::size_t(nu) * omp_get_thread_num();
-    for (int k = 0; k < 9; ++k) c.out[k] = sums + k * nu;
-    const bool inner_row = j >= reach && j < m.nv - reach && nu > 2 * reach;
-    const int lo = inner_row ? reach : nu, hi = inner_row ? nu - reach : nu;
-    for (int i = 0; i < std::min(lo, nu); ++i) sum_border(m, c, sp, i, j);
-    if (inner_row) sum_interior(c, sp, j * nu + lo, j * nu + hi);
-    for (int i = hi; i < nu; ++i) sum_border(m, c, sp, i, j);
-    const auto& o = c.out;
-    for (int i = 0; i < nu; ++i) {
-      w.force[j * nu + i] += Vec3(o[0][i], o[1][i], o[2][i]);
-      if (with_damping)
-        w.damping[j * nu + i] = {o[3][i], o[4][i], o[5][i], o[6][i], o[7][i], o[8][i]};
+  for_each_row_block(m, [&](int j0, int j1, int thread) {
+    double* const ring = X + 6 * std::size_t(n) + kFields * stride + per_thread * thread;
+    double* sums[kFields];
+    for (int k = 0; k < kFields; ++k) sums[k] = ring + kRing * per_row + k * stride;
+    // Field k of offset e's edge row j, at its particle i = 0.
+    const auto edges = [&](int j, int e, int k) {
+      return ring + (j % kRing) * per_row + (std::size_t(e) * kFields + k) * stride + kReach;
+    };
+    for (int slot = 0; slot < kRing; ++slot)
+      for (int e = 0; e < kEdges; ++e) {
+        const auto [lo, hi] = edge_span(m, m.stencil[e]);
+        for (int k = 0; k < kFields; ++k) {
+          double* const row = edges(slot, e, k);
+          std::fill(row - kReach, row + lo, 0.0);
+          std::fill(row + hi, row + nu + kReach, 0.0);
+        }
+      }
+    for (int j = std::max(0, j0 - kReach); j < j1; ++j) {
+      for (int e = 0; e < kEdges; ++e) {
+        if (j + m.stencil[e].dj >= m.nv) continue;  // gathered from the zero row instead
+        double* out[kFields];
+        for (int k = 0; k < kFields; ++k) out[k] = edges(j, e, k);
+        edge_row<damped>(m, c, m.stencil[e], j, out);
+      }
+      if (j < j0) continue;
+      // Row j's particles gather: per offset, the edge starting here (force
+      // +F) and the one ending here, which starts at (i - di, j - dj) (-F).
+      const double* fwd[kEdges][kFields];
+      const double* bwd[kEdges][kFields];
+      for (int e = 0; e < kEdges; ++e) {
+        const StencilEdge& st = m.stencil[e];
+        for (int k = 0; k < fields; ++k) {
+          fwd[e][k] = j + st.dj < m.nv ? edges(j, e, k) : zero_row + kReach;
+          bwd[e][k] = (j >= st.dj ? edges(j - st.dj, e, k) : zero_row + kReach) - st.di;
+        }
+      }
+      gather_row<damped>(fwd, bwd, nu, sums);
+      for (int i = 0; i < nu; ++i) {
+        const int a = j * nu + i;
+        w.force[a] += Vec3(sums[0][i], sums[1][i], sums[2][i]);
+        if constexpr (damped)
+          w.damping[a] = {sums[3][i], sums[4][i], sums[5][i], sums[6][i], sums[7][i], sums[8][i]};
+      }
     }
   });
+}
+
+}  // namespace
+
+void add_spring_forces(const Model& m, const State& s, Workspace& w, bool with_damping) {
+  if (with_damping)
+    add_spring_forces<true>(m, s, w);
+  else
+    add_spring_forces<false>(m, s, w);
 }
 
 }  // namespace wetcloth::detail

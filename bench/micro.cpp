@@ -4,8 +4,8 @@
 #include <benchmark/benchmark.h>
 
 #include <map>
-#include <tuple>
 #include <string>
+#include <tuple>
 #include <utility>
 
 #include "src/detail.hpp"
@@ -29,8 +29,12 @@ constexpr double kLiftedShare = 0.03;
 // `implicit` takes implicit Euler at 1/240 s.
 Params scene(long long grid, bool plain, bool implicit = false) {
   std::vector<std::string> sets{"integrator.threads=1"};
-  if (plain) sets.insert(sets.end(), {"adhesion.enabled=false", "air.model=\"off\"", "self_collision.enabled=false"});
-  if (implicit) sets.insert(sets.end(), {"integrator.type=\"implicit-euler\"", "integrator.dt=0.004166666666666667"});
+  if (plain)
+    sets.insert(sets.end(),
+                {"adhesion.enabled=false", "air.model=\"off\"", "self_collision.enabled=false"});
+  if (implicit)
+    sets.insert(sets.end(),
+                {"integrator.type=\"implicit-euler\"", "integrator.dt=0.004166666666666667"});
   Params p = at_resolution(load_scene("pull-straight", sets), grid);
   if (plain) p.handles.clear();
   return p;
@@ -41,7 +45,9 @@ double lifted_share(const Simulation& sim) {
   return m.lifted_area_m2 / (m.lifted_area_m2 + m.contact_area_m2);
 }
 
-void grids(benchmark::internal::Benchmark* b) { b->Arg(51)->Arg(201)->Unit(benchmark::kMicrosecond); }
+void grids(benchmark::internal::Benchmark* b) {
+  b->Arg(51)->Arg(201)->Unit(benchmark::kMicrosecond);
+}
 
 // Warmed-up simulations, built once per process and copied by each benchmark:
 // at 201 the warm-up costs more than most benchmarks.
@@ -49,7 +55,8 @@ const Simulation& warmed(long long grid, bool plain, bool implicit = false) {
   static std::map<std::tuple<long long, bool, bool>, Simulation> cache;
   auto it = cache.find({grid, plain, implicit});
   if (it == cache.end()) {
-    it = cache.emplace(std::tuple{grid, plain, implicit}, Simulation(scene(grid, plain, implicit))).first;
+    it = cache.emplace(std::tuple{grid, plain, implicit}, Simulation(scene(grid, plain, implicit)))
+             .first;
     Simulation& sim = it->second;
     for (int k = 0; k < kMaxWarmSteps && lifted_share(sim) < kLiftedShare; ++k) sim.step();
   }
@@ -103,9 +110,10 @@ BENCHMARK_CAPTURE(BM_step, plain, true, false)->Apply(grids);
 BENCHMARK_CAPTURE(BM_step, implicit_full, false, true)->Apply(grids);
 
 // One stage, fn(model, state, workspace), on copies of `from`'s state and
-// workspace, with the full scene's model (`from` may have a stage turned off). Forces pile up in w.force over the iterations; nothing reads them.
-// With `restore`, positions and velocities go back to `from`'s (untimed) before
-// each call: stages that move particles would otherwise act on their own output.
+// workspace, with the full scene's model (`from` may have a stage turned off). Forces pile up in
+// w.force over the iterations; nothing reads them. With `restore`, positions and velocities go back
+// to `from`'s (untimed) before each call: stages that move particles would otherwise act on their
+// own output.
 template <class Fn>
 void stage(benchmark::State& st, const Simulation& from, bool restore, Fn fn) {
   const Model& m = warmed(st.range(0), false).model();
@@ -138,7 +146,8 @@ void BM_gravity(benchmark::State& st) {
   stage(st, warm(st), false, [](const Model& m, State&, Workspace& w) { add_gravity(m, w.force); });
 }
 void BM_viscous_damping(benchmark::State& st) {
-  stage(st, warm(st), false, [](const Model& m, State& s, Workspace& w) { add_viscous_damping(m, s, w.force); });
+  stage(st, warm(st), false,
+        [](const Model& m, State& s, Workspace& w) { add_viscous_damping(m, s, w.force); });
 }
 void BM_air(benchmark::State& st) {
   stage(st, warm(st), false, [](const Model& m, State& s, Workspace& w) {
@@ -150,7 +159,8 @@ void BM_adhesion(benchmark::State& st) {
   stage(st, warm(st), false, [](const Model& m, State& s, Workspace& w) { add_adhesion(m, s, w); });
 }
 void BM_self_collision(benchmark::State& st) {
-  stage(st, warm(st), false, [](const Model& m, State& s, Workspace& w) { add_self_collision(m, s, w, true); });
+  stage(st, warm(st), false,
+        [](const Model& m, State& s, Workspace& w) { add_self_collision(m, s, w, true); });
 }
 void BM_build_hash(benchmark::State& st) {
   stage(st, warm(st), false, [](const Model& m, State& s, Workspace& w) {
@@ -175,8 +185,22 @@ void BM_friction(benchmark::State& st) {
     apply_friction(m, s, w, touched, m.params.integrator.dt);
   });
 }
+// The implicit step's linear solve (block assembly, then conjugate gradients)
+// over a whole 1/240 s step from the warm implicit state: the velocities go back
+// before each call, else each solve would start from the last one's answer.
+void BM_implicit_solve(benchmark::State& st) {
+  const Simulation& from = warmed(st.range(0), false, true);
+  int iterations = 0;
+  stage(st, from, true, [&](const Model&, State& s, Workspace& w) {
+    const Model& m = from.model();
+    implicit_euler_velocities(m, s, w, m.params.integrator.dt);
+    iterations = w.cg_iterations;
+  });
+  st.counters["cg_iterations"] = iterations;
+}
 void BM_normals(benchmark::State& st) {
-  stage(st, warm(st), false, [](const Model& m, State& s, Workspace& w) { compute_normals(m, s.x, w.normal); });
+  stage(st, warm(st), false,
+        [](const Model& m, State& s, Workspace& w) { compute_normals(m, s.x, w.normal); });
 }
 
 BENCHMARK(BM_springs)->Apply(grids);
@@ -189,6 +213,7 @@ BENCHMARK(BM_build_hash)->Apply(grids);
 BENCHMARK(BM_limit_strain)->Apply(grids);
 BENCHMARK(BM_collide)->Apply(grids);
 BENCHMARK(BM_friction)->Apply(grids);
+BENCHMARK(BM_implicit_solve)->Apply(grids);
 BENCHMARK(BM_normals)->Apply(grids);
 
 }  // namespace

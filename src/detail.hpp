@@ -12,13 +12,27 @@ namespace wetcloth::detail {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-// surfaces.cpp: signed distance and outward normal of the table and the ball.
+// Signed distance and outward normal of the table and the ball (inline: the
+// stages that touch a surface ask it once per particle).
 struct SurfaceHit {
   double distance = kInf;
   Vec3 normal = Vec3::UnitZ();
 };
-SurfaceHit query_surface(const Params& p, SurfaceKind kind, const Vec3& x);
-// Projects particles out of every obstacle and removes inward normal velocity.
+inline SurfaceHit query_surface(const Params& p, SurfaceKind kind, const Vec3& x) {
+  SurfaceHit h;
+  if (kind == SurfaceKind::Table) {
+    h.distance = x.z() - p.table.height;
+    h.normal = Vec3::UnitZ();
+  } else if (kind == SurfaceKind::Ball) {
+    const Vec3 r = x - to_vec(p.ball.center);
+    const double len = r.norm();
+    h.distance = len - p.ball.radius;
+    h.normal = len > 0 ? Vec3(r / len) : Vec3::UnitZ();
+  }
+  return h;
+}
+
+// surfaces.cpp: projects particles out of every obstacle and removes inward normal velocity.
 // touched[i] is the obstacle it was pushed out of (SurfaceKind), or None.
 void collide(const Model& m, State& s, std::vector<std::uint8_t>* touched);
 // Distances to the contact surface, contact flags and the contact border.

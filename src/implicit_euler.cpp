@@ -70,29 +70,65 @@ std::pair<double, double> precondition(const Model& m, Workspace& w) {
   return {rz, *std::max_element(w.row_max.begin(), w.row_max.end())};
 }
 
+// Field k of edge e's block at its lower end a: edge_blocks[(6 e + k) n + a].
+double* edge_field(const Model& m, Workspace& w, int e, int k) {
+  return w.edge_blocks.data() + (6 * std::size_t(e) + k) * m.n;
+}
+
+Sym edge_block(const Model& m, Workspace& w, int e, int a) {
+  Sym b;
+  for (int k = 0; k < 6; ++k) b[k] = edge_field(m, w, e, k)[a];
+  return b;
+}
+
 // y = A x over the free particles; fixed ones have identity rows (their x
 // never changes, so their columns only enter through the starting residual).
+// x is first copied to columns (x, y, z), and y summed in columns, so that the
+// loops over a row vectorise.
 void multiply(const Model& m, const State& s, Workspace& w, const std::vector<Vec3>& x,
               std::vector<Vec3>& y) {
+  const int n = m.n, nu = m.nu;
+  w.cg_columns.resize(6 * std::size_t(n));
+  double* const X = w.cg_columns.data();
+  double* const Y = X + 3 * std::size_t(n);
+  for_each_particle(m, [&](int a) {
+    for (int k = 0; k < 3; ++k) X[k * n + a] = x[a][k];
+  });
   // Row by row, offset by offset over the particles that have that neighbour:
   // no test per particle in the inner loops, the same order of sums per particle.
   parallel_for(m, m.nv, [&](int j) {
-    const int row = j * m.nu;
-    for (int a = row; a < row + m.nu; ++a) y[a] = times(w.diagonal[a], x[a]);
+    const int row = j * nu;
+    double* __restrict y0 = Y + row;
+    double* __restrict y1 = Y + n + row;
+    double* __restrict y2 = Y + 2 * n + row;
+    for (int i = 0; i < nu; ++i) {
+      const Vec3 d = times(w.diagonal[row + i], x[row + i]);
+      y0[i] = d.x();
+      y1[i] = d.y();
+      y2[i] = d.z();
+    }
     for (int e = 0; e < 8; ++e) {
       const StencilEdge& st = m.stencil[e];
       for (const int sign : {1, -1}) {
         const int di = sign * st.di, dj = sign * st.dj;
         if (j + dj < 0 || j + dj >= m.nv) continue;
-        const int off = di + dj * m.nu, from = row + std::max(0, -di),
-                  to = row + std::min(m.nu, m.nu - di);
+        const int off = di + dj * nu, from = std::max(0, -di), to = std::min(nu, nu - di);
         // The block of edge e sits at its lower end: a going forward, a + off going back.
-        const int at = sign > 0 ? 0 : off;
-        for (int a = from; a < to; ++a) y[a] -= times(w.edge_block[8 * (a + at) + e], x[a + off]);
+        const int at = row + (sign > 0 ? 0 : off);
+        const double *b0 = edge_field(m, w, e, 0) + at, *b1 = edge_field(m, w, e, 1) + at,
+                     *b2 = edge_field(m, w, e, 2) + at, *b3 = edge_field(m, w, e, 3) + at,
+                     *b4 = edge_field(m, w, e, 4) + at, *b5 = edge_field(m, w, e, 5) + at;
+        const double *x0 = X + row + off, *x1 = X + n + row + off, *x2 = X + 2 * n + row + off;
+#pragma GCC ivdep
+        for (int i = from; i < to; ++i) {
+          y0[i] -= b0[i] * x0[i] + b3[i] * x1[i] + b4[i] * x2[i];
+          y1[i] -= b3[i] * x0[i] + b1[i] * x1[i] + b5[i] * x2[i];
+          y2[i] -= b4[i] * x0[i] + b5[i] * x1[i] + b2[i] * x2[i];
+        }
       }
     }
-    for (int a = row; a < row + m.nu; ++a)
-      if (fixed(m, s, a)) y[a] = x[a];
+    for (int a = row; a < row + nu; ++a)
+      y[a] = fixed(m, s, a) ? x[a] : Vec3(Y[a], Y[n + a], Y[2 * n + a]);
   });
   for (const CollisionPair& c : w.collision_pairs) {  // few: serial, in pair order
     if (!fixed(m, s, c.i)) y[c.i] -= times(c.block, x[c.j]);
@@ -106,22 +142,21 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
   const double h2 = h * h, c = m.params.forces.viscous_damping;
   const double kf = m.params.self_collision.damping;
   // Each forward stencil edge's block h k_d u uᵀ + h² K_e.
+  w.edge_blocks.resize(6 * 8 * std::size_t(m.n));
   parallel_for(m, m.nv, [&](int j) {
     for (int i = 0; i < m.nu; ++i) {
       const int a = m.index(i, j);
       for (int e = 0; e < 8; ++e) {
         const StencilEdge& st = m.stencil[e];
         const int b = grid_neighbour(m, i, j, st.di, st.dj);
-        Sym& block = w.edge_block[8 * a + e];
-        block = {};
-        if (b < 0) continue;
-        const Vec3 d = s.x[b] - s.x[a];
-        const double len = d.norm();
-        if (len <= 0) continue;
-        const Vec3 u = d / len;
-        // K_e = k (u uᵀ + (1 - l0/|d|)(I - u uᵀ)), the transverse part only when stretched.
-        const double transverse = std::max(0.0, 1.0 - st.rest / len) * st.k;
-        block = outer(u, h * st.damping + h2 * (st.k - transverse), h2 * transverse);
+        Sym block{};
+        if (const double len = b < 0 ? 0 : (s.x[b] - s.x[a]).norm(); len > 0) {
+          const Vec3 u = (s.x[b] - s.x[a]) / len;
+          // K_e = k (u uᵀ + (1 - l0/|d|)(I - u uᵀ)), the transverse part only when stretched.
+          const double transverse = std::max(0.0, 1.0 - st.rest / len) * st.k;
+          block = outer(u, h * st.damping + h2 * (st.k - transverse), h2 * transverse);
+        }
+        for (int k = 0; k < 6; ++k) edge_field(m, w, e, k)[a] = block[k];
       }
     }
   });
@@ -133,9 +168,9 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
       d = outer(Vec3::Zero(), 0, m.mass[a] + h * c * m.area[a] + (w.colliding[a] ? h * kf : 0.0));
       for (int e = 0; e < 8; ++e) {
         const StencilEdge& st = m.stencil[e];
-        if (grid_neighbour(m, i, j, st.di, st.dj) >= 0) add_to(d, w.edge_block[8 * a + e]);
+        if (grid_neighbour(m, i, j, st.di, st.dj) >= 0) add_to(d, edge_block(m, w, e, a));
         if (const int b = grid_neighbour(m, i, j, -st.di, -st.dj); b >= 0)
-          add_to(d, w.edge_block[8 * b + e]);
+          add_to(d, edge_block(m, w, e, b));
       }
     }
   });

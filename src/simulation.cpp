@@ -73,7 +73,6 @@ void Simulation::reset() {
                   &ws_.v_start})
     a->assign(n, Vec3::Zero());
   ws_.damping.assign(n, Sym{});
-  ws_.edge_block.assign(8 * static_cast<std::size_t>(n), Sym{});
   ws_.diagonal.assign(n, Sym{});
   ws_.preconditioner.assign(n, Mat3::Identity());
   for (auto* a : {&ws_.cg_r, &ws_.cg_z, &ws_.cg_p, &ws_.cg_q}) a->assign(n, Vec3::Zero());

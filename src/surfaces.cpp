@@ -3,20 +3,6 @@
 
 namespace wetcloth::detail {
 
-SurfaceHit query_surface(const Params& p, SurfaceKind kind, const Vec3& x) {
-  SurfaceHit h;
-  if (kind == SurfaceKind::Table) {
-    h.distance = x.z() - p.table.height;
-    h.normal = Vec3::UnitZ();
-  } else if (kind == SurfaceKind::Ball) {
-    const Vec3 r = x - to_vec(p.ball.center);
-    const double len = r.norm();
-    h.distance = len - p.ball.radius;
-    h.normal = len > 0 ? Vec3(r / len) : Vec3::UnitZ();
-  }
-  return h;
-}
-
 void collide(const Model& m, State& s, std::vector<std::uint8_t>* touched) {
   const Params& p = m.params;
   const SurfaceKind kinds[] = {SurfaceKind::Table, SurfaceKind::Ball};

@@ -157,9 +157,11 @@ struct Workspace {
   std::vector<std::uint8_t> candidate_close;  // candidate within d_t this step
   std::vector<Vec3> candidates_anchor;
   double candidates_radius = 0;
-  // Implicit Euler: matrix blocks (8 forward stencil edges per particle), the
-  // block-Jacobi preconditioner, conjugate-gradient vectors, per-row sums.
-  std::vector<Sym> edge_block, diagonal;
+  // Implicit Euler: matrix blocks (of the 8 forward stencil edges, in columns:
+  // field k of edge e at (6 e + k) n), the diagonal blocks, the block-Jacobi
+  // preconditioner, conjugate-gradient vectors and their columns, per-row sums.
+  std::vector<double> edge_blocks, cg_columns;
+  std::vector<Sym> diagonal;
   std::vector<Mat3> preconditioner;
   std::vector<Vec3> cg_r, cg_z, cg_p, cg_q;
   std::vector<double> row_sums, row_max;

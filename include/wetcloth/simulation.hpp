@@ -123,8 +123,8 @@ struct Workspace {
   std::vector<PocketAir> pocket_air;  // per pocket: how its deficit answers V_sum
   std::vector<double> pocket_sums;    // scratch for the implicit air correction
   std::vector<Vec3> air_direction;    // A_i n_i of eq. 3 (zero where no air force)
-  // Springs (forces/springs.cpp): positions, velocities and each particle's
-  // sums by component, columns the compiler vectorises over.
+  // Springs (forces/springs.cpp): positions and velocities by component, a
+  // zero row, then per thread its ring of edge rows and a row of sums.
   std::vector<double> soa;
   std::vector<int> queue;
   // Strain limiting: structural and shear springs in adaptive order, the first

@@ -10,8 +10,6 @@
 // compiler vectorises. Positions and velocities are first copied to columns
 // (x, y, z, vx, vy, vz). Edge rows live in a ring of three per thread: a
 // particle's backward springs start at most two rows back.
-#include <omp.h>
-
 #include <functional>
 
 #include "../detail.hpp"

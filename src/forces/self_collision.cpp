@@ -43,9 +43,9 @@ void add_self_collision(const Model& m, const State& s, Workspace& w, bool with_
     // The search, the costly part, by blocks of rows on the step's threads;
     // the blocks' lists joined in order are the list one thread would make.
     w.thread_candidates.resize(m.threads);
+    for (auto& list : w.thread_candidates) list.clear();  // the runtime may give fewer threads
     for_each_row_block(m, [&](int j0, int j1, int t) {
       auto& list = w.thread_candidates[t];
-      list.clear();
       for_each_close_pair(
           s.x, w.candidates_radius, w, near_in_grid,
           [&](int i, int j, const Vec3&, double) {

@@ -66,6 +66,14 @@ void for_each_particle(const Model& m, Body&& body) {
   });
 }
 
+// Copies v to three columns, out[k n + a] = v[a][k]: loops over a row of
+// columns vectorise where loops over Vec3s do not.
+inline void to_columns(const Model& m, const std::vector<Vec3>& v, double* out) {
+  for_each_particle(m, [&](int a) {
+    for (int k = 0; k < 3; ++k) out[k * m.n + a] = v[a][k];
+  });
+}
+
 // The largest value(i) over the particles: a maximum, so the same for any
 // split between threads.
 template <class Value>

@@ -91,9 +91,7 @@ void multiply(const Model& m, const State& s, Workspace& w, const std::vector<Ve
   w.cg_columns.resize(6 * std::size_t(n));
   double* const X = w.cg_columns.data();
   double* const Y = X + 3 * std::size_t(n);
-  for_each_particle(m, [&](int a) {
-    for (int k = 0; k < 3; ++k) X[k * n + a] = x[a][k];
-  });
+  to_columns(m, x, X);
   // Row by row, offset by offset over the particles that have that neighbour:
   // no test per particle in the inner loops, the same order of sums per particle.
   parallel_for(m, m.nv, [&](int j) {

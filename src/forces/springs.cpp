@@ -98,13 +98,8 @@ void add_spring_forces(const Model& m, const State& s, Workspace& w) {
   const Columns c{X, X + n, X + 2 * n, X + 3 * n, X + 4 * n, X + 5 * n};
   constexpr int fields = damped ? kFields : 3;
 
-  parallel_for(m, m.nv, [&](int j) {
-    for (int a = j * nu; a < (j + 1) * nu; ++a)
-      for (int k = 0; k < 3; ++k) {
-        X[k * n + a] = s.x[a][k];
-        X[(k + 3) * n + a] = s.v[a][k];
-      }
-  });
+  to_columns(m, s.x, X);
+  to_columns(m, s.v, X + 3 * std::size_t(n));
   for_each_row_block(m, [&](int j0, int j1, int thread) {
     double* const ring = X + 6 * std::size_t(n) + kFields * stride + per_thread * thread;
     double* sums[kFields];
@@ -116,7 +111,7 @@ void add_spring_forces(const Model& m, const State& s, Workspace& w) {
     for (int slot = 0; slot < kRing; ++slot)
       for (int e = 0; e < kEdges; ++e) {
         const auto [lo, hi] = edge_span(m, m.stencil[e]);
-        for (int k = 0; k < kFields; ++k) {
+        for (int k = 0; k < fields; ++k) {
           double* const row = edges(slot, e, k);
           std::fill(row - kReach, row + lo, 0.0);
           std::fill(row + hi, row + nu + kReach, 0.0);

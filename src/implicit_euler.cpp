@@ -140,7 +140,12 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
   const double h2 = h * h, c = m.params.forces.viscous_damping;
   const double kf = m.params.self_collision.damping;
   // Each forward stencil edge's block h k_d u uᵀ + h² K_e.
+  // The solver's arrays are sized at the first implicit step: the explicit
+  // integrators need none of them. Every one is written before it is read.
   w.edge_blocks.resize(6 * 8 * std::size_t(m.n));
+  w.diagonal.resize(m.n);
+  w.preconditioner.resize(m.n);
+  for (auto* v : {&w.cg_r, &w.cg_z, &w.cg_p, &w.cg_q}) v->resize(m.n);
   parallel_for(m, m.nv, [&](int j) {
     for (int i = 0; i < m.nu; ++i) {
       const int a = m.index(i, j);

@@ -69,13 +69,9 @@ void Simulation::reset() {
   const int grab = ws_.grab_particle;
   ws_ = Workspace{};
   ws_.grab_particle = grab;
-  for (auto* a : {&ws_.force, &ws_.normal, &ws_.surface_normal, &ws_.x_before, &ws_.air_direction,
-                  &ws_.v_start})
+  for (auto* a : {&ws_.force, &ws_.normal, &ws_.surface_normal, &ws_.x_before, &ws_.air_direction})
     a->assign(n, Vec3::Zero());
   ws_.damping.assign(n, Sym{});
-  ws_.diagonal.assign(n, Sym{});
-  ws_.preconditioner.assign(n, Mat3::Identity());
-  for (auto* a : {&ws_.cg_r, &ws_.cg_z, &ws_.cg_p, &ws_.cg_q}) a->assign(n, Vec3::Zero());
   ws_.row_sums.assign(model_.nv, 0.0);
   ws_.row_max.assign(model_.nv, 0.0);
   ws_.distance.assign(n, kInf);

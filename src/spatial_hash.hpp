@@ -41,40 +41,49 @@ inline void build_hash(const std::vector<Vec3>& x, double cell, Workspace& w) {
     w.cell_entries[fill[w.particle_cell[i]]++] = static_cast<int>(i);
 }
 
+// Calls fn(j, d, |d|²) for every particle j > after of the hash, but self,
+// with d = y - x[j] shorter than `radius`, bucket by bucket. The hash must
+// have been built with cell = 2 radius: the ball of radius r around y then
+// meets at most 2 x 2 x 2 cells.
+template <class Fn>
+void for_each_near(const std::vector<Vec3>& x, double radius, const Workspace& w, const Vec3& y,
+                   int self, int after, Fn fn) {
+  const auto mask = static_cast<std::uint32_t>(w.cell_start.size() - 2);
+  const double r2 = radius * radius, cell = 2 * radius;
+  const long long cx = std::llround(std::floor((y.x() - radius) / cell));
+  const long long cy = std::llround(std::floor((y.y() - radius) / cell));
+  const long long cz = std::llround(std::floor((y.z() - radius) / cell));
+  for (int dz = 0; dz <= 1; ++dz)
+    for (int dy = 0; dy <= 1; ++dy)
+      for (int dx = 0; dx <= 1; ++dx) {
+        const long long ox = cx + dx, oy = cy + dy, oz = cz + dz;
+        const std::uint32_t c = hash_cell(ox, oy, oz, mask);
+        for (int e = w.cell_start[c]; e < w.cell_start[c + 1]; ++e) {
+          const int j = w.cell_entries[e];
+          if (j <= after || j == self) continue;
+          // A bucket may hold other cells too: take j only in the cell visited,
+          // so that none is found twice.
+          const auto& cj = w.cell_coord[j];
+          if (cj[0] != ox || cj[1] != oy || cj[2] != oz) continue;
+          const Vec3 d = y - x[j];
+          const double len2 = d.squaredNorm();
+          if (len2 < r2) fn(j, d, len2);
+        }
+      }
+}
+
 // Calls fn(i, j, d_ij, |d_ij|) once for every pair i < j closer than `radius`
 // that `skip(i, j)` does not exclude, with i in [first, last) (all particles by
-// default), in order of i. The hash must have been built with cell = 2 radius:
-// the ball of radius r around a particle then meets at most 2 x 2 x 2 cells.
+// default), in order of i. The hash must have been built with cell = 2 radius.
 template <class Skip, class Fn>
 void for_each_close_pair(const std::vector<Vec3>& x, double radius, const Workspace& w, Skip skip,
                          Fn fn, int first = 0, int last = -1) {
-  const auto mask = static_cast<std::uint32_t>(w.cell_start.size() - 2);
-  const double r2 = radius * radius;
   if (last < 0) last = static_cast<int>(x.size());
-  for (int i = first; i < last; ++i) {
-    const double cell = 2 * radius;
-    const long long cx = std::llround(std::floor((x[i].x() - radius) / cell));
-    const long long cy = std::llround(std::floor((x[i].y() - radius) / cell));
-    const long long cz = std::llround(std::floor((x[i].z() - radius) / cell));
-    for (int dz = 0; dz <= 1; ++dz)
-      for (int dy = 0; dy <= 1; ++dy)
-        for (int dx = 0; dx <= 1; ++dx) {
-          const std::uint32_t c = hash_cell(cx + dx, cy + dy, cz + dz, mask);
-          const long long ox = cx + dx, oy = cy + dy, oz = cz + dz;
-          for (int e = w.cell_start[c]; e < w.cell_start[c + 1]; ++e) {
-            const int j = w.cell_entries[e];
-            if (j <= i) continue;
-            // A bucket may hold other cells too: take j only in the cell visited,
-            // so that no pair is found twice.
-            const auto& cj = w.cell_coord[j];
-            if (cj[0] != ox || cj[1] != oy || cj[2] != oz) continue;
-            const Vec3 d = x[i] - x[j];
-            const double len2 = d.squaredNorm();
-            if (len2 >= r2 || len2 == 0 || skip(i, j)) continue;  // skip last: it may cost most
-            fn(i, j, d, std::sqrt(len2));
-          }
-        }
-  }
+  for (int i = first; i < last; ++i)
+    for_each_near(x, radius, w, x[i], i, i, [&](int j, const Vec3& d, double len2) {
+      if (len2 == 0 || skip(i, j)) return;  // skip last: it may cost most
+      fn(i, j, d, std::sqrt(len2));
+    });
 }
 
 }  // namespace wetcloth::detail

@@ -150,8 +150,11 @@ struct Workspace {
   std::vector<std::array<long long, 3>> cell_coord;
   std::vector<std::uint8_t> colliding;
   std::vector<CollisionPair> collision_pairs;
-  // Self-collision candidates within candidates_radius at candidates_anchor.
+  // Self-collision candidates: pairs (i < j, sorted) whose anchors are within
+  // candidates_radius; the particles searched again this step, and their flags.
   std::vector<std::array<int, 2>> candidates;
+  std::vector<int> candidate_movers;
+  std::vector<std::uint8_t> candidate_moved;
   std::vector<std::vector<std::array<int, 2>>>
       thread_candidates;                      // each thread's share of the search
   std::vector<std::uint8_t> candidate_close;  // candidate within d_t this step

@@ -13,41 +13,52 @@ void add_self_collision(const Model& m, const State& s, Workspace& w, bool with_
   const auto& p = m.params.self_collision;
   if (!p.enabled) return;
   const double dt_dist = p.distance, k = p.k;
-  // Candidate pairs (a Verlet list): every pair within d_t + margin, rebuilt
-  // with the hash only once some particle has moved margin/2 since the last
-  // build. Until then no pair can have come within d_t unlisted, and a flat or
-  // slowly moving cloth skips the hash for hundreds of steps.
+  // Candidate pairs (a Verlet list): every pair whose anchors, the positions
+  // where each particle was last searched from, are within R = d_t + margin.
+  // While no particle is farther than margin/2 from its anchor, no pair off
+  // the list can have come within d_t. One that moves farther is searched
+  // again from where it is, against the others' anchors; only when many have
+  // moved is the whole cloth searched again. So a flat or slowly moving cloth
+  // skips the hash for hundreds of steps, and a pulled handle costs a search
+  // around the handle, not of the cloth. Sorted, the list depends on the
+  // anchors alone, not on how or on how many threads it was made.
   // The margin is at most 1.5 grid steps: on a fine grid half of d_t spans
   // many steps, and a flat cloth would list every particle's whole ring of
   // grid neighbours just past the excluded ones (360 B a particle at 401 x 401).
   const double step =
       std::min(m.params.cloth.size[0] / (m.nu - 1), m.params.cloth.size[1] / (m.nv - 1));
-  const double margin = std::min(0.5 * dt_dist, 1.5 * step);
-  bool rebuild =
-      w.candidates_radius != dt_dist + margin || w.candidates_anchor.size() != s.x.size();
-  if (!rebuild)
-    rebuild = max_over_particles(m, [&](int i) {
-                return (s.x[i] - w.candidates_anchor[i]).squaredNorm();
-              }) > 0.25 * margin * margin;
-  if (rebuild) {
-    // Grid neighbours never collide: within two grid steps (MODEL.md), or more
-    // on a grid fine enough that d_t spans more steps, else a flat cloth would
-    // repel itself.
-    const int nu = m.nu;
-    const int reach = std::max(2, static_cast<int>(std::ceil(dt_dist / step)));
-    auto near_in_grid = [nu, reach](int i, int j) {
-      return std::abs(i % nu - j % nu) <= reach && std::abs(i / nu - j / nu) <= reach;
-    };
-    w.candidates_radius = dt_dist + margin;
-    build_hash(s.x, 2 * w.candidates_radius, w);
-    // The search, the costly part, by blocks of rows on the step's threads;
-    // the blocks' lists joined in order are the list one thread would make.
+  const double margin = std::min(0.5 * dt_dist, 1.5 * step), radius = dt_dist + margin;
+  // Grid neighbours never collide: within two grid steps (MODEL.md), or more
+  // on a grid fine enough that d_t spans more steps, else a flat cloth would
+  // repel itself.
+  const int nu = m.nu;
+  const int reach = std::max(2, static_cast<int>(std::ceil(dt_dist / step)));
+  auto near_in_grid = [nu, reach](int i, int j) {
+    return std::abs(i % nu - j % nu) <= reach && std::abs(i / nu - j / nu) <= reach;
+  };
+  auto& anchor = w.candidates_anchor;
+  auto& movers = w.candidate_movers;
+  movers.clear();
+  bool search_all = w.candidates_radius != radius || anchor.size() != s.x.size();
+  const auto far = [&](int i) {
+    return (s.x[i] - anchor[i]).squaredNorm() > 0.25 * margin * margin;
+  };
+  if (!search_all && max_over_particles(m, [&](int i) { return far(i) ? 1.0 : 0.0; }) > 0) {
+    for (int i = 0; i < m.n; ++i)
+      if (far(i)) movers.push_back(i);
+    search_all = 4 * movers.size() > std::size_t(m.n);
+  }
+  if (search_all) {
+    // The search, by blocks of rows on the step's threads.
+    w.candidates_radius = radius;
+    anchor = s.x;
+    build_hash(anchor, 2 * radius, w);
     w.thread_candidates.resize(m.threads);
     for (auto& list : w.thread_candidates) list.clear();  // the runtime may give fewer threads
     for_each_row_block(m, [&](int j0, int j1, int t) {
       auto& list = w.thread_candidates[t];
       for_each_close_pair(
-          s.x, w.candidates_radius, w, near_in_grid,
+          anchor, radius, w, near_in_grid,
           [&](int i, int j, const Vec3&, double) {
             list.push_back({i, j});
           },
@@ -56,7 +67,23 @@ void add_self_collision(const Model& m, const State& s, Workspace& w, bool with_
     w.candidates.clear();
     for (const auto& list : w.thread_candidates)
       w.candidates.insert(w.candidates.end(), list.begin(), list.end());
-    w.candidates_anchor = s.x;
+    std::sort(w.candidates.begin(), w.candidates.end());
+  } else if (!movers.empty()) {
+    // The movers' pairs, dropped and searched again from their new anchors.
+    auto& moved = w.candidate_moved;
+    moved.assign(m.n, 0);
+    for (int i : movers) {
+      moved[i] = 1;
+      anchor[i] = s.x[i];
+    }
+    std::erase_if(w.candidates, [&](const auto& c) { return moved[c[0]] || moved[c[1]]; });
+    build_hash(anchor, 2 * radius, w);
+    for (int i : movers)
+      for_each_near(anchor, radius, w, anchor[i], i, -1, [&](int j, const Vec3&, double len2) {
+        if ((moved[j] && j < i) || len2 == 0 || near_in_grid(i, j)) return;  // j < i: found from j
+        w.candidates.push_back({std::min(i, j), std::max(i, j)});
+      });
+    std::sort(w.candidates.begin(), w.candidates.end());
   }
   auto& colliding = w.colliding;
   std::fill(colliding.begin(), colliding.end(), 0);

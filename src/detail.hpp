@@ -4,6 +4,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <array>
 #include <limits>
 
 #include "wetcloth/simulation.hpp"
@@ -84,14 +85,25 @@ double max_over_particles(const Model& m, Value&& value) {
   return worst;
 }
 
-// Σ over rows of row(j), the rows' sums added in order: the same bits for any
-// number of threads. Uses w.row_sums.
+// Σ over rows of row(j), K sums at once (row(j) returns std::array<double, K>):
+// the rows' sums added in order, so the same bits for any number of threads.
+// Uses w.row_sums.
+template <std::size_t K, class Row>
+std::array<double, K> ordered_sums(const Model& m, Workspace& w, Row row) {
+  w.row_sums.resize(K * std::size_t(m.nv));
+  parallel_for(m, m.nv, [&](int j) {
+    const std::array<double, K> sums = row(j);
+    std::copy(sums.begin(), sums.end(), w.row_sums.begin() + K * std::size_t(j));
+  });
+  std::array<double, K> total{};
+  for (int j = 0; j < m.nv; ++j)
+    for (std::size_t k = 0; k < K; ++k) total[k] += w.row_sums[K * std::size_t(j) + k];
+  return total;
+}
+
 template <class Row>
 double ordered_sum(const Model& m, Workspace& w, Row row) {
-  parallel_for(m, m.nv, [&](int j) { w.row_sums[j] = row(j); });
-  double total = 0;
-  for (int j = 0; j < m.nv; ++j) total += w.row_sums[j];
-  return total;
+  return ordered_sums<1>(m, w, [&](int j) { return std::array<double, 1>{row(j)}; })[0];
 }
 
 // The particle at grid cell (i + di, j + dj), or -1 off the grid.

@@ -112,7 +112,7 @@ void Simulation::accumulate_forces(bool implicit) {
   State& s = state_;
   Workspace& w = ws_;
   compute_normals(m, s.x, w.normal, w.triangle_normal);
-  std::fill(w.force.begin(), w.force.end(), Vec3::Zero());
+  for_each_particle(m, [&](int i) { w.force[i].setZero(); });
   add_spring_forces(m, s, w, !implicit);
   add_gravity(m, w.force);
   if (!implicit) add_viscous_damping(m, s, w.force);

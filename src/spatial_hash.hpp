@@ -16,29 +16,29 @@ inline std::uint32_t hash_cell(long long ix, long long iy, long long iz, std::ui
   return static_cast<std::uint32_t>(h) & mask;
 }
 
-// Sorts particles into buckets of cubic cells of side `cell`.
-inline void build_hash(const std::vector<Vec3>& x, double cell, Workspace& w) {
-  const std::size_t n = x.size();
+// Sorts particles into buckets of cubic cells of side `cell`; the cells are
+// found on `threads` threads, the counting sort is in particle order.
+inline void build_hash(const std::vector<Vec3>& x, double cell, Workspace& w, int threads = 1) {
+  const int n = static_cast<int>(x.size());
   std::size_t size = 1;
-  while (size < 2 * n) size <<= 1;
+  while (size < 2 * std::size_t(n)) size <<= 1;
   const auto mask = static_cast<std::uint32_t>(size - 1);
   w.cell_start.assign(size + 1, 0);
   w.cell_entries.resize(n);
   w.particle_cell.resize(n);
   w.cell_coord.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
+#pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1)
+  for (int i = 0; i < n; ++i) {
     auto& cc = w.cell_coord[i];
     cc = {std::llround(std::floor(x[i].x() / cell)), std::llround(std::floor(x[i].y() / cell)),
           std::llround(std::floor(x[i].z() / cell))};
-    const auto c = hash_cell(cc[0], cc[1], cc[2], mask);
-    w.particle_cell[i] = static_cast<int>(c);
-    ++w.cell_start[c + 1];
+    w.particle_cell[i] = static_cast<int>(hash_cell(cc[0], cc[1], cc[2], mask));
   }
+  for (int i = 0; i < n; ++i) ++w.cell_start[w.particle_cell[i] + 1];
   for (std::size_t c = 0; c < size; ++c) w.cell_start[c + 1] += w.cell_start[c];
   std::vector<int>& fill = w.queue;  // reuse as a cursor per bucket
   fill.assign(w.cell_start.begin(), w.cell_start.end() - 1);
-  for (std::size_t i = 0; i < n; ++i)
-    w.cell_entries[fill[w.particle_cell[i]]++] = static_cast<int>(i);
+  for (int i = 0; i < n; ++i) w.cell_entries[fill[w.particle_cell[i]]++] = i;
 }
 
 // Calls fn(j, d, |d|²) for every particle j > after of the hash, but self,

@@ -150,13 +150,16 @@ void update_air(const Model& m, State& s, Workspace& w, double dt) {
   if (model == "vented") {
     update_vented(m, s, w, dt);
   } else {
-    double v_sum = 0, a_sum = 0, s_now = 0;
-    for (int i = 0; i < m.n; ++i) {
-      if (s.contact[i]) s_now += m.area[i];
-      w.pocket[i] = holds_air(m, w.distance[i]) ? 0 : -1;  // one pocket under the whole cloth
-      v_sum += m.area[i] * air_gap(m, w.distance[i]);
-      if (w.pocket[i] >= 0 && !s.contact[i]) a_sum += m.area[i];
-    }
+    const auto [v_sum, a_sum, s_now] = ordered_sums<3>(m, w, [&](int j) {
+      std::array<double, 3> sum{};
+      for (int i = j * m.nu; i < (j + 1) * m.nu; ++i) {
+        w.pocket[i] = holds_air(m, w.distance[i]) ? 0 : -1;  // one pocket under the whole cloth
+        sum[0] += m.area[i] * air_gap(m, w.distance[i]);
+        if (w.pocket[i] >= 0 && !s.contact[i]) sum[1] += m.area[i];
+        if (s.contact[i]) sum[2] += m.area[i];
+      }
+      return sum;
+    });
     const double grown = v_sum - s.air_volume;
     if (model == "off" || s_now == 0) {
       // Nothing is trapped while no part of the cloth touches the surface: the
@@ -173,7 +176,7 @@ void update_air(const Model& m, State& s, Workspace& w, double dt) {
         trapped ? pocket_air(p, s.air_atm_volume, v_sum, a_sum, model == "exchange") : PocketAir{});
     s.air_volume = v_sum;
     s.inner_pressure = pressure(p, s.air_atm_volume, v_sum);
-    std::fill(s.pocket_pressure.begin(), s.pocket_pressure.end(), s.inner_pressure);
+    for_each_particle(m, [&](int i) { s.pocket_pressure[i] = s.inner_pressure; });
   }
   const double deficit = p.air.p_atm - s.inner_pressure;
   if (deficit > s.peak_deficit) s.peak_deficit = deficit;
@@ -198,12 +201,14 @@ void start_air(const Model& m, State& s, Workspace& w) {
 // gradient of the volume that sets the pressure: it pumps energy into lifted
 // flaps until a pulled cloth flutters and blows up (docs/model.md).
 void add_air_pressure(const Model& m, const State& s, Workspace& w) {
-  std::fill(w.air_direction.begin(), w.air_direction.end(), Vec3::Zero());
-  if (m.params.air.model == "off" || m.contact_surface == SurfaceKind::None) return;
+  const bool off = m.params.air.model == "off" || m.contact_surface == SurfaceKind::None;
   const double p_atm = m.params.air.p_atm;
   const bool along_cloth_normal = m.params.air.force_direction == "cloth";
   for_each_particle(m, [&](int i) {
-    if (s.contact[i] || !holds_air(m, w.distance[i])) return;
+    if (off || s.contact[i] || !holds_air(m, w.distance[i])) {
+      w.air_direction[i].setZero();
+      return;
+    }
     Vec3 n = w.surface_normal[i];
     if (along_cloth_normal) {
       n = w.normal[i];
@@ -222,13 +227,25 @@ void add_air_pressure(const Model& m, const State& s, Workspace& w) {
 void correct_air_implicitly(const Model& m, State& s, Workspace& w, double dt) {
   const std::size_t pockets = w.pocket_air.size();
   if (pockets == 0) return;
-  w.pocket_sums.assign(2 * pockets, 0.0);
-  for (int i = 0; i < m.n; ++i) {
-    const int k = w.pocket[i];
-    if (k < 0) continue;
+  // Per pocket Σ b·v and Σ b·M⁻¹a: by rows on the threads for one pocket, in
+  // particle order for the pockets of `vented`.
+  auto add_terms = [&](int i, double* sums) {
     const Vec3 b = m.area[i] * w.surface_normal[i];
-    w.pocket_sums[2 * k] += b.dot(s.v[i]);
-    w.pocket_sums[2 * k + 1] += m.inv_mass[i] * b.dot(w.air_direction[i]);
+    sums[0] += b.dot(s.v[i]);
+    sums[1] += m.inv_mass[i] * b.dot(w.air_direction[i]);
+  };
+  w.pocket_sums.assign(2 * pockets, 0.0);
+  if (pockets == 1) {
+    const auto sums = ordered_sums<2>(m, w, [&](int j) {
+      std::array<double, 2> row{};
+      for (int i = j * m.nu; i < (j + 1) * m.nu; ++i)
+        if (w.pocket[i] == 0) add_terms(i, row.data());
+      return row;
+    });
+    std::copy(sums.begin(), sums.end(), w.pocket_sums.begin());
+  } else {
+    for (int i = 0; i < m.n; ++i)
+      if (w.pocket[i] >= 0) add_terms(i, &w.pocket_sums[2 * w.pocket[i]]);
   }
   for (std::size_t k = 0; k < pockets; ++k) {
     const double c = dt * dt * stiffness(w.pocket_air[k], dt);

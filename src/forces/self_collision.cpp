@@ -52,7 +52,7 @@ void add_self_collision(const Model& m, const State& s, Workspace& w, bool with_
     // The search, by blocks of rows on the step's threads.
     w.candidates_radius = radius;
     anchor = s.x;
-    build_hash(anchor, 2 * radius, w);
+    build_hash(anchor, 2 * radius, w, m.threads);
     w.thread_candidates.resize(m.threads);
     for (auto& list : w.thread_candidates) list.clear();  // the runtime may give fewer threads
     for_each_row_block(m, [&](int j0, int j1, int t) {
@@ -77,7 +77,7 @@ void add_self_collision(const Model& m, const State& s, Workspace& w, bool with_
       anchor[i] = s.x[i];
     }
     std::erase_if(w.candidates, [&](const auto& c) { return moved[c[0]] || moved[c[1]]; });
-    build_hash(anchor, 2 * radius, w);
+    build_hash(anchor, 2 * radius, w, m.threads);
     for (int i : movers)
       for_each_near(anchor, radius, w, anchor[i], i, -1, [&](int j, const Vec3&, double len2) {
         if ((moved[j] && j < i) || len2 == 0 || near_in_grid(i, j)) return;  // j < i: found from j

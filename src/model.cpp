@@ -133,6 +133,7 @@ Model build_model(const Params& p) {
                   d = m.index(i, j + 1);
         // Diagonals alternate like a chequerboard, so that on an odd grid the
         // mesh (and the normals) keep the cloth's mirror symmetries.
+        // compute_normals (simulation.cpp) follows this pattern quad by quad.
         if ((i + j) % 2 == 0) {
           m.triangles.push_back({a, b, cc});
           m.triangles.push_back({a, cc, d});
@@ -142,16 +143,6 @@ Model build_model(const Params& p) {
         }
       }
     }
-  }
-  m.particle_triangle_start.assign(m.n + 1, 0);
-  for (const auto& t : m.triangles)
-    for (int v : t) ++m.particle_triangle_start[v + 1];
-  for (int i = 0; i < m.n; ++i) m.particle_triangle_start[i + 1] += m.particle_triangle_start[i];
-  m.particle_triangles.resize(m.particle_triangle_start[m.n]);
-  {
-    std::vector<int> next(m.particle_triangle_start.begin(), m.particle_triangle_start.end() - 1);
-    for (int t = 0; t < static_cast<int>(m.triangles.size()); ++t)
-      for (int v : m.triangles[t]) m.particle_triangles[next[v]++] = t;
   }
   // Triangles sharing an edge (for the wrinkle measure).
   std::unordered_map<long long, int> first;

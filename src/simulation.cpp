@@ -12,30 +12,95 @@ namespace wetcloth {
 
 using namespace detail;
 
-// Each triangle's area-weighted normal, then per particle the sum over its
-// triangles in a fixed order: rows are independent in both passes.
+// Area-weighted particle normals on the chequerboard triangulation of
+// model.cpp. First each quad's two triangle normals, by rows of quads in
+// columns (field f of quad row q at quad_normals[(6 (q + 1) + f) (nu + 1) + 1 ..]),
+// with zero quads around the grid. Then each particle sums the triangles of its
+// four quads in the order of Model::triangles: quads (i-1, j-1), (i, j-1),
+// (i-1, j), (i, j), each first triangle then second. A particle with i + j
+// even is in all eight; an odd one in four, so it adds zero for the others
+// (exact). Both passes are loops over a row that vectorise; rows are
+// independent.
 void compute_normals(const Model& m, const std::vector<Vec3>& x, std::vector<Vec3>& normal,
-                     std::vector<Vec3>& triangle_normal) {
-  triangle_normal.resize(m.triangles.size());
-  const int per_row = 2 * (m.nu - 1);  // triangles are made row by row, two per quad
-  parallel_for(m, m.nv - 1, [&](int j) {
-    for (int t = j * per_row; t < (j + 1) * per_row; ++t) {
-      const auto& c = m.triangles[t];
-      triangle_normal[t] = (x[c[1]] - x[c[0]]).cross(x[c[2]] - x[c[0]]);
+                     std::vector<double>& quad_normals) {
+  const int nu = m.nu, stride = nu + 1;
+  const std::size_t per_row = 6 * std::size_t(stride);
+  quad_normals.resize((m.nv + 1) * per_row);
+  std::fill_n(quad_normals.begin(), per_row, 0.0);                          // quad row -1
+  std::fill_n(quad_normals.end() - std::ptrdiff_t(per_row), per_row, 0.0);  // quad row nv - 1
+  const double* X = x.data()->data();  // x, y, z of particle a at 3 a
+  parallel_for(m, m.nv - 1, [&](int q) {
+    double* row = quad_normals.data() + (q + 1) * per_row;
+    double* t[6];
+    for (int f = 0; f < 6; ++f) {
+      t[f] = row + f * stride + 1;
+      t[f][-1] = t[f][nu - 1] = 0.0;  // quads -1 and nu - 1
+    }
+    const double* lo = X + 3 * std::size_t(q) * nu;  // corners a = lo[3 i], b = lo[3 (i + 1)]
+    const double* hi = lo + 3 * std::size_t(nu);     // d = hi[3 i], cc = hi[3 (i + 1)]
+#pragma GCC ivdep
+    for (int i = 0; i + 1 < nu; ++i) {
+      // Even quads (i + q even) split along a-cc: {a, b, cc}, {a, cc, d};
+      // odd ones along b-d: {a, b, d}, {b, cc, d}. Eigen's cross, in scalars.
+      const bool even = ((i + q) & 1) == 0;
+      double a[3], b[3], c[3], d[3], u[3], v[3], o[3];
+      for (int k = 0; k < 3; ++k) {
+        a[k] = lo[3 * i + k];
+        b[k] = lo[3 * i + 3 + k];
+        c[k] = hi[3 * i + 3 + k];
+        d[k] = hi[3 * i + k];
+      }
+      for (int k = 0; k < 3; ++k) {
+        u[k] = b[k] - a[k];
+        v[k] = (even ? c[k] : d[k]) - a[k];
+      }
+      t[0][i] = u[1] * v[2] - u[2] * v[1];
+      t[1][i] = u[2] * v[0] - u[0] * v[2];
+      t[2][i] = u[0] * v[1] - u[1] * v[0];
+      for (int k = 0; k < 3; ++k) {
+        o[k] = even ? a[k] : b[k];
+        u[k] = c[k] - o[k];
+        v[k] = d[k] - o[k];
+      }
+      t[3][i] = u[1] * v[2] - u[2] * v[1];
+      t[4][i] = u[2] * v[0] - u[0] * v[2];
+      t[5][i] = u[0] * v[1] - u[1] * v[0];
     }
   });
-  for_each_particle(m, [&](int i) {
-    Vec3 n = Vec3::Zero();
-    for (int k = m.particle_triangle_start[i]; k < m.particle_triangle_start[i + 1]; ++k)
-      n += triangle_normal[m.particle_triangles[k]];
-    const double len = n.norm();
-    normal[i] = len > 0 ? Vec3(n / len) : Vec3::UnitZ();
+  double* N = normal.data()->data();
+  parallel_for(m, m.nv, [&](int j) {
+    // Quad (i - 1, r) of quad row r at [i], quad (i, r) at [i + 1].
+    const double* below = quad_normals.data() + j * per_row;
+    const double* here = below + per_row;
+    double* out = N + 3 * std::size_t(j) * nu;
+#pragma GCC ivdep
+    for (int i = 0; i < nu; ++i) {
+      const bool even = ((i + j) & 1) == 0;
+      double n[3];
+      for (int k = 0; k < 3; ++k) {
+        const int t0 = k * stride + i, t1 = (3 + k) * stride + i;
+        double sum = 0;
+        sum += even ? below[t0] : 0.0;
+        sum += below[t1];
+        sum += even ? below[t0 + 1] : 0.0;
+        sum += below[t1 + 1];
+        sum += here[t0];
+        sum += even ? here[t1] : 0.0;
+        sum += here[t0 + 1];
+        sum += even ? here[t1 + 1] : 0.0;
+        n[k] = sum;
+      }
+      const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+      out[3 * i] = len > 0 ? n[0] / len : 0.0;
+      out[3 * i + 1] = len > 0 ? n[1] / len : 0.0;
+      out[3 * i + 2] = len > 0 ? n[2] / len : 1.0;
+    }
   });
 }
 
 void compute_normals(const Model& m, const std::vector<Vec3>& x, std::vector<Vec3>& normal) {
-  std::vector<Vec3> triangle_normal;
-  compute_normals(m, x, normal, triangle_normal);
+  std::vector<double> quad_normals;
+  compute_normals(m, x, normal, quad_normals);
 }
 
 namespace {
@@ -111,7 +176,7 @@ void Simulation::accumulate_forces(bool implicit) {
   const Model& m = model_;
   State& s = state_;
   Workspace& w = ws_;
-  compute_normals(m, s.x, w.normal, w.triangle_normal);
+  compute_normals(m, s.x, w.normal, w.quad_normals);
   for_each_particle(m, [&](int i) { w.force[i].setZero(); });
   add_spring_forces(m, s, w, !implicit);
   add_gravity(m, w.force);

@@ -63,9 +63,6 @@ struct Model {
   std::array<StencilEdge, 8> stencil;  // the same springs, by offset (forces/springs.cpp)
   int threads = 1;                     // threads of the step (integrator.threads resolved)
   std::vector<std::array<int, 3>> triangles;
-  // Each particle's triangles, ascending: particle i's are
-  // particle_triangles[particle_triangle_start[i] .. particle_triangle_start[i + 1]).
-  std::vector<int> particle_triangle_start, particle_triangles;
   std::vector<std::array<int, 2>> triangle_pairs;  // triangles sharing an edge
   std::vector<Handle> handles;
   SurfaceKind contact_surface = SurfaceKind::None;
@@ -113,7 +110,8 @@ struct PocketAir {
 
 // Scratch arrays, reused every step: nothing is allocated per step.
 struct Workspace {
-  std::vector<Vec3> force, normal, triangle_normal, x_before, surface_normal;
+  std::vector<Vec3> force, normal, x_before, surface_normal;
+  std::vector<double> quad_normals;  // compute_normals' scratch
   std::vector<Sym> damping;           // each particle's damping on its own velocity, N·s/m
   std::vector<double> distance;       // signed distance to the contact surface
   std::vector<double> adhesion;       // |adhesion force| per particle, N
@@ -234,6 +232,6 @@ class Simulation {
 void compute_normals(const Model& m, const std::vector<Vec3>& x, std::vector<Vec3>& normal);
 // The same, with a scratch array for the triangles' normals (the step's: no allocation).
 void compute_normals(const Model& m, const std::vector<Vec3>& x, std::vector<Vec3>& normal,
-                     std::vector<Vec3>& triangle_normal);
+                     std::vector<double>& quad_normals);
 
 }  // namespace wetcloth

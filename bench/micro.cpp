@@ -9,6 +9,7 @@
 #include <utility>
 
 #include "src/detail.hpp"
+#include "src/forces/spring_edges.hpp"
 #include "src/spatial_hash.hpp"
 #include "wetcloth/scene.hpp"
 
@@ -142,6 +143,36 @@ void BM_springs(benchmark::State& st) {
     add_spring_forces(m, s, w, true);
   });
 }
+// The springs' kernel alone (forces/spring_edges.hpp): every forward edge of
+// the warm cloth, damped, in float or double, positions and velocities by
+// component. It is what float would speed up most; the step stays in double
+// (docs/architecture.md, "Precision").
+template <class Real>
+void BM_spring_edges(benchmark::State& st) {
+  const Simulation& sim = warm(st);
+  const Model& m = sim.model();
+  const int n = m.n;
+  std::vector<Real> cols(6 * std::size_t(n));
+  for (int a = 0; a < n; ++a)
+    for (int k = 0; k < 3; ++k) {
+      cols[k * n + a] = Real(sim.state().x[a][k]);
+      cols[(3 + k) * n + a] = Real(sim.state().v[a][k]);
+    }
+  const SpringColumns<Real> c{&cols[0],     &cols[n],     &cols[2 * n],
+                              &cols[3 * n], &cols[4 * n], &cols[5 * n]};
+  std::vector<Real> rows(std::size_t(8) * kSpringFields * m.nu);  // one row of each offset's edges
+  Real* out[8][kSpringFields];
+  for (int e = 0; e < 8; ++e)
+    for (int k = 0; k < kSpringFields; ++k)
+      out[e][k] = &rows[(e * kSpringFields + k) * std::size_t(m.nu)];
+  for (auto _ : st) {
+    for (int j = 0; j < m.nv; ++j)
+      for (int e = 0; e < 8; ++e)
+        if (j + m.stencil[e].dj < m.nv) spring_edge_row<Real, true>(m, c, m.stencil[e], j, out[e]);
+    benchmark::ClobberMemory();
+  }
+  report(st, sim);
+}
 void BM_gravity(benchmark::State& st) {
   stage(st, warm(st), false, [](const Model& m, State&, Workspace& w) { add_gravity(m, w.force); });
 }
@@ -204,6 +235,8 @@ void BM_normals(benchmark::State& st) {
 }
 
 BENCHMARK(BM_springs)->Apply(grids);
+BENCHMARK(BM_spring_edges<double>)->Apply(grids);
+BENCHMARK(BM_spring_edges<float>)->Apply(grids);
 BENCHMARK(BM_gravity)->Apply(grids);
 BENCHMARK(BM_viscous_damping)->Apply(grids);
 BENCHMARK(BM_air)->Apply(grids);

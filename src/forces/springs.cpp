@@ -12,7 +12,7 @@
 // particle's backward springs start at most two rows back.
 #include <functional>
 
-#include "../detail.hpp"
+#include "spring_edges.hpp"
 
 namespace wetcloth::detail {
 
@@ -21,56 +21,13 @@ namespace {
 constexpr int kReach = 2;          // the stencil's longest offset, in grid steps
 constexpr int kRing = kReach + 1;  // edge rows a thread keeps
 constexpr int kEdges = 8;          // forward offsets of the stencil
-constexpr int kFields = 9;         // force on the lower end (x y z), k_d u uᵀ (xx yy zz xy xz yz)
-
-struct Columns {
-  const double *px, *py, *pz, *vx, *vy, *vz;
-};
-
-// The particles i of a row whose spring at offset e is on the grid (given
-// that row j + dj is): the edge rows are zero outside, set once per call.
-inline std::pair<int, int> edge_span(const Model& m, const StencilEdge& st) {
-  return {std::max(0, -st.di), std::min(m.nu, m.nu - st.di)};
-}
-
-// One offset's edges starting in row j (j + dj < nv), into out[k][i].
-template <bool damped>
-void edge_row(const Model& m, const Columns& c, const StencilEdge& st, int j,
-              double* const out[kFields]) {
-  const int nu = m.nu;
-  const auto [lo, hi] = edge_span(m, st);
-  const int off = st.di + st.dj * nu, base = j * nu;
-  const double k_s = st.k, rest = st.rest, kd = damped ? st.damping : 0.0;
-#pragma GCC ivdep
-  for (int i = lo; i < hi; ++i) {
-    const int a = base + i, b = a + off;
-    const double dx = c.px[b] - c.px[a], dy = c.py[b] - c.py[a], dz = c.pz[b] - c.pz[a];
-    const double len = std::sqrt(dx * dx + dy * dy + dz * dz);
-    const double inv = len > 0 ? 1.0 / len : 0.0;  // a zero-length spring pulls nowhere
-    const double ux = dx * inv, uy = dy * inv, uz = dz * inv;
-    double t = k_s * (len - rest);
-    if constexpr (damped)
-      t += kd * ((c.vx[b] - c.vx[a]) * ux + (c.vy[b] - c.vy[a]) * uy + (c.vz[b] - c.vz[a]) * uz);
-    out[0][i] = t * ux;
-    out[1][i] = t * uy;
-    out[2][i] = t * uz;
-    if constexpr (damped) {
-      const double kx = kd * ux, ky = kd * uy;
-      out[3][i] = kx * ux;
-      out[4][i] = ky * uy;
-      out[5][i] = kd * uz * uz;
-      out[6][i] = kx * uy;
-      out[7][i] = kx * uz;
-      out[8][i] = ky * uz;
-    }
-  }
-}
 
 // Each particle of a row sums its springs: per offset the forward edge (+F)
 // and the backward one (-F, the same k_d u uᵀ), into sums[k][i].
 template <bool damped>
-void gather_row(const double* const fwd[kEdges][kFields], const double* const bwd[kEdges][kFields],
-                const int nu, double* const sums[kFields]) {
+void gather_row(const double* const fwd[kEdges][kSpringFields],
+                const double* const bwd[kEdges][kSpringFields], const int nu,
+                double* const sums[kSpringFields]) {
   const auto sum = [&](int k, auto sign) {
     double* __restrict out = sums[k];
 #pragma GCC ivdep
@@ -83,34 +40,34 @@ void gather_row(const double* const fwd[kEdges][kFields], const double* const bw
   };
   for (int k = 0; k < 3; ++k) sum(k, std::minus<>());
   if constexpr (damped)
-    for (int k = 3; k < kFields; ++k) sum(k, std::plus<>());
+    for (int k = 3; k < kSpringFields; ++k) sum(k, std::plus<>());
 }
 
 template <bool damped>
 void add_spring_forces(const Model& m, const State& s, Workspace& w) {
   const int n = m.n, nu = m.nu, stride = nu + 2 * kReach;
-  const std::size_t per_row = std::size_t(kEdges) * kFields * stride;
-  const std::size_t per_thread = kRing * per_row + kFields * stride;  // edge rows, then sums
-  w.soa.resize(6 * std::size_t(n) + kFields * stride + per_thread * m.threads);
+  const std::size_t per_row = std::size_t(kEdges) * kSpringFields * stride;
+  const std::size_t per_thread = kRing * per_row + kSpringFields * stride;  // edge rows, then sums
+  w.soa.resize(6 * std::size_t(n) + kSpringFields * stride + per_thread * m.threads);
   double* const X = w.soa.data();
   double* const zero_row = X + 6 * std::size_t(n);  // stands for edges above the first row
-  std::fill(zero_row, zero_row + kFields * stride, 0.0);
-  const Columns c{X, X + n, X + 2 * n, X + 3 * n, X + 4 * n, X + 5 * n};
-  constexpr int fields = damped ? kFields : 3;
+  std::fill(zero_row, zero_row + kSpringFields * stride, 0.0);
+  const SpringColumns<double> c{X, X + n, X + 2 * n, X + 3 * n, X + 4 * n, X + 5 * n};
+  constexpr int fields = damped ? kSpringFields : 3;
 
   to_columns(m, s.x, X);
   to_columns(m, s.v, X + 3 * std::size_t(n));
   for_each_row_block(m, [&](int j0, int j1, int thread) {
-    double* const ring = X + 6 * std::size_t(n) + kFields * stride + per_thread * thread;
-    double* sums[kFields];
-    for (int k = 0; k < kFields; ++k) sums[k] = ring + kRing * per_row + k * stride;
+    double* const ring = X + 6 * std::size_t(n) + kSpringFields * stride + per_thread * thread;
+    double* sums[kSpringFields];
+    for (int k = 0; k < kSpringFields; ++k) sums[k] = ring + kRing * per_row + k * stride;
     // Field k of offset e's edge row j, at its particle i = 0.
     const auto edges = [&](int j, int e, int k) {
-      return ring + (j % kRing) * per_row + (std::size_t(e) * kFields + k) * stride + kReach;
+      return ring + (j % kRing) * per_row + (std::size_t(e) * kSpringFields + k) * stride + kReach;
     };
     for (int slot = 0; slot < kRing; ++slot)
       for (int e = 0; e < kEdges; ++e) {
-        const auto [lo, hi] = edge_span(m, m.stencil[e]);
+        const auto [lo, hi] = spring_edge_span(m, m.stencil[e]);
         for (int k = 0; k < fields; ++k) {
           double* const row = edges(slot, e, k);
           std::fill(row - kReach, row + lo, 0.0);
@@ -120,15 +77,15 @@ void add_spring_forces(const Model& m, const State& s, Workspace& w) {
     for (int j = std::max(0, j0 - kReach); j < j1; ++j) {
       for (int e = 0; e < kEdges; ++e) {
         if (j + m.stencil[e].dj >= m.nv) continue;  // gathered from the zero row instead
-        double* out[kFields];
-        for (int k = 0; k < kFields; ++k) out[k] = edges(j, e, k);
-        edge_row<damped>(m, c, m.stencil[e], j, out);
+        double* out[kSpringFields];
+        for (int k = 0; k < kSpringFields; ++k) out[k] = edges(j, e, k);
+        spring_edge_row<double, damped>(m, c, m.stencil[e], j, out);
       }
       if (j < j0) continue;
       // Row j's particles gather: per offset, the edge starting here (force
       // +F) and the one ending here, which starts at (i - di, j - dj) (-F).
-      const double* fwd[kEdges][kFields];
-      const double* bwd[kEdges][kFields];
+      const double* fwd[kEdges][kSpringFields];
+      const double* bwd[kEdges][kSpringFields];
       for (int e = 0; e < kEdges; ++e) {
         const StencilEdge& st = m.stencil[e];
         for (int k = 0; k < fields; ++k) {

@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "common.hpp"
 #include "detail.hpp"
 
@@ -27,4 +29,35 @@ TEST(Surfaces, CollisionProjectsOutAndRemovesInwardVelocity) {
   detail::collide(sim.model(), s, nullptr);
   EXPECT_EQ(s.x[0].z(), 0.0);
   EXPECT_EQ(s.v[0], Vec3(0.5, 0, 0));
+}
+
+// The table alone takes a loop of its own, without branches; it must do what
+// the general loop does (here with a ball too far away to touch), to the bit,
+// touched flags and driven particles included.
+TEST(Surfaces, TableAloneCollidesAsTheGeneralLoopDoes) {
+  Params p = test::bare(6);
+  p.table.enabled = true;
+  p.handles["pin"].type = "pin";
+  p.handles["pin"].at = {0, 0};
+  Simulation table_only(p);
+  p.ball.enabled = true;
+  p.ball.center = {5, 5, 5};
+  Simulation with_ball(p);
+  ASSERT_TRUE(table_only.model().driven[0]);
+  State& a = table_only.state();
+  for (int i = 0; i < table_only.model().n; ++i) {
+    a.x[i].z() = 0.01 * std::sin(2.3 * i + 4);  // particle 0 below the table
+    a.v[i] = Vec3(std::cos(i), std::sin(1.7 * i), std::cos(0.9 * i));
+  }
+  State b = a;
+  std::vector<std::uint8_t> touched_a(a.x.size(), 7), touched_b(a.x.size(), 7);
+  detail::collide(table_only.model(), a, &touched_a);
+  detail::collide(with_ball.model(), b, &touched_b);
+  EXPECT_EQ(a.x, b.x);
+  EXPECT_EQ(a.v, b.v);
+  EXPECT_EQ(touched_a, touched_b);
+  EXPECT_LT(a.x[0].z(), 0);  // driven: never moved
+  int pushed = 0;
+  for (std::uint8_t t : touched_a) pushed += t == static_cast<std::uint8_t>(SurfaceKind::Table);
+  EXPECT_GT(pushed, 5);
 }

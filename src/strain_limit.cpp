@@ -111,8 +111,10 @@ void limit_strain(const Model& m, State& s, Workspace& w, double dt) {
   const auto& p = m.params.strain_limit;
   if (!p.enabled) return;
   update_strain_order(m, s, w);
+  // Where each particle the limiter moves started: its velocity follows at the end.
   w.x_before.resize(m.n);
-  for_each_particle(m, [&](int i) { w.x_before[i] = s.x[i]; });
+  w.strain_saved.resize(m.n, 0);  // zero between calls
+  w.strain_changed.clear();
   w.strain_delta.resize(m.n, Vec3::Zero());  // zero between levels
   w.strain_count.resize(m.n, 0);
   const auto& springs = w.strain_springs;
@@ -147,6 +149,11 @@ void limit_strain(const Model& m, State& s, Workspace& w, double dt) {
   // End of level l: each particle moves by the mean of its corrections.
   auto finish_level = [&](int l) {
     for (const int k : touched) {
+      if (!w.strain_saved[k]) {
+        w.strain_saved[k] = 1;
+        w.x_before[k] = s.x[k];
+        w.strain_changed.push_back(k);
+      }
       s.x[k] += w.strain_delta[k] / w.strain_count[k];
       w.strain_delta[k].setZero();
       w.strain_count[k] = 0;
@@ -155,7 +162,6 @@ void limit_strain(const Model& m, State& s, Workspace& w, double dt) {
     w.strain_moved.insert(w.strain_moved.end(), touched.begin(), touched.end());
     touched.clear();
   };
-  bool moved = false;
   for (int pass = 0; pass < p.passes; ++pass) {
     // The levels run in order, one after the other, but most springs are not
     // stretched. Only those stretched at the start of a pass, and the springs of
@@ -233,13 +239,14 @@ void limit_strain(const Model& m, State& s, Workspace& w, double dt) {
       }
       if (heap.empty() && !touched.empty()) finish_level(l);
     }
-    moved = moved || corrected;
     if (!corrected) break;
   }
-  if (!moved) return;
-  // Velocities follow the corrected positions.
+  // Velocities follow the corrected positions (only moved particles' change).
   const double inv_dt = 1.0 / dt;
-  for_each_particle(m, [&](int i) { s.v[i] += (s.x[i] - w.x_before[i]) * inv_dt; });
+  for (const int k : w.strain_changed) {
+    s.v[k] += (s.x[k] - w.x_before[k]) * inv_dt;
+    w.strain_saved[k] = 0;
+  }
 }
 
 }  // namespace wetcloth::detail

@@ -111,7 +111,7 @@ struct PocketAir {
 // Scratch arrays, reused every step: nothing is allocated per step.
 struct Workspace {
   std::vector<Vec3> force, normal, x_before, surface_normal;
-  std::vector<double> quad_normals;  // compute_normals' scratch
+  std::vector<double> quad_normals;   // compute_normals' scratch
   std::vector<Sym> damping;           // each particle's damping on its own velocity, N·s/m
   std::vector<double> distance;       // signed distance to the contact surface
   std::vector<double> adhesion;       // |adhesion force| per particle, N
@@ -142,6 +142,8 @@ struct Workspace {
   std::vector<std::uint8_t> strain_queued;     // per spring: in strain_heap
   std::vector<int> strain_heap, strain_touched;
   std::vector<int> strain_moved, strain_over;  // particles moved, springs stretched in a pass
+  std::vector<std::uint8_t> strain_saved;      // x_before holds where it started this call
+  std::vector<int> strain_changed;             // particles moved in this call
   Vec3 handle_force = Vec3::Zero();            // force the first pulling handle exerts, N
   // Self-collision spatial hash (counting sort by cell).
   std::vector<int> cell_start, cell_entries, particle_cell;

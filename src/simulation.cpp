@@ -141,7 +141,6 @@ void Simulation::reset() {
   ws_.row_max.assign(model_.nv, 0.0);
   ws_.distance.assign(n, kInf);
   ws_.adhesion.assign(n, 0.0);
-  ws_.normal_force.assign(n, 0.0);
   ws_.border.assign(n, 0);
   ws_.pocket.assign(n, -1);
   ws_.colliding.assign(n, 0);
@@ -186,7 +185,6 @@ void Simulation::accumulate_forces(bool implicit) {
   add_adhesion(m, s, w);
   add_self_collision(m, s, w, !implicit);
   add_handle_forces(m, s, w);
-  for_each_particle(m, [&](int i) { w.normal_force[i] = w.force[i].dot(w.surface_normal[i]); });
 }
 
 void Simulation::step() {

@@ -233,7 +233,6 @@ TEST(Friction, NeverReversesOrGrowsAndStopsASlowParticle) {
   detail::update_contact(m, s, w);
   std::fill(w.force.begin(), w.force.end(), Vec3::Zero());
   detail::add_adhesion(m, s, w);
-  for (int i = 0; i < m.n; ++i) w.normal_force[i] = w.force[i].dot(w.surface_normal[i]);
   std::vector<std::uint8_t> touched(m.n, 0);
   const double dt = 5e-5;
   for (int i = 0; i < m.n; ++i) s.v[i] = Vec3(0.01 * (i % 7) - 0.03, 0.002 * (i % 5), 0);

@@ -115,7 +115,6 @@ struct Workspace {
   std::vector<Sym> damping;           // each particle's damping on its own velocity, N·s/m
   std::vector<double> distance;       // signed distance to the contact surface
   std::vector<double> adhesion;       // |adhesion force| per particle, N
-  std::vector<double> normal_force;   // total force · n_s before friction, N
   std::vector<std::uint8_t> border;   // border of the contact region
   std::vector<int> pocket;            // air pocket of each particle, -1 none
   std::vector<PocketAir> pocket_air;  // per pocket: how its deficit answers V_sum

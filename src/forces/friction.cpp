@@ -20,8 +20,8 @@ void apply_friction(const Model& m, State& s, const Workspace& w,
     Vec3 n;
     if (s.contact[i]) {
       n = w.surface_normal[i];
-      // normal_force holds (all forces)·n_s, adhesion included (it is -adhesion·n_s).
-      const double pressing = -(w.normal_force[i] + w.adhesion[i]);
+      // w.force holds the step's forces, adhesion included (it is -adhesion·n_s).
+      const double pressing = -(w.force[i].dot(n) + w.adhesion[i]);
       load = w.adhesion[i] + (with_load && pressing > 0 ? pressing : 0.0);
     } else if (touched[i] != 0 && with_load) {
       n = query_surface(m.params, static_cast<SurfaceKind>(touched[i]), s.x[i]).normal;

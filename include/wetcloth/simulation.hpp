@@ -147,7 +147,8 @@ struct Workspace {
   // Self-collision spatial hash (counting sort by cell).
   std::vector<int> cell_start, cell_entries, particle_cell;
   std::vector<std::array<long long, 3>> cell_coord;
-  std::vector<std::uint8_t> colliding;
+  std::vector<std::uint8_t> colliding;  // in a pair within d_t (the pairs' ends, listed once)
+  std::vector<int> colliding_particles;
   std::vector<CollisionPair> collision_pairs;
   // Self-collision candidates: pairs (i < j, sorted) whose anchors are within
   // candidates_radius; the particles searched again this step, and their flags.

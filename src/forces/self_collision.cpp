@@ -85,9 +85,12 @@ void add_self_collision(const Model& m, const State& s, Workspace& w, bool with_
       });
     std::sort(w.candidates.begin(), w.candidates.end());
   }
+  // Flags of colliding particles: last step's cleared through last step's
+  // pairs, not over the whole cloth.
   auto& colliding = w.colliding;
-  std::fill(colliding.begin(), colliding.end(), 0);
+  for (const CollisionPair& c : w.collision_pairs) colliding[c.i] = colliding[c.j] = 0;
   w.collision_pairs.clear();
+  w.colliding_particles.clear();
   // Which candidates are within d_t, in parallel; then the few that are, in order.
   const int count = static_cast<int>(w.candidates.size());
   w.candidate_close.resize(count);
@@ -104,14 +107,16 @@ void add_self_collision(const Model& m, const State& s, Workspace& w, bool with_
     const Vec3 fi = (k * (dt_dist - len) / len) * d;
     w.force[i] += fi;
     w.force[j] -= fi;
-    colliding[i] = colliding[j] = 1;
+    for (const int q : {i, j})
+      if (!colliding[q]) {
+        colliding[q] = 1;
+        w.colliding_particles.push_back(q);
+      }
     w.collision_pairs.push_back({i, j, d / len, {}});
   }
   if (!with_damping) return;  // implicit Euler takes it into its matrix
-  // The paper's friction-like damping -k_f v on every colliding particle.
-  for_each_particle(m, [&](int i) {
-    if (colliding[i]) w.force[i] -= p.damping * s.v[i];
-  });
+  // The paper's friction-like damping -k_f v on every colliding particle, once.
+  for (const int q : w.colliding_particles) w.force[q] -= p.damping * s.v[q];
 }
 
 }  // namespace wetcloth::detail

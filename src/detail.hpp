@@ -35,7 +35,9 @@ inline SurfaceHit query_surface(const Params& p, SurfaceKind kind, const Vec3& x
 
 // surfaces.cpp: projects particles out of every obstacle and removes inward normal velocity.
 // touched[i] is the obstacle it was pushed out of (SurfaceKind), or None.
-void collide(const Model& m, State& s, std::vector<std::uint8_t>* touched);
+// With `only`, just those particles (the others are known to be outside).
+void collide(const Model& m, State& s, std::vector<std::uint8_t>* touched,
+             const std::vector<int>* only = nullptr);
 // Distances to the contact surface, contact flags and the contact border.
 void update_contact(const Model& m, State& s, Workspace& w);
 

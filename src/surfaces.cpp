@@ -32,14 +32,15 @@ void collide_with_table(const Model& m, State& s, std::uint8_t* touched) {
 
 }  // namespace
 
-void collide(const Model& m, State& s, std::vector<std::uint8_t>* touched) {
+void collide(const Model& m, State& s, std::vector<std::uint8_t>* touched,
+             const std::vector<int>* only) {
   const Params& p = m.params;
-  if (p.table.enabled && !p.ball.enabled)
+  if (!only && p.table.enabled && !p.ball.enabled)
     return touched ? collide_with_table<true>(m, s, touched->data())
                    : collide_with_table<false>(m, s, nullptr);
   const SurfaceKind kinds[] = {SurfaceKind::Table, SurfaceKind::Ball};
   const bool enabled[] = {p.table.enabled, p.ball.enabled};
-  for_each_particle(m, [&](int i) {
+  auto one = [&](int i) {
     if (touched) (*touched)[i] = 0;
     if (m.driven[i]) return;
     for (int o = 0; o < 2; ++o) {
@@ -51,7 +52,11 @@ void collide(const Model& m, State& s, std::vector<std::uint8_t>* touched) {
       if (vn < 0) s.v[i] -= vn * h.normal;
       if (touched) (*touched)[i] = static_cast<std::uint8_t>(kinds[o]);
     }
-  });
+  };
+  if (only)
+    for (const int i : *only) one(i);
+  else
+    for_each_particle(m, one);
 }
 
 void update_contact(const Model& m, State& s, Workspace& w) {

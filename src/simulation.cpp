@@ -282,7 +282,8 @@ void Simulation::finish_step(double h) {
   if (m.params.strain_limit.enabled) {
     limit_strain(m, s, w, h);
     // On the table alone only the particles strain limiting moved can be
-    // inside: collide put the others exactly on it (z - (z - H) is H). A ball's
+    // inside: collide put the others on it (z - (z - H) is exactly H when H is
+    // 0 or z within a factor 2 of it, as a step's motion keeps it). A ball's
     // projection can leave one an ulp inside, and two obstacles can push a
     // particle out of one into the other: then all are looked at again.
     const bool table_alone = m.params.table.enabled && !m.params.ball.enabled;

@@ -152,7 +152,7 @@ struct Workspace {
   std::vector<CollisionPair> collision_pairs;
   // Self-collision candidates: pairs (i < j, sorted) whose anchors are within
   // candidates_radius; the particles searched again this step, and their flags.
-  std::vector<std::array<int, 2>> candidates;
+  std::vector<std::array<int, 2>> candidates, candidates_merged;
   std::vector<int> candidate_movers;
   std::vector<std::uint8_t> candidate_moved;
   std::vector<std::vector<std::array<int, 2>>>

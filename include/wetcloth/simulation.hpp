@@ -151,7 +151,8 @@ struct Workspace {
   std::vector<int> colliding_particles;
   std::vector<CollisionPair> collision_pairs;
   // Self-collision candidates: pairs (i < j, sorted) whose anchors are within
-  // candidates_radius; the particles searched again this step, and their flags.
+  // candidates_radius; the particles searched again this step, and their flags
+  // (zero between steps).
   std::vector<std::array<int, 2>> candidates, candidates_merged;
   std::vector<int> candidate_movers;
   std::vector<std::uint8_t> candidate_moved;

@@ -70,23 +70,25 @@ void add_self_collision(const Model& m, const State& s, Workspace& w, bool with_
     std::sort(w.candidates.begin(), w.candidates.end());
   } else if (!movers.empty()) {
     // The movers' pairs, dropped and searched again from their new anchors.
+    // Their flags are set here and cleared at the end: no pass over the cloth.
     auto& moved = w.candidate_moved;
-    moved.assign(m.n, 0);
+    auto& list = w.candidates;
+    moved.resize(m.n, 0);
     for (int i : movers) {
       moved[i] = 1;
       anchor[i] = s.x[i];
     }
     // The rest stays sorted; the new pairs are sorted alone and merged in:
     // a flat cloth at 401 x 401 lists a million pairs, too many to sort again.
-    std::erase_if(w.candidates, [&](const auto& c) { return moved[c[0]] || moved[c[1]]; });
-    const auto kept = static_cast<std::ptrdiff_t>(w.candidates.size());
+    std::erase_if(list, [&](const auto& c) { return moved[c[0]] || moved[c[1]]; });
+    const auto kept = static_cast<std::ptrdiff_t>(list.size());
     build_hash(anchor, 2 * radius, w, m.threads);
     for (int i : movers)
       for_each_near(anchor, radius, w, anchor[i], i, -1, [&](int j, const Vec3&, double len2) {
         if ((moved[j] && j < i) || len2 == 0 || near_in_grid(i, j)) return;  // j < i: found from j
-        w.candidates.push_back({std::min(i, j), std::max(i, j)});
+        list.push_back({std::min(i, j), std::max(i, j)});
       });
-    auto& list = w.candidates;
+    for (int i : movers) moved[i] = 0;
     std::sort(list.begin() + kept, list.end());
     w.candidates_merged.resize(list.size());  // a scratch list: no allocation once warm
     std::merge(list.begin(), list.begin() + kept, list.begin() + kept, list.end(),

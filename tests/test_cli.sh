@@ -89,5 +89,17 @@ expect_bad_bench grid2   2 --grids 2
 expect_bad_bench scene   2 --scene no-such-scene --grids 9
 expect_bad_bench blow-up 3 --scene hang --set integrator.dt=2e-3 --duration 1 --repetitions 1
 
+# converge: three steps of a small cloth, a row each; the table gives an order.
+"$W" converge pull-straight --set 'cloth.resolution=[9,9]' --duration 0.02 --dt 4e-5,2e-5,1e-5 \
+  --out "$T/conv" >"$T/conv.txt" 2>&1; code=$?
+[ $code -eq 0 ] && ok "converge exits 0" || bad "converge exit code $code: $(cat "$T/conv.txt")"
+[ "$(cut -d, -f1,2 "$T/conv/converge.csv" | tr '\n' ' ')" = "dt_s,status 4e-05,ok 2e-05,ok 1e-05,ok " ] &&
+  ok "converge.csv: a row per step, largest first" || bad "converge.csv: $(cat "$T/conv/converge.csv")"
+grep -q "^order p" "$T/conv.txt" && grep -q "^limit dt->0" "$T/conv.txt" && ok "converge: order and limit" ||
+  bad "converge table: $(cat "$T/conv.txt")"
+"$W" converge pull-straight --dt 5e-5,5e-5 --out "$T/conv2" >/dev/null 2>"$T/err"; code=$?
+[ $code -eq 2 ] && [ ! -e "$T/conv2" ] && grep -q -- "--dt" "$T/err" && ok "converge: a step given twice exits 2" ||
+  bad "converge twice: exit $code, $(cat "$T/err")"
+
 echo "$passes passed, $fails failed"
 [ $fails -eq 0 ]

@@ -1,9 +1,11 @@
-// The integrators of MODEL.md section 8, and the step's threads.
+// The integrators of MODEL.md section 8, the step's threads, and how a result
+// converges as the step shrinks.
 #include <gtest/gtest.h>
 
 #include <cmath>
 
 #include "common.hpp"
+#include "wetcloth/convergence.hpp"
 #include "wetcloth/simulation.hpp"
 
 using namespace wetcloth;
@@ -107,4 +109,18 @@ TEST(Threads, TwoThreadsGiveTheSameBitsAsOne) {
       ASSERT_EQ(sims[0].state().v[i], sims[1].state().v[i]) << integrator << " particle " << i;
     }
   }
+}
+
+TEST(Convergence, RichardsonRecoversTheOrderAndTheLimit) {
+  // f(Δt) = f* + C Δt^p at Δt = 4e-5, 2e-5, 1e-5.
+  for (const double p : {1.0, 2.0}) {
+    auto f = [p](double dt) { return 0.07 - 3.0 * std::pow(dt * 1e4, p); };
+    const Extrapolation e = richardson(f(4e-5), f(2e-5), f(1e-5), 2.0);
+    EXPECT_NEAR(e.order, p, 1e-9);
+    EXPECT_NEAR(e.limit, 0.07, 1e-12);
+  }
+  // Differences that grow, or change sign, show no order.
+  EXPECT_TRUE(std::isnan(richardson(1.0, 1.1, 1.3, 2.0).order));
+  EXPECT_TRUE(std::isnan(richardson(1.0, 1.1, 1.05, 2.0).limit));
+  EXPECT_TRUE(std::isnan(richardson(1.0, 1.0, 1.0, 2.0).order));
 }

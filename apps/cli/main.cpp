@@ -7,6 +7,7 @@
 #include <unistd.h>
 
 #include "bench.hpp"
+#include "converge.hpp"
 #include "run.hpp"
 #include "scene_options.hpp"
 #include "sweep.hpp"
@@ -52,6 +53,7 @@ int main(int argc, char** argv) {
 
   auto sweep_command = cli::add_sweep_command(app);
   auto bench_command = cli::add_bench_command(app);
+  auto converge_command = cli::add_converge_command(app);
 #ifdef WETCLOTH_VIEWER
   auto viewer_command = viewer::add_commands(app);  // view, render
 #endif
@@ -64,6 +66,7 @@ int main(int argc, char** argv) {
 #endif
     if (const int code = sweep_command(); code >= 0) return code;
     if (const int code = bench_command(); code >= 0) return code;
+    if (const int code = converge_command(); code >= 0) return code;
     if (*scenes) {
       for (const auto& s : builtin_scenes()) std::printf("%-14s %s\n", s.name.c_str(), s.description.c_str());
       return 0;

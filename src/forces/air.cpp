@@ -219,42 +219,57 @@ void add_air_pressure(const Model& m, const State& s, Workspace& w) {
   });
 }
 
-// Backward Euler for the air term alone. Linearised, the air force is
-// F_i = -ΔP a_i with dΔP = c dV_sum and dV_sum = Σ_j b_j·dx_j (b_j = A_j n_s),
-// a rank-one stiffness per pocket, so (I + Δt² c M⁻¹ a bᵀ) v = v* is solved
-// exactly by Sherman-Morrison in O(n). Without it the air film's kHz ringing
-// and the follower direction of eq. 3 make explicit steps blow up.
+// Backward Euler for the air term alone: the force over the step is the one of
+// the deficit at its end. Linearised, ΔP_end = ΔP e^(-Δt/τ) + c ΔV_sum with
+// ΔV_sum = Δt Σ_j b_j·v_j (b_j = A_j n_s) and c = stiffness(): the deficit the
+// step started with seeps away by e^(-Δt/τ) over it, as in exchange(), and the
+// growth of V_sum adds to it. The explicit step applied ΔP, so each particle
+// gets back Δt M⁻¹ a_i ΔP (1 - e^(-Δt/τ)) (without it the suction was too
+// strong by about Δt/τ: 19 % at 5e-5 s on pull-straight, whose tent rose that
+// much too slowly), and the growth is a rank-one stiffness per pocket:
+// (I + Δt² c M⁻¹ a bᵀ) v = v*, solved exactly by Sherman-Morrison in O(n).
+// Without it the air film's kHz ringing and the follower direction of eq. 3
+// make explicit steps blow up.
 void correct_air_implicitly(const Model& m, State& s, Workspace& w, double dt) {
   const std::size_t pockets = w.pocket_air.size();
   if (pockets == 0) return;
-  // Per pocket Σ b·v and Σ b·M⁻¹a: by rows on the threads for one pocket, in
-  // particle order for the pockets of `vented`.
-  auto add_terms = [&](int i, double* sums) {
-    const Vec3 b = m.area[i] * w.surface_normal[i];
-    sums[0] += b.dot(s.v[i]);
-    sums[1] += m.inv_mass[i] * b.dot(w.air_direction[i]);
+  const double p_atm = m.params.air.p_atm;
+  // Per pocket: Σ b·v (with the seeped deficit given back), Σ b·M⁻¹a, and the
+  // share of the deficit that seeps away over the step.
+  w.pocket_sums.assign(3 * pockets, 0.0);
+  for (std::size_t k = 0; k < pockets; ++k)
+    w.pocket_sums[3 * k + 2] = -std::expm1(-dt * w.pocket_air[k].seep_rate);
+  auto given_back = [&](int i, int k) {  // Δt ΔP (1 - e^(-Δt/τ)), a velocity per unit M⁻¹a
+    return dt * (p_atm - s.pocket_pressure[i]) * w.pocket_sums[3 * k + 2];
   };
-  w.pocket_sums.assign(2 * pockets, 0.0);
+  auto add_terms = [&](int i, int k, double* sums) {
+    const Vec3 b = m.area[i] * w.surface_normal[i];
+    const double b_a = m.inv_mass[i] * b.dot(w.air_direction[i]);
+    sums[0] += b.dot(s.v[i]) + given_back(i, k) * b_a;
+    sums[1] += b_a;
+  };
+  // By rows on the threads for one pocket, in particle order for the pockets of `vented`.
   if (pockets == 1) {
     const auto sums = ordered_sums<2>(m, w, [&](int j) {
       std::array<double, 2> row{};
       for (int i = j * m.nu; i < (j + 1) * m.nu; ++i)
-        if (w.pocket[i] == 0) add_terms(i, row.data());
+        if (w.pocket[i] == 0) add_terms(i, 0, row.data());
       return row;
     });
     std::copy(sums.begin(), sums.end(), w.pocket_sums.begin());
   } else {
     for (int i = 0; i < m.n; ++i)
-      if (w.pocket[i] >= 0) add_terms(i, &w.pocket_sums[2 * w.pocket[i]]);
+      if (const int k = w.pocket[i]; k >= 0) add_terms(i, k, &w.pocket_sums[3 * k]);
   }
   for (std::size_t k = 0; k < pockets; ++k) {
     const double c = dt * dt * stiffness(w.pocket_air[k], dt);
-    w.pocket_sums[2 * k] = c * w.pocket_sums[2 * k] / (1.0 + c * w.pocket_sums[2 * k + 1]);
+    w.pocket_sums[3 * k] = c * w.pocket_sums[3 * k] / (1.0 + c * w.pocket_sums[3 * k + 1]);
   }
   for_each_particle(m, [&](int i) {
     const int k = w.pocket[i];
-    if (k < 0 || w.pocket_sums[2 * k] == 0) return;
-    s.v[i] -= (w.pocket_sums[2 * k] * m.inv_mass[i]) * w.air_direction[i];
+    if (k < 0) return;
+    const double dv = given_back(i, k) - w.pocket_sums[3 * k];
+    if (dv != 0) s.v[i] += (dv * m.inv_mass[i]) * w.air_direction[i];
   });
 }
 

@@ -1,11 +1,9 @@
 #include "converge.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <mutex>
 #include <thread>
 
 #include "run.hpp"
@@ -76,11 +74,7 @@ std::function<int()> add_converge_command(CLI::App& app) {
       c.dt = dt;
       c.name = "dt_" + format_number(dt);
       std::vector<std::string> sets = o->scene.overrides();
-      if (!overrides_key(sets, "integrator.threads")) {  // the cores shared out, as in sweep
-        const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
-        sets.insert(sets.begin(),
-                    "integrator.threads=" + std::to_string(std::max(1u, cores / o->jobs)));
-      }
+      share_cores(sets, o->jobs);
       sets.push_back("integrator.dt=" + format_number(dt));
       c.params = load_scene(o->scene.scene, sets);
       cases.push_back(std::move(c));
@@ -90,23 +84,15 @@ std::function<int()> add_converge_command(CLI::App& app) {
                              : fs::path(o->out);
     fs::create_directories(out);
 
-    std::atomic<std::size_t> next{0};
-    std::mutex print;
-    auto worker = [&] {
-      for (std::size_t i; (i = next++) < cases.size();) {
-        Case& c = cases[i];
-        c.result = run_scene(c.params, out / c.name, false);
-        if (o->quiet) continue;
-        std::lock_guard<std::mutex> lock(print);
-        std::printf("dt %-10s %s  (%.1f s wall)\n", format_number(c.dt).c_str(),
-                    c.result.code == kOk ? "ok" : "BLEW UP", c.result.wall_seconds);
-        std::fflush(stdout);
-      }
-    };
-    std::vector<std::thread> pool;
-    for (unsigned t = 0; t < std::min<std::size_t>(o->jobs, cases.size()); ++t)
-      pool.emplace_back(worker);
-    for (auto& t : pool) t.join();
+    std::vector<std::pair<Params, fs::path>> runs;
+    for (const auto& c : cases) runs.emplace_back(c.params, out / c.name);
+    run_all(runs, o->jobs, [&](std::size_t i, const RunResult& r) {
+      cases[i].result = r;
+      if (o->quiet) return;
+      std::printf("dt %-10s %s  (%.1f s wall)\n", format_number(cases[i].dt).c_str(),
+                  r.code == kOk ? "ok" : "BLEW UP", r.wall_seconds);
+      std::fflush(stdout);
+    });
 
     std::string csv = "dt_s,status,wall_s";
     for (const auto& c : metrics_columns()) csv += "," + c;

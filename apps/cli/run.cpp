@@ -1,10 +1,15 @@
 #include "run.hpp"
 
+#include <algorithm>
+#include <atomic>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <mutex>
 #include <nlohmann/json.hpp>
+#include <thread>
 
+#include "scene_options.hpp"
 #include "wetcloth/output.hpp"
 #include "wetcloth/scene.hpp"
 
@@ -100,6 +105,31 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress) {
   s["final"] = metrics_json(r.final);
   write_file_atomic(out / "summary.json", s.dump(2) + "\n");
   return r;
+}
+
+void share_cores(std::vector<std::string>& sets, unsigned jobs) {
+  if (overrides_key(sets, "integrator.threads")) return;
+  const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
+  sets.insert(sets.begin(), "integrator.threads=" + std::to_string(std::max(1u, cores / jobs)));
+}
+
+std::vector<RunResult> run_all(const std::vector<std::pair<Params, fs::path>>& runs, unsigned jobs,
+                               const std::function<void(std::size_t, const RunResult&)>& done) {
+  std::vector<RunResult> results(runs.size());
+  std::atomic<std::size_t> next{0};
+  std::mutex lock;
+  auto worker = [&] {
+    for (std::size_t i; (i = next++) < runs.size();) {
+      results[i] = run_scene(runs[i].first, runs[i].second, false);
+      std::lock_guard<std::mutex> hold(lock);
+      done(i, results[i]);
+    }
+  };
+  std::vector<std::thread> pool;
+  for (std::size_t t = 0; t < std::min<std::size_t>(std::max(1u, jobs), runs.size()); ++t)
+    pool.emplace_back(worker);
+  for (auto& t : pool) t.join();
+  return results;
 }
 
 }  // namespace wetcloth::cli

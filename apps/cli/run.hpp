@@ -2,7 +2,9 @@
 #pragma once
 
 #include <filesystem>
+#include <functional>
 #include <string>
+#include <vector>
 
 #include "wetcloth/params.hpp"
 #include "wetcloth/simulation.hpp"
@@ -13,7 +15,7 @@ enum ExitCode { kOk = 0, kError = 1, kBadInput = 2, kBlowUp = 3 };
 
 struct RunResult {
   int code = kOk;
-  std::string message;      // why it stopped, when it failed
+  std::string message;  // why it stopped, when it failed
   Metrics final;
   double peak_deficit_pa = 0;
   double time_to_5cm_s = -1;  // first time the handle is 5 cm up; -1: never
@@ -22,5 +24,16 @@ struct RunResult {
 };
 
 RunResult run_scene(const Params& p, const std::filesystem::path& out, bool progress);
+
+// The override that shares the cores between `jobs` runs at once, put first
+// in `sets` unless the user chose the step's threads (more threads than cores
+// only wait).
+void share_cores(std::vector<std::string>& sets, unsigned jobs);
+
+// Runs every (params, folder) `jobs` at a time; done(i) is called for each as
+// it ends, one call at a time. Returns the results in the order given.
+std::vector<RunResult> run_all(const std::vector<std::pair<Params, std::filesystem::path>>& runs,
+                               unsigned jobs,
+                               const std::function<void(std::size_t, const RunResult&)>& done);
 
 }  // namespace wetcloth::cli

@@ -1,10 +1,8 @@
 #include "sweep.hpp"
 
 #include <algorithm>
-#include <atomic>
 #include <cstdio>
 #include <filesystem>
-#include <mutex>
 #include <sstream>
 #include <thread>
 #include <unistd.h>
@@ -109,12 +107,7 @@ std::function<int()> add_sweep_command(CLI::App& app) {
         c.air_model = air;
         c.humidity = w;
         std::vector<std::string> sets = o->scene.overrides();
-        // The cores are shared out between the cases run at once, unless the
-        // user chose the step's threads: more threads than cores only wait.
-        if (!overrides_key(sets, "integrator.threads")) {
-          const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
-          sets.insert(sets.begin(), "integrator.threads=" + std::to_string(std::max(1u, cores / o->jobs)));
-        }
+        share_cores(sets, o->jobs);
         sets.push_back("cloth.humidity=" + format_number(w));
         sets.push_back("air.model=\"" + air + "\"");
         c.params = load_scene(o->scene.scene, sets);
@@ -123,23 +116,16 @@ std::function<int()> add_sweep_command(CLI::App& app) {
     const fs::path out = o->out.empty() ? fs::path("out") / (base.name + "-sweep") : fs::path(o->out);
     fs::create_directories(out);
 
-    std::atomic<std::size_t> next{0};
-    std::mutex print;
-    auto worker = [&] {
-      for (std::size_t i; (i = next++) < cases.size();) {
-        Case& c = cases[i];
-        c.result = run_scene(c.params, out / c.name, false);
-        if (o->quiet) continue;
-        std::lock_guard<std::mutex> lock(print);
-        std::printf("%-22s %s  handle %.4f m  contact %.5f m²  peak deficit %.1f Pa  (%.1f s wall)\n",
-                    c.name.c_str(), c.result.code == kOk ? "ok     " : "BLEW UP", c.result.final.handle_height_m,
-                    c.result.final.contact_area_m2, c.result.peak_deficit_pa, c.result.wall_seconds);
-        std::fflush(stdout);
-      }
-    };
-    std::vector<std::thread> pool;
-    for (unsigned t = 0; t < std::min<std::size_t>(o->jobs, cases.size()); ++t) pool.emplace_back(worker);
-    for (auto& t : pool) t.join();
+    std::vector<std::pair<Params, fs::path>> runs;
+    for (const auto& c : cases) runs.emplace_back(c.params, out / c.name);
+    run_all(runs, o->jobs, [&](std::size_t i, const RunResult& r) {
+      cases[i].result = r;
+      if (o->quiet) return;
+      std::printf("%-22s %s  handle %.4f m  contact %.5f m²  peak deficit %.1f Pa  (%.1f s wall)\n",
+                  cases[i].name.c_str(), r.code == kOk ? "ok     " : "BLEW UP", r.final.handle_height_m,
+                  r.final.contact_area_m2, r.peak_deficit_pa, r.wall_seconds);
+      std::fflush(stdout);
+    });
     write_file_atomic(out / "sweep.csv", sweep_csv(cases));
 
     int code = kOk;

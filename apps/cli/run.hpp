@@ -1,4 +1,4 @@
-// Running one scene into an output folder (shared by `run` and `sweep`).
+// Running scenes into output folders: one (`run`), or many at once (`sweep`, `converge`).
 #pragma once
 
 #include <filesystem>

@@ -29,6 +29,44 @@ void make_tent(Simulation& sim, double h, double radius) {
   }
 }
 
+// The air's time constant τ = V_sum / (P_atm δ A_sum) in the current state.
+double air_time_constant(const Simulation& sim) {
+  const Model& m = sim.model();
+  const State& s = sim.state();
+  double a_sum = 0;
+  for (int i = 0; i < m.n; ++i)
+    if (!s.contact[i]) a_sum += m.area[i];
+  return s.air_volume / (m.params.air.p_atm * permeability(m.params) * a_sum);
+}
+
+// A 2 cm tent on the flat cloth, its air at atmospheric pressure, then grown
+// at a steady rate (about 100 Pa of deficit) for 30 τ in steps of
+// τ / steps_per_tau, each followed by update_air.
+struct GrowingTent {
+  double height, dt, rise, volume_before_last_step;
+};
+GrowingTent grow_tent_steadily(Simulation& sim, double steps_per_tau) {
+  const Model& m = sim.model();
+  State& s = sim.state();
+  Workspace& w = const_cast<Workspace&>(sim.workspace());
+  GrowingTent t{0.02, 0, 0, 0};
+  make_tent(sim, t.height, 0.08);
+  detail::update_contact(m, s, w);
+  detail::update_air(m, s, w, 0.0);
+  s.air_atm_volume = s.air_volume;
+  const double tau = air_time_constant(sim);
+  t.dt = tau / steps_per_tau;
+  t.rise = 1e-3 * t.height / tau;
+  for (int k = 0; k * t.dt < 30 * tau; ++k) {
+    t.volume_before_last_step = s.air_volume;
+    t.height += t.rise * t.dt;
+    make_tent(sim, t.height, 0.08);
+    detail::update_contact(m, s, w);
+    detail::update_air(m, s, w, t.dt);
+  }
+  return t;
+}
+
 }  // namespace
 
 TEST(Adhesion, Equation13AtFullHumidity) {
@@ -109,11 +147,7 @@ TEST(Air, PocketHeldStillRelaxesWithTheModelsTimeConstant) {
   Workspace& w = const_cast<Workspace&>(sim.workspace());
   detail::update_contact(m, s, w);
   detail::update_air(m, s, w, 0.0);
-  const double v_sum = s.air_volume;
-  double a_sum = 0;
-  for (int i = 0; i < m.n; ++i)
-    if (!s.contact[i]) a_sum += m.area[i];
-  const double tau = v_sum / (m.params.air.p_atm * permeability(m.params) * a_sum);
+  const double v_sum = s.air_volume, tau = air_time_constant(sim);
   s.air_atm_volume = v_sum * (1 - 500 / m.params.air.p_atm);  // a 500 Pa deficit, below P_b
   const double dt = tau / 7;
   for (int k = 1; k <= 20; ++k) {
@@ -131,29 +165,9 @@ TEST(Air, GrowingTentLagsByRateTimesTimeConstant) {
   for (const double steps_per_tau : {10.0, 0.1}) {
     Simulation sim = flat_on_table(0.5);
     const Model& m = sim.model();
-    State& s = sim.state();
-    Workspace& w = const_cast<Workspace&>(sim.workspace());
-    double h = 0.02;
-    make_tent(sim, h, 0.08);
-    detail::update_contact(m, s, w);
-    detail::update_air(m, s, w, 0.0);
-    s.air_atm_volume = s.air_volume;
-    auto tau = [&] {
-      double a_sum = 0;
-      for (int i = 0; i < m.n; ++i)
-        if (!s.contact[i]) a_sum += m.area[i];
-      return s.air_volume / (m.params.air.p_atm * permeability(m.params) * a_sum);
-    };
-    const double tau0 = tau(), dt = tau0 / steps_per_tau, rise = 1e-3 * h / tau0;  // ~100 Pa
-    double v_before = 0;
-    for (int k = 0; k * dt < 30 * tau0; ++k) {
-      v_before = s.air_volume;
-      h += rise * dt;
-      make_tent(sim, h, 0.08);
-      detail::update_contact(m, s, w);
-      detail::update_air(m, s, w, dt);
-    }
-    const double lag = (s.air_volume - v_before) / dt * tau();
+    const State& s = sim.state();
+    const GrowingTent t = grow_tent_steadily(sim, steps_per_tau);
+    const double lag = (s.air_volume - t.volume_before_last_step) / t.dt * air_time_constant(sim);
     const double deficit = m.params.air.p_atm - s.inner_pressure;
     EXPECT_NEAR(deficit, m.params.air.p_atm * lag / s.air_volume, 0.02 * deficit) << steps_per_tau;
     EXPECT_GT(deficit, 20) << steps_per_tau;
@@ -173,26 +187,12 @@ TEST(Air, OneStepFeelsTheDeficitAtItsEnd) {
     const Model& m = sim.model();
     State& s = sim.state();
     Workspace& w = const_cast<Workspace&>(sim.workspace());
-    double h = 0.02;
-    make_tent(sim, h, 0.08);
-    detail::update_contact(m, s, w);
-    detail::update_air(m, s, w, 0.0);
-    s.air_atm_volume = s.air_volume;
-    double a_sum = 0;
-    for (int i = 0; i < m.n; ++i)
-      if (!s.contact[i]) a_sum += m.area[i];
-    const double tau = s.air_volume / (m.params.air.p_atm * permeability(m.params) * a_sum);
-    const double dt = tau / steps_per_tau, rise = 1e-3 * h / tau;
-    for (int k = 0; k * dt < 30 * tau; ++k) {  // steady growth, as in the test above
-      h += rise * dt;
-      make_tent(sim, h, 0.08);
-      detail::update_contact(m, s, w);
-      detail::update_air(m, s, w, dt);
-    }
+    const GrowingTent t = grow_tent_steadily(sim, steps_per_tau);
+    const double dt = t.dt;
     // The tent's velocities for one more step of the same growth, then the
     // explicit air force over it and the correction.
     const std::vector<Vec3> x0 = s.x;
-    make_tent(sim, h + rise * dt, 0.08);
+    make_tent(sim, t.height + t.rise * dt, 0.08);
     for (int i = 0; i < m.n; ++i) {
       s.v[i] = (s.x[i] - x0[i]) / dt;
       s.x[i] = x0[i];
@@ -214,7 +214,8 @@ TEST(Air, OneStepFeelsTheDeficitAtItsEnd) {
       ++lifted;
       const double felt = -(m.mass[i] * (s.v[i] - v0[i]) / dt).dot(w.air_direction[i]) /
                           w.air_direction[i].squaredNorm();
-      ASSERT_NEAR(felt, end, 0.01 * end) << steps_per_tau << " particle " << i << ", start " << start;
+      ASSERT_NEAR(felt, end, 0.01 * end)
+          << steps_per_tau << " particle " << i << ", start " << start;
     }
     EXPECT_GT(lifted, 100);
   }

@@ -115,11 +115,12 @@ inline int grid_neighbour(const Model& m, int i, int j, int di, int dj) {
 }
 
 // forces/*.cpp: each adds its force into w.force.
-// Springs: with_damping also adds eq. 1's damping and sets w.damping[i] to each
-// particle's damping on its own velocity (Σ k_d u uᵀ), which the symplectic step
-// takes implicitly; without it, only the elastic part (implicit Euler takes the
-// damping into its matrix).
+// Springs: with_damping adds eq. 1's damping too (explicit Euler); without it,
+// only the elastic part. Implicit Euler takes the damping into its matrix, the
+// symplectic step takes it with apply_spring_damping, after its velocity
+// update, on w.soa's positions as add_spring_forces left them.
 void add_spring_forces(const Model& m, const State& s, Workspace& w, bool with_damping);
+void apply_spring_damping(const Model& m, State& s, Workspace& w, double h);
 void add_gravity(const Model& m, std::vector<Vec3>& f);
 void add_viscous_damping(const Model& m, const State& s, std::vector<Vec3>& f);
 void add_wind(const Model& m, const State& s, const Workspace& w, std::vector<Vec3>& f);

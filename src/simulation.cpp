@@ -103,20 +103,6 @@ void compute_normals(const Model& m, const std::vector<Vec3>& x, std::vector<Vec
   compute_normals(m, x, normal, quad_normals);
 }
 
-namespace {
-
-// x with a x = b, a symmetric (xx yy zz xy xz yz), by its adjugate.
-Vec3 solve(const Sym& a, const Vec3& b) {
-  const double c00 = a[1] * a[2] - a[5] * a[5], c01 = a[4] * a[5] - a[3] * a[2],
-               c02 = a[3] * a[5] - a[4] * a[1], c11 = a[0] * a[2] - a[4] * a[4],
-               c12 = a[3] * a[4] - a[0] * a[5], c22 = a[0] * a[1] - a[3] * a[3];
-  const double inv_det = 1.0 / (a[0] * c00 + a[3] * c01 + a[4] * c02);
-  return inv_det * Vec3(c00 * b[0] + c01 * b[1] + c02 * b[2], c01 * b[0] + c11 * b[1] + c12 * b[2],
-                        c02 * b[0] + c12 * b[1] + c22 * b[2]);
-}
-
-}  // namespace
-
 Simulation::Simulation(const Params& p) : model_(build_model(p)) { reset(); }
 
 void Simulation::reset() {
@@ -136,7 +122,6 @@ void Simulation::reset() {
   ws_.grab_particle = grab;
   for (auto* a : {&ws_.force, &ws_.normal, &ws_.surface_normal, &ws_.x_before, &ws_.air_direction})
     a->assign(n, Vec3::Zero());
-  ws_.damping.assign(n, Sym{});
   ws_.row_sums.assign(model_.nv, 0.0);
   ws_.row_max.assign(model_.nv, 0.0);
   ws_.distance.assign(n, kInf);
@@ -177,7 +162,7 @@ void Simulation::accumulate_forces(bool implicit) {
   Workspace& w = ws_;
   compute_normals(m, s.x, w.normal, w.quad_normals);
   for_each_particle(m, [&](int i) { w.force[i].setZero(); });
-  add_spring_forces(m, s, w, !implicit);
+  add_spring_forces(m, s, w, m.params.integrator.type == "explicit-euler");
   add_gravity(m, w.force);
   if (!implicit) add_viscous_damping(m, s, w.force);
   add_wind(m, s, w, w.force);
@@ -222,18 +207,18 @@ void Simulation::step() {
       }
       correct_air_implicitly(m, s, w, dt);
     } else {  // symplectic Euler
-      // Each particle's own damping (springs and viscous) is taken at the end of
-      // the step: v += (I + Δt/m C_i)⁻¹ Δt/m F_i. Explicit, the 0.01 N·s/m of a
-      // few springs on a dry corner particle (1 mg) is unstable at Δt = 5e-5 s.
+      // The damping is taken at the end of the step: the viscous drag on each
+      // particle's own velocity, v += Δt F / (m + Δt c A), then the springs'
+      // (apply_spring_damping). Explicit, the 0.01 N·s/m of a particle's
+      // springs is unstable at Δt = 5e-5 s from 51 × 51 up: h Σk_d / m ≈ 2.
       const double c = m.params.forces.viscous_damping;
       parallel_for(m, m.nv, [&](int j) {
         for (int i = j * m.nu; i < (j + 1) * m.nu; ++i) {
           const double h = dt * m.inv_mass[i], own = 1 + h * c * m.area[i];
-          const Sym& d = w.damping[i];
-          const Sym a{own + h * d[0], own + h * d[1], own + h * d[2], h * d[3], h * d[4], h * d[5]};
-          s.v[i] += solve(a, h * w.force[i]);  // inv_mass 0: a = I, force times 0
+          s.v[i] += (h / own) * w.force[i];
         }
       });
+      apply_spring_damping(m, s, w, dt);
       move_at_new_velocities(dt);
     }
     s.time = (s.steps + 1) * dt;  // no drift from summing dt

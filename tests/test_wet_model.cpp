@@ -314,6 +314,33 @@ TEST(Friction, NeverReversesOrGrowsAndStopsASlowParticle) {
   EXPECT_GT(stopped, 0);
 }
 
+// Friction acts on the velocity that moves the particle over the step
+// (Bridson et al. 2002), so a load below μ F_n holds a cloth still; applied
+// after the move it would let the cloth creep by Δt² a every step. Then above
+// the limit the cloth slides with a = g_t - μ g (dry: F_n is the weight; no
+// viscous damping).
+TEST(Friction, HoldsBelowTheLimitAndSlidesAboveIt) {
+  const auto centroid_x = [](const Simulation& sim) { return sim.metrics().centroid_x_m; };
+  {
+    // Wet: μ F_n / m is about 150 m/s²; a 2 m/s² tilt would creep 20 µm in 0.2 s.
+    Simulation sim = flat_on_table(1.0, {"forces.gravity=[2,0,-9.81]", "cloth.resolution=[15,15]"});
+    const double x0 = centroid_x(sim);
+    ASSERT_TRUE(sim.advance_to(0.2));
+    EXPECT_LT(std::abs(centroid_x(sim) - x0), 1e-9);
+  }
+  {
+    const Params p = flat_on_table(0.0, {"forces.gravity=[5,0,-9.81]", "cloth.resolution=[15,15]",
+                                         "forces.viscous_damping=0"})
+                         .model()
+                         .params;
+    Simulation sim(p);
+    const double x0 = centroid_x(sim), t = 0.1;
+    ASSERT_TRUE(sim.advance_to(t));
+    const double a = 5 - p.friction.mu * 9.81;
+    EXPECT_NEAR(centroid_x(sim) - x0, 0.5 * a * t * t, 0.02 * 0.5 * a * t * t);
+  }
+}
+
 // The paper's friction uses adhesion alone: a dry cloth would never stop.
 // MODEL.md's default adds the contact load, so its weight holds it.
 TEST(Friction, DryClothStillHasFrictionFromItsWeight) {

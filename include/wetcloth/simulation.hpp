@@ -112,7 +112,6 @@ struct PocketAir {
 struct Workspace {
   std::vector<Vec3> force, normal, x_before, surface_normal;
   std::vector<double> quad_normals;   // compute_normals' scratch
-  std::vector<Sym> damping;           // each particle's damping on its own velocity, N·s/m
   std::vector<double> distance;       // signed distance to the contact surface
   std::vector<double> adhesion;       // |adhesion force| per particle, N
   std::vector<std::uint8_t> border;   // border of the contact region
@@ -123,6 +122,7 @@ struct Workspace {
   // Springs (forces/springs.cpp): positions and velocities by component, a
   // zero row, then per thread its ring of edge rows and a row of sums.
   std::vector<double> soa;
+  std::vector<double> damping_columns;  // apply_spring_damping's columns and scratch
   std::vector<int> queue;
   // Strain limiting: structural and shear springs in adaptive order, the first
   // spring of each level (and the end), summed corrections within a level.

@@ -6,7 +6,10 @@
 namespace wetcloth::detail {
 
 // Velocity-level Coulomb friction: the tangential velocity shrinks by
-// Δv_f = μ F_n Δt / m and never reverses. On the contact surface F_n is the
+// Δv_f = μ F_n Δt / m and never reverses. As in Bridson et al. 2002, it acts on
+// the velocity that moves the particle over the step, so the step's move is
+// taken back by Δt Δv_f too: applied after the move, a load under μ F_n would
+// still creep Δt² a a step, and a cloth that should hold would slide. On the contact surface F_n is the
 // adhesion plus, by default, the part of the other forces that presses the
 // particle in; on other obstacles it is that load alone.
 void apply_friction(const Model& m, State& s, const Workspace& w,
@@ -34,7 +37,9 @@ void apply_friction(const Model& m, State& s, const Workspace& w,
     const double speed = vt.norm();
     if (speed == 0) return;
     const double dv = mu * load * dt * m.inv_mass[i];
-    s.v[i] -= vt * (std::min(dv, speed) / speed);  // eq. 14
+    const Vec3 slowed = vt * (std::min(dv, speed) / speed);  // eq. 14
+    s.v[i] -= slowed;
+    s.x[i] -= dt * slowed;
   });
 }
 

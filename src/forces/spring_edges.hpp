@@ -11,8 +11,8 @@
 
 namespace wetcloth::detail {
 
-// Per edge: force on the lower end (x y z), k_d u uᵀ (xx yy zz xy xz yz).
-constexpr int kSpringFields = 9;
+// Per edge: the force on its lower end (x y z).
+constexpr int kSpringFields = 3;
 
 // Positions and velocities by component.
 template <class Real>
@@ -27,7 +27,8 @@ inline std::pair<int, int> spring_edge_span(const Model& m, const StencilEdge& s
 }
 
 // Offset st's springs starting in row j (j + dj < nv), into out[k][i]; with
-// damped, eq. 1's damping and k_d u uᵀ too.
+// damped, eq. 1's damping too (explicit Euler; the symplectic step takes it
+// implicitly, apply_spring_damping).
 template <class Real, bool damped>
 void spring_edge_row(const Model& m, const SpringColumns<Real>& c, const StencilEdge& st, int j,
                      Real* const out[kSpringFields]) {
@@ -48,15 +49,6 @@ void spring_edge_row(const Model& m, const SpringColumns<Real>& c, const Stencil
     out[0][i] = t * ux;
     out[1][i] = t * uy;
     out[2][i] = t * uz;
-    if constexpr (damped) {
-      const Real kx = kd * ux, ky = kd * uy;
-      out[3][i] = kx * ux;
-      out[4][i] = ky * uy;
-      out[5][i] = kd * uz * uz;
-      out[6][i] = kx * uy;
-      out[7][i] = kx * uz;
-      out[8][i] = ky * uz;
-    }
   }
 }
 

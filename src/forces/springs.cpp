@@ -217,12 +217,18 @@ void apply_spring_damping(const Model& m, State& s, Workspace& w, double h) {
   for (const StencilEdge& st : m.stencil) damped += st.damping > 0;
   if (damped == 0) return;
   const int n = m.n, nu = m.nu, nv = m.nv;
+  // The offsets in two fixed groups (structural and shear; bending), each
+  // adding its offsets in stencil order into its own dv on the grid and on
+  // the transpose: the groups may run on two threads, and the sums are the
+  // same for any number of threads.
+  constexpr int kGroups = 2;
   // Columns: the grid (v, 1/m; x y z are add_spring_forces') and its
-  // transpose (x y z, v, 1/m); each offset's dv (on its grid); each thread's
-  // chain scratch. Each has zeros before and after it for the slots two
-  // springs beyond the grid's ends.
+  // transpose (x y z, v, 1/m); each group's dv on both; each thread's chain
+  // scratch. Each has zeros before and after it for the slots two springs
+  // beyond the grid's ends.
   constexpr int kPad = 4, kGrids = 11, kScratch = 7;
-  const int columns = kGrids + 3 * kEdges + kScratch * m.threads;
+  const int threads = std::min(m.threads, kGroups);
+  const int columns = kGrids + 6 * kGroups + kScratch * threads;
   const std::size_t stride = std::size_t(n) + 2 * kPad;
   w.damping_columns.resize(columns * stride);
   const auto col = [&](int k) { return w.damping_columns.data() + k * stride + kPad; };
@@ -240,15 +246,10 @@ void apply_spring_damping(const Model& m, State& s, Workspace& w, double h) {
       }
       col(10)[t] = m.inv_mass[a];
     }
-    // Offsets run in parallel, each into its own dv, summed in a fixed order:
-    // the same bits for any number of threads.
-#pragma omp parallel for schedule(static) num_threads(m.threads) if (m.threads > 1)
-  for (int e = 0; e < kEdges; ++e) {
-    const StencilEdge& st = m.stencil[e];
-    double* dv = col(kGrids + 3 * e);
-    std::fill(dv - kPad, dv + 3 * stride - kPad, 0.0);
-    if (st.damping == 0) continue;
-    double* t = col(kGrids + 3 * kEdges + kScratch * omp_get_thread_num());
+  std::fill(col(kGrids) - kPad, col(kGrids + 6 * kGroups) - kPad, 0.0);
+#pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1)
+  for (int group = 0; group < kGroups; ++group) {
+    double* t = col(kGrids + 6 * kGroups + kScratch * omp_get_thread_num());
     const ChainScratch scratch{t,
                                t + stride,
                                t + 2 * stride,
@@ -256,26 +257,32 @@ void apply_spring_damping(const Model& m, State& s, Workspace& w, double h) {
                                t + 4 * stride,
                                t + 5 * stride,
                                t + 6 * stride};
-    const double c = damped * h * st.damping;
-    if (st.dj > 0) {
-      const DampingGrid grid{nu,     nv,     X,      X + n, X + 2 * n,   col(0),
-                             col(1), col(2), col(3), dv,    dv + stride, dv + 2 * stride};
-      damp_offset(grid, st.di, st.dj, c, scratch);
-    } else {  // a horizontal offset's chains are vertical on the transposed grid
-      const DampingGrid grid{nv,     nu,     col(4),  col(5), col(6),      col(7),
-                             col(8), col(9), col(10), dv,     dv + stride, dv + 2 * stride};
-      damp_offset(grid, st.dj, st.di, c, scratch);
+    double* dv = col(kGrids + 6 * group);  // on the grid, then on the transpose
+    double* dv_t = dv + 3 * stride;
+    for (int e = group * kEdges / kGroups; e < (group + 1) * kEdges / kGroups; ++e) {
+      const StencilEdge& st = m.stencil[e];
+      if (st.damping == 0) continue;
+      const double c = damped * h * st.damping;
+      if (st.dj > 0) {
+        const DampingGrid grid{nu,     nv,     X,      X + n, X + 2 * n,   col(0),
+                               col(1), col(2), col(3), dv,    dv + stride, dv + 2 * stride};
+        damp_offset(grid, st.di, st.dj, c, scratch);
+      } else {  // a horizontal offset's chains are vertical on the transposed grid
+        const DampingGrid grid{nv,     nu,     col(4),  col(5), col(6),        col(7),
+                               col(8), col(9), col(10), dv_t,   dv_t + stride, dv_t + 2 * stride};
+        damp_offset(grid, st.dj, st.di, c, scratch);
+      }
     }
   }
   const double share = 1.0 / damped;
   parallel_for(m, nv, [&](int j) {
     for (int i = 0; i < nu; ++i) {
-      const int a = j * nu + i;
+      const int a = j * nu + i, t = i * nv + j;
       Vec3 sum = Vec3::Zero();
-      for (int e = 0; e < kEdges; ++e) {
-        const double* dv = col(kGrids + 3 * e);
-        const int k = m.stencil[e].dj > 0 ? a : i * nv + j;
-        sum += Vec3(dv[k], dv[k + stride], dv[k + 2 * stride]);
+      for (int group = 0; group < kGroups; ++group) {
+        const double* dv = col(kGrids + 6 * group);
+        const double* dv_t = dv + 3 * stride;
+        for (int k = 0; k < 3; ++k) sum[k] += dv[a + k * stride] + dv_t[t + k * stride];
       }
       s.v[a] += share * sum;
     }

@@ -145,9 +145,11 @@ struct ChainScratch {
 };
 
 // One offset (di, dj), dj > 0, of grid g: solves its chains and adds each
-// particle's velocity change. Every loop runs over whole rows (a spring slot
-// off the grid computes zeros), so that it vectorises.
-void damp_offset(const DampingGrid& g, int di, int dj, double c, const ChainScratch& t) {
+// particle's velocity change (the first offset into a dv sets it). Every
+// loop runs over whole rows (a spring slot off the grid computes zeros), so
+// that it vectorises.
+void damp_offset(const DampingGrid& g, int di, int dj, double c, const ChainScratch& t,
+                 bool first_offset) {
   const int nu = g.nu, nv = g.nv, n = nu * nv, off = di + dj * nu, springs_end = (nv - dj) * nu;
   const int lo = std::max(0, -di), hi = std::min(nu, nu - di);
   for (double* z : {t.ux, t.uy, t.uz, t.coupling, t.lambda})  // rows where no spring starts
@@ -184,7 +186,38 @@ void damp_offset(const DampingGrid& g, int di, int dj, double c, const ChainScra
       t.rhs[a] = on ? rhs : 0.0;
     }
   }
-  // Back substitution: λ = (rhs - coupling to the next spring · its λ) / diag.
+  // Back substitution, λ = (rhs - coupling to the next spring · its λ) / diag,
+  // from the last row up; once row j's λ is known, row j + dj's particles
+  // take +λ u of the spring each starts and −λ u of the one each ends.
+  const auto take = [&](int r, auto ends, auto set) {
+    const double* __restrict lambda = t.lambda, * __restrict ux = t.ux, * __restrict uy = t.uy, * __restrict uz = t.uz, * __restrict w = g.inv_mass;
+    double* __restrict dvx = g.dvx, * __restrict dvy = g.dvy, * __restrict dvz = g.dvz;
+#pragma GCC ivdep
+    for (int a = r * nu; a < (r + 1) * nu; ++a) {
+      double x = lambda[a] * ux[a], y = lambda[a] * uy[a], z = lambda[a] * uz[a];
+      if constexpr (ends) {
+        const int p = a - off;
+        x -= lambda[p] * ux[p];
+        y -= lambda[p] * uy[p];
+        z -= lambda[p] * uz[p];
+      }
+      if constexpr (set) {
+        dvx[a] = w[a] * x;
+        dvy[a] = w[a] * y;
+        dvz[a] = w[a] * z;
+      } else {
+        dvx[a] += w[a] * x;
+        dvy[a] += w[a] * y;
+        dvz[a] += w[a] * z;
+      }
+    }
+  };
+  const auto take_row = [&](int r, auto ends) {
+    if (first_offset)
+      take(r, ends, std::true_type{});
+    else
+      take(r, ends, std::false_type{});
+  };
   for (int j = nv - 1 - dj; j >= 0; --j) {
     const int row = j * nu;
 #pragma GCC ivdep
@@ -192,22 +225,23 @@ void damp_offset(const DampingGrid& g, int di, int dj, double c, const ChainScra
       const int a = row + i;
       t.lambda[a] = (t.rhs[a] - t.coupling[a + off] * t.lambda[a + off]) * t.inv_diag[a];
     }
+    take_row(j + dj, std::true_type{});
   }
-  // Each particle: +λ u of the spring it starts, −λ u of the one it ends.
-  for (int a = 0; a < std::min(n, dj * nu); ++a) {
-    const double w = g.inv_mass[a] * t.lambda[a];
-    g.dvx[a] += w * t.ux[a];
-    g.dvy[a] += w * t.uy[a];
-    g.dvz[a] += w * t.uz[a];
-  }
-#pragma GCC ivdep
-  for (int a = dj * nu; a < n; ++a) {
-    const int p = a - off;
-    const double w = g.inv_mass[a];
-    g.dvx[a] += w * (t.lambda[a] * t.ux[a] - t.lambda[p] * t.ux[p]);
-    g.dvy[a] += w * (t.lambda[a] * t.uy[a] - t.lambda[p] * t.uy[p]);
-    g.dvz[a] += w * (t.lambda[a] * t.uz[a] - t.lambda[p] * t.uz[p]);
-  }
+  for (int r = 0; r < std::min(dj, nv); ++r) take_row(r, std::false_type{});
+}
+
+// out[i rows + j] = in[j cols + i]: by tiles, so that both sides stay in cache.
+void transpose(const Model& m, const double* __restrict in, double* __restrict out, int rows,
+               int cols) {
+  constexpr int kTile = 16;
+  parallel_for(m, (rows + kTile - 1) / kTile, [&](int tile) {
+    const int j0 = tile * kTile, j1 = std::min(rows, j0 + kTile);
+    for (int i0 = 0; i0 < cols; i0 += kTile) {
+      const int i1 = std::min(cols, i0 + kTile);
+      for (int i = i0; i < i1; ++i)
+        for (int j = j0; j < j1; ++j) out[i * rows + j] = in[j * cols + i];
+    }
+  });
 }
 
 }  // namespace
@@ -233,20 +267,16 @@ void apply_spring_damping(const Model& m, State& s, Workspace& w, double h) {
   w.damping_columns.resize(columns * stride);
   const auto col = [&](int k) { return w.damping_columns.data() + k * stride + kPad; };
   const double* X = w.soa.data();  // x y z by component, then more of w.soa
-  for (int a = 0; a < n; ++a) {
+  for_each_particle(m, [&](int a) {
     for (int k = 0; k < 3; ++k) col(k)[a] = s.v[a][k];
     col(3)[a] = m.inv_mass[a];
+  });
+  for (int k = 0; k < 3; ++k) {  // transposed: particle (i, j) at i nv + j
+    transpose(m, X + k * std::size_t(n), col(4 + k), nv, nu);
+    transpose(m, col(k), col(7 + k), nv, nu);
   }
-  for (int j = 0; j < nv; ++j)  // transposed: particle (i, j) at i nv + j
-    for (int i = 0; i < nu; ++i) {
-      const int a = j * nu + i, t = i * nv + j;
-      for (int k = 0; k < 3; ++k) {
-        col(4 + k)[t] = X[k * n + a];
-        col(7 + k)[t] = col(k)[a];
-      }
-      col(10)[t] = m.inv_mass[a];
-    }
-  std::fill(col(kGrids) - kPad, col(kGrids + 6 * kGroups) - kPad, 0.0);
+  transpose(m, col(3), col(10), nv, nu);
+  bool first[kGroups][2] = {{true, true}, {true, true}};  // per group: nothing in dv, dv_t yet
 #pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1)
   for (int group = 0; group < kGroups; ++group) {
     double* t = col(kGrids + 6 * kGroups + kScratch * omp_get_thread_num());
@@ -266,26 +296,32 @@ void apply_spring_damping(const Model& m, State& s, Workspace& w, double h) {
       if (st.dj > 0) {
         const DampingGrid grid{nu,     nv,     X,      X + n, X + 2 * n,   col(0),
                                col(1), col(2), col(3), dv,    dv + stride, dv + 2 * stride};
-        damp_offset(grid, st.di, st.dj, c, scratch);
+        damp_offset(grid, st.di, st.dj, c, scratch, first[group][0]);
+        first[group][0] = false;
       } else {  // a horizontal offset's chains are vertical on the transposed grid
         const DampingGrid grid{nv,     nu,     col(4),  col(5), col(6),        col(7),
                                col(8), col(9), col(10), dv_t,   dv_t + stride, dv_t + 2 * stride};
-        damp_offset(grid, st.dj, st.di, c, scratch);
+        damp_offset(grid, st.dj, st.di, c, scratch, first[group][1]);
+        first[group][1] = false;
       }
     }
   }
-  const double share = 1.0 / damped;
-  parallel_for(m, nv, [&](int j) {
-    for (int i = 0; i < nu; ++i) {
-      const int a = j * nu + i, t = i * nv + j;
-      Vec3 sum = Vec3::Zero();
-      for (int group = 0; group < kGroups; ++group) {
-        const double* dv = col(kGrids + 6 * group);
-        const double* dv_t = dv + 3 * stride;
-        for (int k = 0; k < 3; ++k) sum[k] += dv[a + k * stride] + dv_t[t + k * stride];
-      }
-      s.v[a] += share * sum;
+  // The groups' changes on the transpose, back on the grid (into the
+  // scratch of thread 0), then v += the mean change.
+  double* back = col(kGrids + 6 * kGroups);
+  for (int group = 0; group < kGroups; ++group)
+    for (int k = 0; k < 3; ++k) {
+      if (first[group][1]) std::fill_n(col(kGrids + 6 * group + 3 + k), n, 0.0);
+      if (first[group][0]) std::fill_n(col(kGrids + 6 * group + k), n, 0.0);
+      transpose(m, col(kGrids + 6 * group + 3 + k), back + (3 * group + k) * stride, nu, nv);
     }
+  const double share = 1.0 / damped;
+  for_each_particle(m, [&](int a) {
+    Vec3 sum = Vec3::Zero();
+    for (int group = 0; group < kGroups; ++group)
+      for (int k = 0; k < 3; ++k)
+        sum[k] += col(kGrids + 6 * group + k)[a] + back[(3 * group + k) * stride + a];
+    s.v[a] += share * sum;
   });
 }
 

@@ -132,7 +132,7 @@ namespace {
 struct DampingGrid {
   int nu = 0, nv = 0;
   const double *px, *py, *pz, *vx, *vy, *vz, *inv_mass;
-  double *dvx, *dvy, *dvz;  // each offset adds its velocity change here
+  double *dvx, *dvy, *dvz;  // velocity changes: the first offset sets them, the others add
 };
 
 // Per spring slot of one offset (one per particle: the spring it starts).

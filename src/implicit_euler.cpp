@@ -70,15 +70,17 @@ std::pair<double, double> precondition(const Model& m, Workspace& w) {
   return {rz, *std::max_element(w.row_max.begin(), w.row_max.end())};
 }
 
-// Field k of edge e's block at its lower end a: edge_blocks[(6 e + k) n + a].
+// Edge e's block s sᵀ + β I (s = √α u, α ≥ 0: see implicit_euler_velocities),
+// held at its lower end a as four fields: field k (s_x, s_y, s_z, β) at
+// edge_blocks[(4 e + k) n + a]. Four numbers where a symmetric block takes six.
+constexpr int kBlockFields = 4;
 double* edge_field(const Model& m, Workspace& w, int e, int k) {
-  return w.edge_blocks.data() + (6 * std::size_t(e) + k) * m.n;
+  return w.edge_blocks.data() + (kBlockFields * std::size_t(e) + k) * m.n;
 }
 
 Sym edge_block(const Model& m, Workspace& w, int e, int a) {
-  Sym b;
-  for (int k = 0; k < 6; ++k) b[k] = edge_field(m, w, e, k)[a];
-  return b;
+  const Vec3 s(edge_field(m, w, e, 0)[a], edge_field(m, w, e, 1)[a], edge_field(m, w, e, 2)[a]);
+  return outer(s, 1, edge_field(m, w, e, 3)[a]);
 }
 
 // y = A x over the free particles; fixed ones have identity rows (their x
@@ -113,15 +115,15 @@ void multiply(const Model& m, const State& s, Workspace& w, const std::vector<Ve
         const int off = di + dj * nu, from = std::max(0, -di), to = std::min(nu, nu - di);
         // The block of edge e sits at its lower end: a going forward, a + off going back.
         const int at = row + (sign > 0 ? 0 : off);
-        const double *b0 = edge_field(m, w, e, 0) + at, *b1 = edge_field(m, w, e, 1) + at,
-                     *b2 = edge_field(m, w, e, 2) + at, *b3 = edge_field(m, w, e, 3) + at,
-                     *b4 = edge_field(m, w, e, 4) + at, *b5 = edge_field(m, w, e, 5) + at;
+        const double *s0 = edge_field(m, w, e, 0) + at, *s1 = edge_field(m, w, e, 1) + at,
+                     *s2 = edge_field(m, w, e, 2) + at, *beta = edge_field(m, w, e, 3) + at;
         const double *x0 = X + row + off, *x1 = X + n + row + off, *x2 = X + 2 * n + row + off;
 #pragma GCC ivdep
         for (int i = from; i < to; ++i) {
-          y0[i] -= b0[i] * x0[i] + b3[i] * x1[i] + b4[i] * x2[i];
-          y1[i] -= b3[i] * x0[i] + b1[i] * x1[i] + b5[i] * x2[i];
-          y2[i] -= b4[i] * x0[i] + b5[i] * x1[i] + b2[i] * x2[i];
+          const double sx = s0[i] * x0[i] + s1[i] * x1[i] + s2[i] * x2[i];
+          y0[i] -= s0[i] * sx + beta[i] * x0[i];
+          y1[i] -= s1[i] * sx + beta[i] * x1[i];
+          y2[i] -= s2[i] * sx + beta[i] * x2[i];
         }
       }
     }
@@ -142,7 +144,7 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
   // Each forward stencil edge's block h k_d u uᵀ + h² K_e.
   // The solver's arrays are sized at the first implicit step: the explicit
   // integrators need none of them. Every one is written before it is read.
-  w.edge_blocks.resize(6 * 8 * std::size_t(m.n));
+  w.edge_blocks.resize(kBlockFields * 8 * std::size_t(m.n));
   w.diagonal.resize(m.n);
   w.preconditioner.resize(m.n);
   for (auto* v : {&w.cg_r, &w.cg_z, &w.cg_p, &w.cg_q}) v->resize(m.n);
@@ -152,14 +154,17 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
       for (int e = 0; e < 8; ++e) {
         const StencilEdge& st = m.stencil[e];
         const int b = grid_neighbour(m, i, j, st.di, st.dj);
-        Sym block{};
+        Vec3 su = Vec3::Zero();
+        double beta = 0;
         if (const double len = b < 0 ? 0 : (s.x[b] - s.x[a]).norm(); len > 0) {
-          const Vec3 u = (s.x[b] - s.x[a]) / len;
-          // K_e = k (u uᵀ + (1 - l0/|d|)(I - u uᵀ)), the transverse part only when stretched.
+          // K_e = k (u uᵀ + (1 - l0/|d|)(I - u uᵀ)), the transverse part only when
+          // stretched: the block is α u uᵀ + β I, α = h k_d + h² (k - transverse) ≥ 0.
           const double transverse = std::max(0.0, 1.0 - st.rest / len) * st.k;
-          block = outer(u, h * st.damping + h2 * (st.k - transverse), h2 * transverse);
+          su = std::sqrt(h * st.damping + h2 * (st.k - transverse)) / len * (s.x[b] - s.x[a]);
+          beta = h2 * transverse;
         }
-        for (int k = 0; k < 6; ++k) edge_field(m, w, e, k)[a] = block[k];
+        for (int k = 0; k < 3; ++k) edge_field(m, w, e, k)[a] = su[k];
+        edge_field(m, w, e, 3)[a] = beta;
       }
     }
   });
@@ -183,8 +188,10 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
     add_to(w.diagonal[p.j], p.block);
   }
 
-  // Right-hand side M v + h f, the block-Jacobi preconditioner, and the start
-  // from the current velocities.
+  // Right-hand side M v + h f, the block-Jacobi preconditioner, and the start:
+  // the velocities the last substep's acceleration would give. A pull or a
+  // fall changes little from one substep to the next, so this starts CG
+  // nearer the answer than v does (about half the iterations on the pulls).
   auto& x = s.v;
   auto &r = w.cg_r, &z = w.cg_z, &p = w.cg_p, &q = w.cg_q;
   for_each_particle(m, [&](int a) {
@@ -195,6 +202,7 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
     }
     w.preconditioner[a] = full(w.diagonal[a]).inverse();
     r[a] = m.mass[a] * x[a] + h * w.force[a];
+    if (!w.acceleration.empty()) x[a] += h * w.acceleration[a];
   });
   multiply(m, s, w, x, q);
   for_each_particle(m, [&](int a) { r[a] -= q[a]; });

@@ -240,6 +240,8 @@ double Simulation::implicit_substep(double dt, int& k) {
     implicit_euler_velocities(m, s, w, h);
     if (k == kMostHalvings || step_strain(m, s, h) <= m.params.integrator.max_step_strain) {
       ++w.substeps;
+      w.acceleration.resize(m.n);
+      for_each_particle(m, [&](int a) { w.acceleration[a] = (s.v[a] - w.v_start[a]) / h; });
       move_at_new_velocities(h);
       return h;
     }

@@ -162,7 +162,7 @@ struct Workspace {
   std::vector<Vec3> candidates_anchor;
   double candidates_radius = 0;
   // Implicit Euler: matrix blocks (of the 8 forward stencil edges, in columns:
-  // field k of edge e at (6 e + k) n), the diagonal blocks, the block-Jacobi
+  // field k of edge e at (4 e + k) n), the diagonal blocks, the block-Jacobi
   // preconditioner, conjugate-gradient vectors and their columns, per-row sums.
   std::vector<double> edge_blocks, cg_columns;
   std::vector<Sym> diagonal;
@@ -172,8 +172,9 @@ struct Workspace {
   int cg_iterations = 0;  // of the last implicit step
   // Implicit Euler's step control: velocities at the start of a try, the
   // halvings of dt the next substep tries; substeps taken since reset (one a
-  // step for the other integrators).
-  std::vector<Vec3> v_start;
+  // step for the other integrators). The last substep's solved change of
+  // velocity per second: the next solve starts from v + h times it.
+  std::vector<Vec3> v_start, acceleration;
   int halvings = 0;
   long long substeps = 0;
   // Interactive grab (viewer).

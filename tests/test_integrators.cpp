@@ -81,6 +81,19 @@ TEST(ImplicitEuler, HalvesTheStepWhereTheSpringsLinearisationFails) {
   EXPECT_EQ(drop.state().time, 10 * drop.model().params.integrator.dt);
 }
 
+// The step control doubles a substep only when its springs changed by at most
+// half the limit, so fewer solves are thrown away: on the straight pull under
+// way (0.2 to 0.4 s) 1.29 solves a substep, against 1.5 when every substep
+// that held was doubled (each held one followed by a failed try).
+TEST(ImplicitEuler, StepControlThrowsFewerSolvesAway) {
+  Simulation sim(load_scene("pull-straight", {kImplicit, kLargeStep}));
+  ASSERT_TRUE(sim.advance_to(0.2)) << sim.blow_up_reason();
+  const Workspace& w = sim.workspace();
+  const long long substeps = w.substeps, solves = w.solves;
+  ASSERT_TRUE(sim.advance_to(0.4)) << sim.blow_up_reason();
+  EXPECT_LT(double(w.solves - solves) / double(w.substeps - substeps), 1.4);
+}
+
 // Each solve starts from the velocities the last substep's acceleration would
 // give (a pull changes little from one substep to the next: about a quarter
 // fewer iterations on pull-straight). Started from its own answer, a solve

@@ -172,11 +172,12 @@ struct Workspace {
   int cg_iterations = 0;  // of the last implicit step
   // Implicit Euler's step control: velocities at the start of a try, the
   // halvings of dt the next substep tries; substeps taken since reset (one a
-  // step for the other integrators). The last substep's solved change of
-  // velocity per second: the next solve starts from v + h times it.
+  // step for the other integrators), and solves (the tries thrown away
+  // included). The last substep's solved change of velocity per second: the
+  // next solve starts from v + h times it.
   std::vector<Vec3> v_start, acceleration;
   int halvings = 0;
-  long long substeps = 0;
+  long long substeps = 0, solves = 0;
   // Interactive grab (viewer).
   int grab_particle = -1;
   Vec3 grab_target = Vec3::Zero();
@@ -227,7 +228,7 @@ class Simulation {
   std::vector<std::uint8_t> touched_;  // obstacle each particle was pushed out of this step
 
   void accumulate_forces(bool implicit);
-  double implicit_substep(double dt, int& halvings);
+  double implicit_substep(double dt, int& halvings, double& strain);
   void move_at_new_velocities(double h);
   void finish_step(double h);
 };

@@ -155,7 +155,7 @@ std::vector<ParamDef> make_defs() {
             "implicit-euler: most conjugate-gradient iterations per step", P(integrator.cg_max_iterations)),
       field("integrator.max_step_strain", "1", 1e-3, 10,
             "implicit-euler: a step is halved when a spring changes by more than this times its rest "
-            "length in it",
+            "length in it, and doubled only when none changed by half as much",
             P(integrator.max_step_strain)),
       field("integrator.max_speed", "m/s", 1e-3, 1e6, "speed taken as a blow-up", P(integrator.max_speed)),
       field("run.duration", "s", 0, 1e6, "simulated time", P(run.duration)),

@@ -138,7 +138,8 @@ void update_air(const Model& m, State& s, Workspace& w, double dt);
 // The air term taken implicitly, after the explicit velocity update.
 void correct_air_implicitly(const Model& m, State& s, Workspace& w, double dt);
 // implicit_euler.cpp: the new velocities by backward Euler (s.v in, s.v out),
-// from the forces in w.force without their damping.
+// from the forces in w.force without their damping, and the positions in
+// columns that add_spring_forces left in w.soa.
 void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h);
 // The largest change of a structural or shear spring over a step of h at the
 // velocities s.v, relative to its rest length: the step control's measure.

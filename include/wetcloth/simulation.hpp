@@ -161,11 +161,10 @@ struct Workspace {
   std::vector<std::uint8_t> candidate_close;  // candidate within d_t this step
   std::vector<Vec3> candidates_anchor;
   double candidates_radius = 0;
-  // Implicit Euler: matrix blocks (of the 8 forward stencil edges, in columns:
-  // field k of edge e at (4 e + k) n), the diagonal blocks, the block-Jacobi
+  // Implicit Euler: the matrix in columns (the 8 forward stencil edges'
+  // blocks, then the diagonal blocks: see implicit_euler.cpp), the block-Jacobi
   // preconditioner, conjugate-gradient vectors and their columns, per-row sums.
   std::vector<double> edge_blocks, cg_columns;
-  std::vector<Sym> diagonal;
   std::vector<Mat3> preconditioner;
   std::vector<Vec3> cg_r, cg_z, cg_p, cg_q;
   std::vector<double> row_sums, row_max;

@@ -213,8 +213,7 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
       const int at = row + (sign > 0 ? 0 : off);
       const double *s0 = edge_field(m, w, e, 0) + at, *s1 = edge_field(m, w, e, 1) + at,
                    *s2 = edge_field(m, w, e, 2) + at, *beta = edge_field(m, w, e, 3) + at;
-      double *__restrict d0 = d[0], *__restrict d1 = d[1], *__restrict d2 = d[2],
-                         *__restrict d3 = d[3], *__restrict d4 = d[4], *__restrict d5 = d[5];
+      double* __restrict d0 = d[0], * __restrict d1 = d[1], * __restrict d2 = d[2], * __restrict d3 = d[3], * __restrict d4 = d[4], * __restrict d5 = d[5];
 #pragma GCC ivdep
       for (int i = from; i < to; ++i) {
         d0[i] += s0[i] * s0[i] + beta[i];

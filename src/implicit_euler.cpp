@@ -37,35 +37,6 @@ Mat3 full(const Sym& s) {
 
 bool fixed(const Model& m, const State& s, int i) { return m.inv_mass[i] == 0 || s.held[i]; }
 
-double dot(const Model& m, Workspace& w, const std::vector<Vec3>& a, const std::vector<Vec3>& b) {
-  return ordered_sum(m, w, [&](int j) {
-    double sum = 0;
-    for (int k = j * m.nu; k < (j + 1) * m.nu; ++k) sum += a[k].dot(b[k]);
-    return sum;
-  });
-}
-
-// z = P r, in one pass with r·z (rows summed in order, as dot does) and the
-// largest |z|, the convergence test. Returns {r·z, max |z|}.
-std::pair<double, double> precondition(const Model& m, Workspace& w) {
-  const auto& r = w.cg_r;
-  const auto& pre = w.preconditioner;
-  auto& z = w.cg_z;
-  parallel_for(m, m.nv, [&](int j) {
-    double rz = 0, worst = 0;
-    for (int k = j * m.nu; k < (j + 1) * m.nu; ++k) {
-      z[k] = pre[k] * r[k];
-      rz += r[k].dot(z[k]);
-      worst = std::max(worst, z[k].norm());
-    }
-    w.row_sums[j] = rz;
-    w.row_max[j] = worst;
-  });
-  double rz = 0;
-  for (int j = 0; j < m.nv; ++j) rz += w.row_sums[j];
-  return {rz, *std::max_element(w.row_max.begin(), w.row_max.end())};
-}
-
 // The matrix in columns. Edge e's block s sᵀ + β I (s = √α u, α ≥ 0: see
 // implicit_euler_velocities), held at its lower end a as four fields: field k
 // (s_x, s_y, s_z, β) at edge_blocks[(4 e + k) n + a], four numbers where a
@@ -100,29 +71,40 @@ void for_each_neighbour_offset(const Model& m, int j, Body&& body) {
   }
 }
 
+// The solver's vectors in columns, three each (x, y, z), then the
+// preconditioner's six fields (Sym's order): every loop over a row vectorises.
+enum Vector { kX, kR, kZ, kP, kQ };
+constexpr int kPreconditionerColumn = 15, kSolverColumns = 21;
+struct Columns {
+  double* c[3];
+  Vec3 at(int a) const { return {c[0][a], c[1][a], c[2][a]}; }
+};
+double* solver_column(const Model& m, Workspace& w, int k) {
+  return w.cg_columns.data() + std::size_t(k) * m.n;
+}
+Columns columns(const Model& m, Workspace& w, Vector v) {
+  return {
+      {solver_column(m, w, 3 * v), solver_column(m, w, 3 * v + 1), solver_column(m, w, 3 * v + 2)}};
+}
+
 // y = A x over the free particles; fixed ones have identity rows (their x
 // never changes, so their columns only enter through the starting residual).
-// x is first copied to columns (x, y, z), and y summed in columns, so that the
-// loops over a row vectorise.
-void multiply(const Model& m, const State& s, Workspace& w, const std::vector<Vec3>& x,
-              std::vector<Vec3>& y) {
-  const int n = m.n, nu = m.nu;
-  w.cg_columns.resize(6 * std::size_t(n));
-  double* const X = w.cg_columns.data();
-  double* const Y = X + 3 * std::size_t(n);
-  to_columns(m, x, X);
+void multiply(const Model& m, const State& s, Workspace& w, Vector in, Vector out) {
+  const int nu = m.nu;
+  const Columns xc = columns(m, w, in), yc = columns(m, w, out);
+  const double *const X0 = xc.c[0], *const X1 = xc.c[1], *const X2 = xc.c[2];
   // Row by row, offset by offset over the particles that have that neighbour:
   // no test per particle in the inner loops, the same order of sums per particle.
   parallel_for(m, m.nv, [&](int j) {
     const int row = j * nu;
-    double* __restrict y0 = Y + row;
-    double* __restrict y1 = Y + n + row;
-    double* __restrict y2 = Y + 2 * n + row;
+    double* __restrict y0 = yc.c[0] + row;
+    double* __restrict y1 = yc.c[1] + row;
+    double* __restrict y2 = yc.c[2] + row;
     {
       const double *d0 = diagonal_field(m, w, 0) + row, *d1 = diagonal_field(m, w, 1) + row,
                    *d2 = diagonal_field(m, w, 2) + row, *d3 = diagonal_field(m, w, 3) + row,
                    *d4 = diagonal_field(m, w, 4) + row, *d5 = diagonal_field(m, w, 5) + row;
-      const double *x0 = X + row, *x1 = X + n + row, *x2 = X + 2 * n + row;
+      const double *x0 = X0 + row, *x1 = X1 + row, *x2 = X2 + row;
 #pragma GCC ivdep
       for (int i = 0; i < nu; ++i) {
         y0[i] = d0[i] * x0[i] + d3[i] * x1[i] + d4[i] * x2[i];
@@ -135,7 +117,7 @@ void multiply(const Model& m, const State& s, Workspace& w, const std::vector<Ve
       const int at = row + (sign > 0 ? 0 : off);
       const double *s0 = edge_field(m, w, e, 0) + at, *s1 = edge_field(m, w, e, 1) + at,
                    *s2 = edge_field(m, w, e, 2) + at, *beta = edge_field(m, w, e, 3) + at;
-      const double *x0 = X + row + off, *x1 = X + n + row + off, *x2 = X + 2 * n + row + off;
+      const double *x0 = X0 + row + off, *x1 = X1 + row + off, *x2 = X2 + row + off;
 #pragma GCC ivdep
       for (int i = from; i < to; ++i) {
         const double sx = s0[i] * x0[i] + s1[i] * x1[i] + s2[i] * x2[i];
@@ -144,13 +126,59 @@ void multiply(const Model& m, const State& s, Workspace& w, const std::vector<Ve
         y2[i] -= s2[i] * sx + beta[i] * x2[i];
       }
     });
-    for (int a = row; a < row + nu; ++a)
-      y[a] = fixed(m, s, a) ? x[a] : Vec3(Y[a], Y[n + a], Y[2 * n + a]);
+    for (int i = 0; i < nu; ++i)
+      if (fixed(m, s, row + i)) {
+        y0[i] = X0[row + i];
+        y1[i] = X1[row + i];
+        y2[i] = X2[row + i];
+      }
   });
-  for (const CollisionPair& c : w.collision_pairs) {  // few: serial, in pair order
-    if (!fixed(m, s, c.i)) y[c.i] -= times(c.block, x[c.j]);
-    if (!fixed(m, s, c.j)) y[c.j] -= times(c.block, x[c.i]);
-  }
+  for (const CollisionPair& c : w.collision_pairs)  // few: serial, in pair order
+    for (const auto& [a, b] : {std::pair{c.i, c.j}, std::pair{c.j, c.i}}) {
+      if (fixed(m, s, a)) continue;
+      const Vec3 d = times(c.block, xc.at(b));
+      for (int k = 0; k < 3; ++k) yc.c[k][a] -= d[k];
+    }
+}
+
+// a · b, rows summed in order (the same bits for any number of threads).
+double dot(const Model& m, Workspace& w, Vector av, Vector bv) {
+  const Columns a = columns(m, w, av), b = columns(m, w, bv);
+  return ordered_sum(m, w, [&](int j) {
+    double sum = 0;
+    for (int k = j * m.nu; k < (j + 1) * m.nu; ++k)
+      sum += a.c[0][k] * b.c[0][k] + a.c[1][k] * b.c[1][k] + a.c[2][k] * b.c[2][k];
+    return sum;
+  });
+}
+
+// z = P r, with r·z (rows summed in order, as dot does) and the largest |z|,
+// the convergence test. Returns {r·z, max |z|}.
+std::pair<double, double> precondition(const Model& m, Workspace& w) {
+  const Columns r = columns(m, w, kR), z = columns(m, w, kZ);
+  parallel_for(m, m.nv, [&](int j) {
+    const int row = j * m.nu;
+    const double* P[6];
+    for (int k = 0; k < 6; ++k) P[k] = solver_column(m, w, kPreconditionerColumn + k) + row;
+    const double *r0 = r.c[0] + row, *r1 = r.c[1] + row, *r2 = r.c[2] + row;
+    double* __restrict z0 = z.c[0] + row, * __restrict z1 = z.c[1] + row, * __restrict z2 = z.c[2] + row;
+#pragma GCC ivdep
+    for (int i = 0; i < m.nu; ++i) {
+      z0[i] = P[0][i] * r0[i] + P[3][i] * r1[i] + P[4][i] * r2[i];
+      z1[i] = P[3][i] * r0[i] + P[1][i] * r1[i] + P[5][i] * r2[i];
+      z2[i] = P[4][i] * r0[i] + P[5][i] * r1[i] + P[2][i] * r2[i];
+    }
+    double rz = 0, worst = 0;
+    for (int i = 0; i < m.nu; ++i) {
+      rz += r0[i] * z0[i] + r1[i] * z1[i] + r2[i] * z2[i];
+      worst = std::max(worst, z0[i] * z0[i] + z1[i] * z1[i] + z2[i] * z2[i]);
+    }
+    w.row_sums[j] = rz;
+    w.row_max[j] = worst;
+  });
+  double rz = 0;
+  for (int j = 0; j < m.nv; ++j) rz += w.row_sums[j];
+  return {rz, std::sqrt(*std::max_element(w.row_max.begin(), w.row_max.end()))};
 }
 
 }  // namespace
@@ -163,8 +191,6 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
   // The solver's arrays are sized at the first implicit step: the explicit
   // integrators need none of them. Every one is written before it is read.
   w.edge_blocks.resize((kDiagonalField + 6) * std::size_t(m.n));
-  w.preconditioner.resize(m.n);
-  for (auto* v : {&w.cg_r, &w.cg_z, &w.cg_p, &w.cg_q}) v->resize(m.n);
   const double* const X = w.soa.data();  // x, y, z by component
   const int n = m.n, nu = m.nu;
   parallel_for(m, m.nv, [&](int j) {
@@ -235,44 +261,72 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
   // the velocities the last substep's acceleration would give. A pull or a
   // fall changes little from one substep to the next, so this starts CG
   // nearer the answer than v does (a quarter fewer iterations on the pulls).
-  auto& x = s.v;
-  auto &r = w.cg_r, &z = w.cg_z, &p = w.cg_p, &q = w.cg_q;
+  w.cg_columns.resize(kSolverColumns * std::size_t(n));
+  const Columns x = columns(m, w, kX), r = columns(m, w, kR), z = columns(m, w, kZ),
+                p = columns(m, w, kP), q = columns(m, w, kQ);
+  double* P[6];
+  for (int k = 0; k < 6; ++k) P[k] = solver_column(m, w, kPreconditionerColumn + k);
+  const bool guess = !w.acceleration.empty();
   for_each_particle(m, [&](int a) {
-    if (fixed(m, s, a)) {
-      w.preconditioner[a] = Mat3::Identity();
-      r[a] = x[a];  // b = x: no change
-      return;
+    const Vec3& v = s.v[a];
+    Sym inverse = outer(Vec3::Zero(), 0, 1);
+    Vec3 b = v, start = v;  // fixed: b = x, no change
+    if (!fixed(m, s, a)) {
+      const Mat3 d = full(diagonal_block(m, w, a)).inverse();
+      inverse = {d(0, 0), d(1, 1), d(2, 2), d(0, 1), d(0, 2), d(1, 2)};
+      b = m.mass[a] * v + h * w.force[a];
+      if (guess) start += h * w.acceleration[a];
     }
-    w.preconditioner[a] = full(diagonal_block(m, w, a)).inverse();
-    r[a] = m.mass[a] * x[a] + h * w.force[a];
-    if (!w.acceleration.empty()) x[a] += h * w.acceleration[a];
+    for (int k = 0; k < 6; ++k) P[k][a] = inverse[k];
+    for (int k = 0; k < 3; ++k) {
+      r.c[k][a] = b[k];
+      x.c[k][a] = start[k];
+    }
   });
-  multiply(m, s, w, x, q);
-  for_each_particle(m, [&](int a) { r[a] -= q[a]; });
+  multiply(m, s, w, kX, kQ);
+  const auto each_row = [&](auto&& body) {  // body(first, end) of each row's particles
+    parallel_for(m, m.nv, [&](int j) { body(j * nu, (j + 1) * nu); });
+  };
+  each_row([&](int a0, int a1) {
+    for (int k = 0; k < 3; ++k)
+#pragma GCC ivdep
+      for (int a = a0; a < a1; ++a) r.c[k][a] -= q.c[k][a];
+  });
   // Converged when no particle's velocity is off by more than the tolerance:
   // z = P r is the preconditioned residual, a velocity. (A norm over the whole
   // cloth would let the adhesion and weight of thousands of particles drown
   // out the few the hand pulls.)
   auto [rz, worst] = precondition(m, w);
-  for_each_particle(m, [&](int a) { p[a] = z[a]; });
+  each_row([&](int a0, int a1) {
+    for (int k = 0; k < 3; ++k) std::copy(z.c[k] + a0, z.c[k] + a1, p.c[k] + a0);
+  });
   int it = 0;
   for (; it < m.params.integrator.cg_max_iterations; ++it) {
     if (worst <= m.params.integrator.cg_tolerance) break;
-    multiply(m, s, w, p, q);
-    const double pq = dot(m, w, p, q);
+    multiply(m, s, w, kP, kQ);
+    const double pq = dot(m, w, kP, kQ);
     if (pq <= 0) break;
     const double alpha = rz / pq;
-    for_each_particle(m, [&](int a) {
-      x[a] += alpha * p[a];
-      r[a] -= alpha * q[a];
+    each_row([&](int a0, int a1) {
+      for (int k = 0; k < 3; ++k)
+#pragma GCC ivdep
+        for (int a = a0; a < a1; ++a) {
+          x.c[k][a] += alpha * p.c[k][a];
+          r.c[k][a] -= alpha * q.c[k][a];
+        }
     });
     const auto [rz_next, worst_next] = precondition(m, w);
     const double beta = rz_next / rz;
     rz = rz_next;
     worst = worst_next;
-    for_each_particle(m, [&](int a) { p[a] = z[a] + beta * p[a]; });
+    each_row([&](int a0, int a1) {
+      for (int k = 0; k < 3; ++k)
+#pragma GCC ivdep
+        for (int a = a0; a < a1; ++a) p.c[k][a] = z.c[k][a] + beta * p.c[k][a];
+    });
   }
   w.cg_iterations = it;
+  for_each_particle(m, [&](int a) { s.v[a] = x.at(a); });
 }
 
 // Where a spring turns or stretches by a good part of its length within one

@@ -161,12 +161,10 @@ struct Workspace {
   std::vector<std::uint8_t> candidate_close;  // candidate within d_t this step
   std::vector<Vec3> candidates_anchor;
   double candidates_radius = 0;
-  // Implicit Euler: the matrix in columns (the 8 forward stencil edges'
-  // blocks, then the diagonal blocks: see implicit_euler.cpp), the block-Jacobi
-  // preconditioner, conjugate-gradient vectors and their columns, per-row sums.
+  // Implicit Euler, in columns (see implicit_euler.cpp): the matrix (the 8
+  // forward stencil edges' blocks, then the diagonal blocks), the
+  // conjugate-gradient vectors and the block-Jacobi preconditioner; per-row sums.
   std::vector<double> edge_blocks, cg_columns;
-  std::vector<Mat3> preconditioner;
-  std::vector<Vec3> cg_r, cg_z, cg_p, cg_q;
   std::vector<double> row_sums, row_max;
   int cg_iterations = 0;  // of the last implicit step
   // Implicit Euler's step control: velocities at the start of a try, the

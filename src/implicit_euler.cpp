@@ -37,17 +37,27 @@ Mat3 full(const Sym& s) {
 
 bool fixed(const Model& m, const State& s, int i) { return m.inv_mass[i] == 0 || s.held[i]; }
 
-// The matrix in columns. Edge e's block s sᵀ + β I (s = √α u, α ≥ 0: see
-// implicit_euler_velocities), held at its lower end a as four fields: field k
-// (s_x, s_y, s_z, β) at edge_blocks[(4 e + k) n + a], four numbers where a
-// symmetric block takes six. Then the diagonal blocks' six fields (Sym's
-// order) at edge_blocks[(32 + k) n + a].
-constexpr int kBlockFields = 4, kDiagonalField = 8 * kBlockFields;
+// The matrix and the solver's vectors are held in columns, each with zeros
+// for two rows and two particles before and after it. Column k of a store:
+std::size_t padding(const Model& m) { return 2 * std::size_t(m.nu) + 2; }
+std::size_t padded_size(const Model& m, int columns) {
+  return columns * (std::size_t(m.n) + 2 * padding(m));
+}
+double* column(const Model& m, std::vector<double>& store, int k) {
+  return store.data() + k * (std::size_t(m.n) + 2 * padding(m)) + padding(m);
+}
+
+// The matrix. Edge e's block s sᵀ + β I (s = √α u, α ≥ 0: see
+// implicit_euler_velocities), held at its lower end as four fields, column
+// 4 e + k for s_x, s_y, s_z, β: four numbers where a symmetric block takes
+// six. An edge that leaves the grid has a zero block. Then the diagonal
+// blocks' six fields (Sym's order), columns 32 to 37.
+constexpr int kBlockFields = 4, kDiagonalField = 8 * kBlockFields, kMatrixColumns = 38;
 double* edge_field(const Model& m, Workspace& w, int e, int k) {
-  return w.edge_blocks.data() + (kBlockFields * std::size_t(e) + k) * m.n;
+  return column(m, w.edge_blocks, kBlockFields * e + k);
 }
 double* diagonal_field(const Model& m, Workspace& w, int k) {
-  return w.edge_blocks.data() + (kDiagonalField + std::size_t(k)) * m.n;
+  return column(m, w.edge_blocks, kDiagonalField + k);
 }
 Sym diagonal_block(const Model& m, Workspace& w, int a) {
   Sym d;
@@ -79,9 +89,7 @@ struct Columns {
   double* c[3];
   Vec3 at(int a) const { return {c[0][a], c[1][a], c[2][a]}; }
 };
-double* solver_column(const Model& m, Workspace& w, int k) {
-  return w.cg_columns.data() + std::size_t(k) * m.n;
-}
+double* solver_column(const Model& m, Workspace& w, int k) { return column(m, w.cg_columns, k); }
 Columns columns(const Model& m, Workspace& w, Vector v) {
   return {
       {solver_column(m, w, 3 * v), solver_column(m, w, 3 * v + 1), solver_column(m, w, 3 * v + 2)}};
@@ -89,48 +97,50 @@ Columns columns(const Model& m, Workspace& w, Vector v) {
 
 // y = A x over the free particles; fixed ones have identity rows (their x
 // never changes, so their columns only enter through the starting residual).
+// Each thread takes its block of rows, offset by offset in stencil order,
+// forward then back, over all its particles at once: a neighbour off the grid
+// meets a zero block (an offset that wraps round a row reaches the block of
+// an edge that leaves the grid; one past the first or last row, the padding),
+// so the loops need no test, and each particle sums in the same order.
 void multiply(const Model& m, const State& s, Workspace& w, Vector in, Vector out) {
-  const int nu = m.nu;
   const Columns xc = columns(m, w, in), yc = columns(m, w, out);
-  const double *const X0 = xc.c[0], *const X1 = xc.c[1], *const X2 = xc.c[2];
-  // Row by row, offset by offset over the particles that have that neighbour:
-  // no test per particle in the inner loops, the same order of sums per particle.
-  parallel_for(m, m.nv, [&](int j) {
-    const int row = j * nu;
-    double* __restrict y0 = yc.c[0] + row;
-    double* __restrict y1 = yc.c[1] + row;
-    double* __restrict y2 = yc.c[2] + row;
+  const double *const x0 = xc.c[0], *const x1 = xc.c[1], *const x2 = xc.c[2];
+  double *const y0 = yc.c[0], *const y1 = yc.c[1], *const y2 = yc.c[2];
+  for_each_row_block(m, [&](int j0, int j1, int) {
+    const int a0 = j0 * m.nu, a1 = j1 * m.nu;
     {
-      const double *d0 = diagonal_field(m, w, 0) + row, *d1 = diagonal_field(m, w, 1) + row,
-                   *d2 = diagonal_field(m, w, 2) + row, *d3 = diagonal_field(m, w, 3) + row,
-                   *d4 = diagonal_field(m, w, 4) + row, *d5 = diagonal_field(m, w, 5) + row;
-      const double *x0 = X0 + row, *x1 = X1 + row, *x2 = X2 + row;
+      const double *d0 = diagonal_field(m, w, 0), *d1 = diagonal_field(m, w, 1),
+                   *d2 = diagonal_field(m, w, 2), *d3 = diagonal_field(m, w, 3),
+                   *d4 = diagonal_field(m, w, 4), *d5 = diagonal_field(m, w, 5);
 #pragma GCC ivdep
-      for (int i = 0; i < nu; ++i) {
-        y0[i] = d0[i] * x0[i] + d3[i] * x1[i] + d4[i] * x2[i];
-        y1[i] = d3[i] * x0[i] + d1[i] * x1[i] + d5[i] * x2[i];
-        y2[i] = d4[i] * x0[i] + d5[i] * x1[i] + d2[i] * x2[i];
+      for (int a = a0; a < a1; ++a) {
+        y0[a] = d0[a] * x0[a] + d3[a] * x1[a] + d4[a] * x2[a];
+        y1[a] = d3[a] * x0[a] + d1[a] * x1[a] + d5[a] * x2[a];
+        y2[a] = d4[a] * x0[a] + d5[a] * x1[a] + d2[a] * x2[a];
       }
     }
-    for_each_neighbour_offset(m, j, [&](int e, int sign, int off, int from, int to) {
-      // The block of edge e sits at its lower end: a going forward, a + off going back.
-      const int at = row + (sign > 0 ? 0 : off);
-      const double *s0 = edge_field(m, w, e, 0) + at, *s1 = edge_field(m, w, e, 1) + at,
-                   *s2 = edge_field(m, w, e, 2) + at, *beta = edge_field(m, w, e, 3) + at;
-      const double *x0 = X0 + row + off, *x1 = X1 + row + off, *x2 = X2 + row + off;
+    for (int e = 0; e < 8; ++e) {
+      const StencilEdge& st = m.stencil[e];
+      for (const int sign : {1, -1}) {
+        // The block of edge e sits at its lower end: a going forward, a + off going back.
+        const int off = sign * (st.di + st.dj * m.nu), at = sign > 0 ? 0 : off;
+        const double *s0 = edge_field(m, w, e, 0) + at, *s1 = edge_field(m, w, e, 1) + at,
+                     *s2 = edge_field(m, w, e, 2) + at, *beta = edge_field(m, w, e, 3) + at;
+        const double *n0 = x0 + off, *n1 = x1 + off, *n2 = x2 + off;
 #pragma GCC ivdep
-      for (int i = from; i < to; ++i) {
-        const double sx = s0[i] * x0[i] + s1[i] * x1[i] + s2[i] * x2[i];
-        y0[i] -= s0[i] * sx + beta[i] * x0[i];
-        y1[i] -= s1[i] * sx + beta[i] * x1[i];
-        y2[i] -= s2[i] * sx + beta[i] * x2[i];
+        for (int a = a0; a < a1; ++a) {
+          const double sx = s0[a] * n0[a] + s1[a] * n1[a] + s2[a] * n2[a];
+          y0[a] -= s0[a] * sx + beta[a] * n0[a];
+          y1[a] -= s1[a] * sx + beta[a] * n1[a];
+          y2[a] -= s2[a] * sx + beta[a] * n2[a];
+        }
       }
-    });
-    for (int i = 0; i < nu; ++i)
-      if (fixed(m, s, row + i)) {
-        y0[i] = X0[row + i];
-        y1[i] = X1[row + i];
-        y2[i] = X2[row + i];
+    }
+    for (int a = a0; a < a1; ++a)
+      if (fixed(m, s, a)) {
+        y0[a] = x0[a];
+        y1[a] = x1[a];
+        y2[a] = x2[a];
       }
   });
   for (const CollisionPair& c : w.collision_pairs)  // few: serial, in pair order
@@ -190,8 +200,8 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
   // the positions in columns add_spring_forces left (this substep's).
   // The solver's arrays are sized at the first implicit step: the explicit
   // integrators need none of them. Every one is written before it is read.
-  w.edge_blocks.resize((kDiagonalField + 6) * std::size_t(m.n));
-  const double* const X = w.soa.data();  // x, y, z by component
+  w.edge_blocks.resize(padded_size(m, kMatrixColumns));  // the padding stays zero
+  const double* const X = w.soa.data();                  // x, y, z by component
   const int n = m.n, nu = m.nu;
   parallel_for(m, m.nv, [&](int j) {
     const int row = j * nu;
@@ -261,7 +271,7 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
   // the velocities the last substep's acceleration would give. A pull or a
   // fall changes little from one substep to the next, so this starts CG
   // nearer the answer than v does (a quarter fewer iterations on the pulls).
-  w.cg_columns.resize(kSolverColumns * std::size_t(n));
+  w.cg_columns.resize(padded_size(m, kSolverColumns));
   const Columns x = columns(m, w, kX), r = columns(m, w, kR), z = columns(m, w, kZ),
                 p = columns(m, w, kP), q = columns(m, w, kQ);
   double* P[6];

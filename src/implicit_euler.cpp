@@ -171,7 +171,9 @@ std::pair<double, double> precondition(const Model& m, Workspace& w) {
     const double* P[6];
     for (int k = 0; k < 6; ++k) P[k] = solver_column(m, w, kPreconditionerColumn + k) + row;
     const double *r0 = r.c[0] + row, *r1 = r.c[1] + row, *r2 = r.c[2] + row;
-    double* __restrict z0 = z.c[0] + row, * __restrict z1 = z.c[1] + row, * __restrict z2 = z.c[2] + row;
+    double* __restrict z0 = z.c[0] + row;
+    double* __restrict z1 = z.c[1] + row;
+    double* __restrict z2 = z.c[2] + row;
 #pragma GCC ivdep
     for (int i = 0; i < m.nu; ++i) {
       z0[i] = P[0][i] * r0[i] + P[3][i] * r1[i] + P[4][i] * r2[i];
@@ -249,7 +251,12 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
       const int at = row + (sign > 0 ? 0 : off);
       const double *s0 = edge_field(m, w, e, 0) + at, *s1 = edge_field(m, w, e, 1) + at,
                    *s2 = edge_field(m, w, e, 2) + at, *beta = edge_field(m, w, e, 3) + at;
-      double* __restrict d0 = d[0], * __restrict d1 = d[1], * __restrict d2 = d[2], * __restrict d3 = d[3], * __restrict d4 = d[4], * __restrict d5 = d[5];
+      double* __restrict d0 = d[0];
+      double* __restrict d1 = d[1];
+      double* __restrict d2 = d[2];
+      double* __restrict d3 = d[3];
+      double* __restrict d4 = d[4];
+      double* __restrict d5 = d[5];
 #pragma GCC ivdep
       for (int i = from; i < to; ++i) {
         d0[i] += s0[i] * s0[i] + beta[i];

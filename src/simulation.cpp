@@ -184,11 +184,11 @@ void Simulation::step() {
     // springs change too much for their linearisation is taken again at half
     // the size. Where they double the size after every substep that held, the
     // next one here tries twice the size only when this one's springs changed
-    // by at most half the limit: a spring's change over a substep grows at
-    // least in proportion to its length, so a larger one would fail, and a
-    // failed try costs a whole solve (on the pulls, one solve in three was
-    // thrown away). Substeps are dt / 2^k and start on a multiple of their
-    // size, so they end exactly on the step.
+    // by at most half the limit: a spring's change grows at least in
+    // proportion to the substep, so a larger one would fail, and a failed try
+    // costs a whole solve (on the pulls, one solve in three was thrown away).
+    // Substeps are dt / 2^k and start on a multiple of their size, so they end
+    // exactly on the step.
     constexpr long long kWhole = 1LL << kMostHalvings;
     long long done = 0;  // in units of dt / 2^kMostHalvings
     while (done < kWhole) {

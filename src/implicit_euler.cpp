@@ -82,9 +82,11 @@ void for_each_neighbour_offset(const Model& m, int j, Body&& body) {
 }
 
 // The solver's vectors in columns, three each (x, y, z), then the
-// preconditioner's six fields (Sym's order): every loop over a row vectorises.
+// preconditioner's six fields (Sym's order), then the normal of each particle
+// held on the contact surface (zero for the others): every loop over a row
+// vectorises.
 enum Vector { kX, kR, kZ, kP, kQ };
-constexpr int kPreconditionerColumn = 15, kSolverColumns = 21;
+constexpr int kPreconditionerColumn = 15, kHeldColumn = 21, kSolverColumns = 24;
 struct Columns {
   double* c[3];
   Vec3 at(int a) const { return {c[0][a], c[1][a], c[2][a]}; }
@@ -93,6 +95,23 @@ double* solver_column(const Model& m, Workspace& w, int k) { return column(m, w.
 Columns columns(const Model& m, Workspace& w, Vector v) {
   return {
       {solver_column(m, w, 3 * v), solver_column(m, w, 3 * v + 1), solver_column(m, w, 3 * v + 2)}};
+}
+
+// v -= (v·n) n for the particles held on the surface (Baraff & Witkin's
+// filter S = I - n nᵀ; n is zero for the others).
+void filter(const Model& m, Workspace& w, Vector v) {
+  const Columns c = columns(m, w, v);
+  const double *n0 = solver_column(m, w, kHeldColumn), *n1 = solver_column(m, w, kHeldColumn + 1),
+               *n2 = solver_column(m, w, kHeldColumn + 2);
+  parallel_for(m, m.nv, [&](int j) {
+#pragma GCC ivdep
+    for (int a = j * m.nu; a < (j + 1) * m.nu; ++a) {
+      const double d = c.c[0][a] * n0[a] + c.c[1][a] * n1[a] + c.c[2][a] * n2[a];
+      c.c[0][a] -= d * n0[a];
+      c.c[1][a] -= d * n1[a];
+      c.c[2][a] -= d * n2[a];
+    }
+  });
 }
 
 // y = A x over the free particles; fixed ones have identity rows (their x
@@ -170,6 +189,8 @@ std::pair<double, double> precondition(const Model& m, Workspace& w) {
     const int row = j * m.nu;
     const double* P[6];
     for (int k = 0; k < 6; ++k) P[k] = solver_column(m, w, kPreconditionerColumn + k) + row;
+    const double* N[3];
+    for (int k = 0; k < 3; ++k) N[k] = solver_column(m, w, kHeldColumn + k) + row;
     const double *r0 = r.c[0] + row, *r1 = r.c[1] + row, *r2 = r.c[2] + row;
     double* __restrict z0 = z.c[0] + row;
     double* __restrict z1 = z.c[1] + row;
@@ -179,6 +200,10 @@ std::pair<double, double> precondition(const Model& m, Workspace& w) {
       z0[i] = P[0][i] * r0[i] + P[3][i] * r1[i] + P[4][i] * r2[i];
       z1[i] = P[3][i] * r0[i] + P[1][i] * r1[i] + P[5][i] * r2[i];
       z2[i] = P[4][i] * r0[i] + P[5][i] * r1[i] + P[2][i] * r2[i];
+      const double d = z0[i] * N[0][i] + z1[i] * N[1][i] + z2[i] * N[2][i];
+      z0[i] -= d * N[0][i];
+      z1[i] -= d * N[1][i];
+      z2[i] -= d * N[2][i];
     }
     double rz = 0, worst = 0;
     for (int i = 0; i < m.nu; ++i) {
@@ -278,6 +303,13 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
   // the velocities the last substep's acceleration would give. A pull or a
   // fall changes little from one substep to the next, so this starts CG
   // nearer the answer than v does (a quarter fewer iterations on the pulls).
+  // A particle on the contact surface that the step's forces press into it
+  // is held on it: its new velocity keeps no normal part (Baraff & Witkin's
+  // constraint, their section 5.3: the start, r, z and A p are filtered).
+  // Free, the solve would carry it into the surface for the whole substep,
+  // and drag its lifted neighbours down with it through the springs, before
+  // collide stopped it: the peel front lagged, and the step control halved
+  // substeps for a motion the surface takes away.
   w.cg_columns.resize(padded_size(m, kSolverColumns));
   const Columns x = columns(m, w, kX), r = columns(m, w, kR), z = columns(m, w, kZ),
                 p = columns(m, w, kP), q = columns(m, w, kQ);
@@ -295,11 +327,16 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
       if (guess) start += h * w.acceleration[a];
     }
     for (int k = 0; k < 6; ++k) P[k][a] = inverse[k];
+    Vec3 held = Vec3::Zero();
+    if (!fixed(m, s, a) && s.contact[a] && w.force[a].dot(w.surface_normal[a]) < 0)
+      held = w.surface_normal[a];
     for (int k = 0; k < 3; ++k) {
       r.c[k][a] = b[k];
       x.c[k][a] = start[k];
+      solver_column(m, w, kHeldColumn + k)[a] = held[k];
     }
   });
+  filter(m, w, kX);
   multiply(m, s, w, kX, kQ);
   const auto each_row = [&](auto&& body) {  // body(first, end) of each row's particles
     parallel_for(m, m.nv, [&](int j) { body(j * nu, (j + 1) * nu); });
@@ -309,6 +346,7 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
 #pragma GCC ivdep
       for (int a = a0; a < a1; ++a) r.c[k][a] -= q.c[k][a];
   });
+  filter(m, w, kR);
   // Converged when no particle's velocity is off by more than the tolerance:
   // z = P r is the preconditioned residual, a velocity. (A norm over the whole
   // cloth would let the adhesion and weight of thousands of particles drown
@@ -321,6 +359,7 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
   for (; it < m.params.integrator.cg_max_iterations; ++it) {
     if (worst <= m.params.integrator.cg_tolerance) break;
     multiply(m, s, w, kP, kQ);
+    filter(m, w, kQ);
     const double pq = dot(m, w, kP, kQ);
     if (pq <= 0) break;
     const double alpha = rz / pq;

@@ -118,7 +118,7 @@ struct Params {
     long long threads = 1;    // threads of the step; 0 means all cores (the CLI's default)
     double cg_tolerance = 1e-4;          // implicit-euler: largest velocity error, m/s
     long long cg_max_iterations = 300;   // implicit-euler
-    double max_step_strain = 0.05;       // implicit-euler: a step is halved past this (Baraff & Witkin)
+    double max_step_strain = 0.025;      // implicit-euler: a step is halved past this (Baraff & Witkin)
   } integrator;
 
   struct Run {

@@ -7,8 +7,10 @@
 // which D takes implicitly; K is the springs' stiffness with the compressed-spring
 // fix (the transverse term dropped when |d| < l0, so K stays positive
 // semi-definite) plus the repulsion of colliding pairs along their line. The air,
-// adhesion, friction and surface contacts are taken at the start of the step.
-// Pinned, driven and held particles keep their velocity (Baraff & Witkin's filter).
+// adhesion and friction are taken at the start of the step; collisions with
+// the surfaces after it. Pinned, driven and held particles keep their velocity,
+// and particles the forces press into the contact surface keep no normal
+// velocity (Baraff & Witkin's filter).
 #include <algorithm>
 #include <cmath>
 #include <utility>

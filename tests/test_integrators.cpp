@@ -141,8 +141,8 @@ TEST(ImplicitEuler, HoldsParticlesPressedIntoTheSurfaceOnIt) {
   EXPECT_LT(w.cg_iterations, m.params.integrator.cg_max_iterations);
   int held = 0, lifting = 0;
   for (int a = 0; a < m.n; ++a) {
-    if (!s.contact[a] || m.inv_mass[a] == 0 || s.held[a])
-      continue;  // as the solve: fixed ones keep v
+    // Fixed particles keep their velocity, as in the solve.
+    if (!s.contact[a] || m.inv_mass[a] == 0 || s.held[a]) continue;
     const Vec3& n = w.surface_normal[a];
     if (w.force[a].dot(n) < 0) {
       ++held;

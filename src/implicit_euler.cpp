@@ -384,6 +384,7 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
     });
   }
   w.cg_iterations = it;
+  w.cg_iterations_total += it;
   for_each_particle(m, [&](int a) { s.v[a] = x.at(a); });
 }
 

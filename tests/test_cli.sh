@@ -79,6 +79,16 @@ d = json.load(open(sys.argv[1]))
 g = d["grids"]
 assert len(g) == 1 and g[0]["particles"] == 81 and len(g[0]["wall_s"]) == 2 and d["repetitions"] == 2, d
 ' "$T/bench.json" && ok "bench.json: one grid, 81 particles, 2 repetitions" || bad "bench.json"
+"$W" bench --grids 9 --duration 0.01 --repetitions 1 --integrator implicit-euler \
+  --set integrator.dt=0.004166666666666667 --out "$T/bench_implicit.json" >"$T/bench_implicit.txt"
+python3 -c '
+import json, sys
+g = json.load(open(sys.argv[1]))["grids"][0]
+e = json.load(open(sys.argv[2]))["grids"][0]
+assert g["solves_per_step"] >= g["substeps_per_step"] >= 1 and g["cg_iterations_per_solve"] > 0, g
+assert e["solves_per_step"] == 0 and e["cg_iterations_per_solve"] == 0, e
+' "$T/bench_implicit.json" "$T/bench.json" && grep -q "conjugate-gradient iterations a solve" "$T/bench_implicit.txt" &&
+  ok "bench: implicit Euler's solves and iterations" || bad "bench: implicit Euler's solves and iterations"
 expect_bad_bench() {
   local name="$1" want="$2"; shift 2
   "$W" bench "$@" --out "$T/bench_$name.json" >/dev/null 2>"$T/err"; local code=$?

@@ -75,12 +75,19 @@ json measure(const Grid& g, int repetitions) {
   for (int rep = 0; rep < repetitions; ++rep) {
     Simulation sim(g.params);
     sim.step();
-    const long long substeps = sim.workspace().substeps;
+    const Workspace& w = sim.workspace();
+    const long long substeps = w.substeps, solves = w.solves, iterations = w.cg_iterations_total;
     const auto start = std::chrono::steady_clock::now();
     for (long long k = 0; k < g.steps; ++k) sim.step();
     wall.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-    // Implicit Euler's step control may take a step in substeps; the others never.
-    r["substeps_per_step"] = static_cast<double>(sim.workspace().substeps - substeps) / g.steps;
+    // Implicit Euler's step control may take a step in substeps, and throw
+    // solves away; the other integrators take one substep and no solve.
+    r["substeps_per_step"] = static_cast<double>(w.substeps - substeps) / g.steps;
+    r["solves_per_step"] = static_cast<double>(w.solves - solves) / g.steps;
+    r["cg_iterations_per_solve"] = w.solves > solves
+                                       ? static_cast<double>(w.cg_iterations_total - iterations) /
+                                             static_cast<double>(w.solves - solves)
+                                       : 0.0;
     // Checked after the clock stops: the check costs a pass over the particles.
     if (const std::string why = sim.blow_up_reason(); !why.empty()) return {{"blow_up", why}};
     const Model& m = sim.model();
@@ -214,6 +221,11 @@ int run_bench(const Options& o) {
         "%5lld  %9lld  %7lld  %5.2f  %6lld  %13.2f  %8.3f  %9.1f  %16.1f  %11.4f  %7.1f  %10.0f\n",
         g.size, n, springs, 1e6 * g.params.integrator.dt, g.steps, substeps, median(walls),
         median(us_step), median(ns_particle), median(realtime), peak_mb, per_particle);
+    const double solves = r["solves_per_step"], iterations = r["cg_iterations_per_solve"];
+    if (solves > 0)
+      std::printf(
+          "       implicit Euler: %.2f solves a step, %.1f conjugate-gradient iterations a solve\n",
+          solves, iterations);
     std::fflush(stdout);
     doc["grids"].push_back({{"grid", g.size},
                             {"particles", n},
@@ -221,6 +233,8 @@ int run_bench(const Options& o) {
                             {"dt_s", g.params.integrator.dt},
                             {"steps", g.steps},
                             {"substeps_per_step", substeps},
+                            {"solves_per_step", solves},
+                            {"cg_iterations_per_solve", iterations},
                             {"wall_s", walls},
                             {"median",
                              {{"wall_s", median(walls)},

@@ -166,7 +166,8 @@ struct Workspace {
   // conjugate-gradient vectors and the block-Jacobi preconditioner; per-row sums.
   std::vector<double> edge_blocks, cg_columns;
   std::vector<double> row_sums, row_max;
-  int cg_iterations = 0;  // of the last implicit step
+  int cg_iterations = 0;             // of the last implicit solve
+  long long cg_iterations_total = 0;  // of every implicit solve since reset
   // Implicit Euler's step control: velocities at the start of a try, the
   // halvings of dt the next substep tries; substeps taken since reset (one a
   // step for the other integrators), and solves (the tries thrown away

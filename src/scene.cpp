@@ -152,7 +152,7 @@ std::vector<ParamDef> make_defs() {
             "implicit-euler: conjugate gradients stop when no velocity is off by more",
             P(integrator.cg_tolerance)),
       field("integrator.cg_max_iterations", "", 1, 100000,
-            "implicit-euler: most conjugate-gradient iterations per step", P(integrator.cg_max_iterations)),
+            "implicit-euler: most conjugate-gradient iterations per solve", P(integrator.cg_max_iterations)),
       field("integrator.max_step_strain", "1", 1e-3, 10,
             "implicit-euler: a step is halved when a spring changes by more than this times its rest "
             "length in it, and doubled only when none changed by half as much",

@@ -67,22 +67,6 @@ Sym diagonal_block(const Model& m, Workspace& w, int a) {
   return d;
 }
 
-// Calls body(e, sign, off, from, to) for each of row j's 16 neighbour
-// offsets (edge e forward, sign 1, then back, -1) that stay on the grid, in
-// stencil order: the particles i in [from, to) of the row have the neighbour
-// a + off.
-template <class Body>
-void for_each_neighbour_offset(const Model& m, int j, Body&& body) {
-  for (int e = 0; e < 8; ++e) {
-    const StencilEdge& st = m.stencil[e];
-    for (const int sign : {1, -1}) {
-      const int di = sign * st.di, dj = sign * st.dj;
-      if (j + dj < 0 || j + dj >= m.nv) continue;
-      body(e, sign, di + dj * m.nu, std::max(0, -di), std::min(m.nu, m.nu - di));
-    }
-  }
-}
-
 // The solver's vectors in columns, three each (x, y, z), then the
 // preconditioner's six fields (Sym's order), then the normal of each particle
 // held on the contact surface (zero for the others): every loop over a row
@@ -264,36 +248,36 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
     }
   });
   // Diagonal blocks: mass, viscous and collision damping, and every edge at
-  // the particle, in the product's order (forward, then back, edge by edge).
-  parallel_for(m, m.nv, [&](int j) {
-    const int row = j * nu;
-    double* d[6];
-    for (int k = 0; k < 6; ++k) d[k] = diagonal_field(m, w, k) + row;
-    for (int i = 0; i < nu; ++i) {
-      const int a = row + i;
-      const double own = m.mass[a] + h * c * m.area[a] + (w.colliding[a] ? h * kf : 0.0);
-      for (int k = 0; k < 6; ++k) d[k][i] = k < 3 ? own : 0.0;
+  // the particle, in the product's order and over the same blocks of rows (an
+  // edge off the grid adds its zero block).
+  for_each_row_block(m, [&](int j0, int j1, int) {
+    const int a0 = j0 * nu, a1 = j1 * nu;
+    double* __restrict d0 = diagonal_field(m, w, 0);
+    double* __restrict d1 = diagonal_field(m, w, 1);
+    double* __restrict d2 = diagonal_field(m, w, 2);
+    double* __restrict d3 = diagonal_field(m, w, 3);
+    double* __restrict d4 = diagonal_field(m, w, 4);
+    double* __restrict d5 = diagonal_field(m, w, 5);
+    for (int a = a0; a < a1; ++a) {
+      d0[a] = d1[a] = d2[a] = m.mass[a] + h * c * m.area[a] + (w.colliding[a] ? h * kf : 0.0);
+      d3[a] = d4[a] = d5[a] = 0.0;
     }
-    for_each_neighbour_offset(m, j, [&](int e, int sign, int off, int from, int to) {
-      const int at = row + (sign > 0 ? 0 : off);
-      const double *s0 = edge_field(m, w, e, 0) + at, *s1 = edge_field(m, w, e, 1) + at,
-                   *s2 = edge_field(m, w, e, 2) + at, *beta = edge_field(m, w, e, 3) + at;
-      double* __restrict d0 = d[0];
-      double* __restrict d1 = d[1];
-      double* __restrict d2 = d[2];
-      double* __restrict d3 = d[3];
-      double* __restrict d4 = d[4];
-      double* __restrict d5 = d[5];
+    for (int e = 0; e < 8; ++e)
+      for (const int sign : {1, -1}) {
+        const StencilEdge& st = m.stencil[e];
+        const int at = sign > 0 ? 0 : -(st.di + st.dj * nu);
+        const double *s0 = edge_field(m, w, e, 0) + at, *s1 = edge_field(m, w, e, 1) + at,
+                     *s2 = edge_field(m, w, e, 2) + at, *beta = edge_field(m, w, e, 3) + at;
 #pragma GCC ivdep
-      for (int i = from; i < to; ++i) {
-        d0[i] += s0[i] * s0[i] + beta[i];
-        d1[i] += s1[i] * s1[i] + beta[i];
-        d2[i] += s2[i] * s2[i] + beta[i];
-        d3[i] += s0[i] * s1[i];
-        d4[i] += s0[i] * s2[i];
-        d5[i] += s1[i] * s2[i];
+        for (int a = a0; a < a1; ++a) {
+          d0[a] += s0[a] * s0[a] + beta[a];
+          d1[a] += s1[a] * s1[a] + beta[a];
+          d2[a] += s2[a] * s2[a] + beta[a];
+          d3[a] += s0[a] * s1[a];
+          d4[a] += s0[a] * s2[a];
+          d5[a] += s1[a] * s2[a];
+        }
       }
-    });
   });
   for (CollisionPair& p : w.collision_pairs) {
     p.block = outer(p.u, h2 * m.params.self_collision.k, 0);

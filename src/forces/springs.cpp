@@ -190,8 +190,14 @@ void damp_offset(const DampingGrid& g, int di, int dj, double c, const ChainScra
   // from the last row up; once row j's λ is known, row j + dj's particles
   // take +λ u of the spring each starts and −λ u of the one each ends.
   const auto take = [&](int r, auto ends, auto set) {
-    const double* __restrict lambda = t.lambda, * __restrict ux = t.ux, * __restrict uy = t.uy, * __restrict uz = t.uz, * __restrict w = g.inv_mass;
-    double* __restrict dvx = g.dvx, * __restrict dvy = g.dvy, * __restrict dvz = g.dvz;
+    const double* __restrict lambda = t.lambda;
+    const double* __restrict ux = t.ux;
+    const double* __restrict uy = t.uy;
+    const double* __restrict uz = t.uz;
+    const double* __restrict w = g.inv_mass;
+    double* __restrict dvx = g.dvx;
+    double* __restrict dvy = g.dvy;
+    double* __restrict dvz = g.dvz;
 #pragma GCC ivdep
     for (int a = r * nu; a < (r + 1) * nu; ++a) {
       double x = lambda[a] * ux[a], y = lambda[a] * uy[a], z = lambda[a] * uz[a];

@@ -122,7 +122,8 @@ struct Workspace {
   // Springs (forces/springs.cpp): positions and velocities by component, a
   // zero row, then per thread its ring of edge rows and a row of sums.
   std::vector<double> soa;
-  std::vector<double> damping_columns;  // apply_spring_damping's columns and scratch
+  std::vector<float> damping_columns;    // apply_spring_damping's columns and scratch
+  std::vector<double> damping_impulses;  // and its impulses
   std::vector<int> queue;
   // Strain limiting: structural and shear springs in adaptive order, the first
   // spring of each level (and the end), summed corrections within a level.
@@ -166,7 +167,7 @@ struct Workspace {
   // conjugate-gradient vectors and the block-Jacobi preconditioner; per-row sums.
   std::vector<double> edge_blocks, cg_columns;
   std::vector<double> row_sums, row_max;
-  int cg_iterations = 0;             // of the last implicit solve
+  int cg_iterations = 0;              // of the last implicit solve
   long long cg_iterations_total = 0;  // of every implicit solve since reset
   // Implicit Euler's step control: velocities at the start of a try, the
   // halvings of dt the next substep tries; substeps taken since reset (one a

@@ -128,32 +128,38 @@ void add_spring_forces(const Model& m, const State& s, Workspace& w, bool with_d
 // their chains are vertical too.
 namespace {
 
+// The solve runs in float, at twice the vector width and half the memory
+// traffic of double; its impulses are summed in double. A spring's impulse λ u
+// is the same float at both ends, so each pair still cancels exactly and
+// momentum is conserved to double rounding.
+using Real = float;
+
 // A grid's particles by component (row-major over nu columns and nv rows).
 struct DampingGrid {
   int nu = 0, nv = 0;
-  const double *px, *py, *pz, *vx, *vy, *vz, *inv_mass;
-  double *dvx, *dvy, *dvz;  // velocity changes: the first offset sets them, the others add
+  const Real *px, *py, *pz, *vx, *vy, *vz, *inv_mass;
+  double *jx, *jy, *jz;  // impulses: the first offset sets them, the others add
 };
 
 // Per spring slot of one offset (one per particle: the spring it starts).
 // Where no spring starts, u, λ and the coupling are zero.
 struct ChainScratch {
-  double *ux, *uy, *uz;
-  double *inv_diag, *rhs;  // after elimination
-  double* coupling;        // with the spring before in the chain
-  double* lambda;
+  Real *ux, *uy, *uz;
+  Real *inv_diag, *rhs;  // after elimination
+  Real* coupling;        // with the spring before in the chain
+  Real* lambda;
 };
 
 // One offset (di, dj), dj > 0, of grid g: solves its chains and adds each
-// particle's velocity change (the first offset into a dv sets it). Every
+// particle's impulse (the first offset into a j sets it). Every
 // loop runs over whole rows (a spring slot off the grid computes zeros), so
 // that it vectorises.
-void damp_offset(const DampingGrid& g, int di, int dj, double c, const ChainScratch& t,
+void damp_offset(const DampingGrid& g, int di, int dj, Real c, const ChainScratch& t,
                  bool first_offset) {
   const int nu = g.nu, nv = g.nv, n = nu * nv, off = di + dj * nu, springs_end = (nv - dj) * nu;
   const int lo = std::max(0, -di), hi = std::min(nu, nu - di);
-  for (double* z : {t.ux, t.uy, t.uz, t.coupling, t.lambda})  // rows where no spring starts
-    std::fill(z + springs_end, z + n, 0.0);
+  for (Real* z : {t.ux, t.uy, t.uz, t.coupling, t.lambda})  // rows where no spring starts
+    std::fill(z + springs_end, z + n, Real(0));
   // Forward elimination, row by row: a spring's predecessor starts dj rows up
   // (at a - off; zero u where there is none).
   for (int j = 0; j + dj < nv; ++j) {
@@ -163,18 +169,19 @@ void damp_offset(const DampingGrid& g, int di, int dj, double c, const ChainScra
     for (int i = 0; i < nu; ++i) {
       const int a = row + i, b = a + off;  // b: off the grid where no spring starts
       const bool on = i >= lo && i < hi;
-      const double dx = g.px[b] - g.px[a], dy = g.py[b] - g.py[a], dz = g.pz[b] - g.pz[a];
-      const double len = std::sqrt(dx * dx + dy * dy + dz * dz);
-      const double inv = on && len > 0 ? 1.0 / len : 0.0;  // a zero-length spring damps nothing
-      const double ux = dx * inv, uy = dy * inv, uz = dz * inv;
-      double diag = 1 + c * (g.inv_mass[a] + (on ? g.inv_mass[b] : 0.0));
-      double rhs =
+      const Real dx = g.px[b] - g.px[a], dy = g.py[b] - g.py[a], dz = g.pz[b] - g.pz[a];
+      const Real len = std::sqrt(dx * dx + dy * dy + dz * dz);
+      const Real inv =
+          on && len > 0 ? Real(1) / len : Real(0);  // a zero-length spring damps nothing
+      const Real ux = dx * inv, uy = dy * inv, uz = dz * inv;
+      Real diag = 1 + c * (g.inv_mass[a] + (on ? g.inv_mass[b] : Real(0)));
+      Real rhs =
           c * (ux * (g.vx[b] - g.vx[a]) + uy * (g.vy[b] - g.vy[a]) + uz * (g.vz[b] - g.vz[a]));
-      double coupling = 0;
+      Real coupling = 0;
       if (!first) {
         const int p = a - off;
         coupling = -c * g.inv_mass[a] * (t.ux[p] * ux + t.uy[p] * uy + t.uz[p] * uz);
-        const double f = coupling * t.inv_diag[p];
+        const Real f = coupling * t.inv_diag[p];
         diag -= f * coupling;
         rhs -= f * t.rhs[p];
       }
@@ -182,22 +189,21 @@ void damp_offset(const DampingGrid& g, int di, int dj, double c, const ChainScra
       t.uy[a] = uy;
       t.uz[a] = uz;
       t.coupling[a] = coupling;
-      t.inv_diag[a] = 1.0 / diag;
-      t.rhs[a] = on ? rhs : 0.0;
+      t.inv_diag[a] = Real(1) / diag;
+      t.rhs[a] = on ? rhs : Real(0);
     }
   }
   // Back substitution, λ = (rhs - coupling to the next spring · its λ) / diag,
   // from the last row up; once row j's λ is known, row j + dj's particles
   // take +λ u of the spring each starts and −λ u of the one each ends.
   const auto take = [&](int r, auto ends, auto set) {
-    const double* __restrict lambda = t.lambda;
-    const double* __restrict ux = t.ux;
-    const double* __restrict uy = t.uy;
-    const double* __restrict uz = t.uz;
-    const double* __restrict w = g.inv_mass;
-    double* __restrict dvx = g.dvx;
-    double* __restrict dvy = g.dvy;
-    double* __restrict dvz = g.dvz;
+    const Real* __restrict lambda = t.lambda;
+    const Real* __restrict ux = t.ux;
+    const Real* __restrict uy = t.uy;
+    const Real* __restrict uz = t.uz;
+    double* __restrict jx = g.jx;
+    double* __restrict jy = g.jy;
+    double* __restrict jz = g.jz;
 #pragma GCC ivdep
     for (int a = r * nu; a < (r + 1) * nu; ++a) {
       double x = lambda[a] * ux[a], y = lambda[a] * uy[a], z = lambda[a] * uz[a];
@@ -208,13 +214,13 @@ void damp_offset(const DampingGrid& g, int di, int dj, double c, const ChainScra
         z -= lambda[p] * uz[p];
       }
       if constexpr (set) {
-        dvx[a] = w[a] * x;
-        dvy[a] = w[a] * y;
-        dvz[a] = w[a] * z;
+        jx[a] = x;
+        jy[a] = y;
+        jz[a] = z;
       } else {
-        dvx[a] += w[a] * x;
-        dvy[a] += w[a] * y;
-        dvz[a] += w[a] * z;
+        jx[a] += x;
+        jy[a] += y;
+        jz[a] += z;
       }
     }
   };
@@ -237,8 +243,8 @@ void damp_offset(const DampingGrid& g, int di, int dj, double c, const ChainScra
 }
 
 // out[i rows + j] = in[j cols + i]: by tiles, so that both sides stay in cache.
-void transpose(const Model& m, const double* __restrict in, double* __restrict out, int rows,
-               int cols) {
+template <class T>
+void transpose(const Model& m, const T* __restrict in, T* __restrict out, int rows, int cols) {
   constexpr int kTile = 16;
   parallel_for(m, (rows + kTile - 1) / kTile, [&](int tile) {
     const int j0 = tile * kTile, j1 = std::min(rows, j0 + kTile);
@@ -258,34 +264,36 @@ void apply_spring_damping(const Model& m, State& s, Workspace& w, double h) {
   if (damped == 0) return;
   const int n = m.n, nu = m.nu, nv = m.nv;
   // The offsets in two fixed groups (structural and shear; bending), each
-  // adding its offsets in stencil order into its own dv on the grid and on
-  // the transpose: the groups may run on two threads, and the sums are the
+  // adding its offsets in stencil order into its own impulses on the grid and
+  // on the transpose: the groups may run on two threads, and the sums are the
   // same for any number of threads.
   constexpr int kGroups = 2;
-  // Columns: the grid (v, 1/m; x y z are add_spring_forces') and its
-  // transpose (x y z, v, 1/m); each group's dv on both; each thread's chain
-  // scratch. Each has zeros before and after it for the slots two springs
-  // beyond the grid's ends.
-  constexpr int kPad = 4, kGrids = 11, kScratch = 7;
+  // Float columns: the grid (x y z, v, 1/m) and its transpose; each thread's
+  // chain scratch. Each has zeros before and after it for the slots two
+  // springs beyond the grid's ends. Double columns: each group's impulses on
+  // the grid and on the transpose, then those on the transpose back on the
+  // grid.
+  constexpr int kPad = 4, kGrid = 7, kScratch = 7;
   const int threads = std::min(m.threads, kGroups);
-  const int columns = kGrids + 6 * kGroups + kScratch * threads;
   const std::size_t stride = std::size_t(n) + 2 * kPad;
-  w.damping_columns.resize(columns * stride);
+  w.damping_columns.resize((2 * kGrid + kScratch * threads) * stride);
+  w.damping_impulses.resize(9 * kGroups * std::size_t(n));
   const auto col = [&](int k) { return w.damping_columns.data() + k * stride + kPad; };
+  const auto impulse = [&](int k) { return w.damping_impulses.data() + k * std::size_t(n); };
   const double* X = w.soa.data();  // x y z by component, then more of w.soa
   for_each_particle(m, [&](int a) {
-    for (int k = 0; k < 3; ++k) col(k)[a] = s.v[a][k];
-    col(3)[a] = m.inv_mass[a];
+    for (int k = 0; k < 3; ++k) {
+      col(k)[a] = Real(X[k * std::size_t(n) + a]);
+      col(3 + k)[a] = Real(s.v[a][k]);
+    }
+    col(6)[a] = Real(m.inv_mass[a]);
   });
-  for (int k = 0; k < 3; ++k) {  // transposed: particle (i, j) at i nv + j
-    transpose(m, X + k * std::size_t(n), col(4 + k), nv, nu);
-    transpose(m, col(k), col(7 + k), nv, nu);
-  }
-  transpose(m, col(3), col(10), nv, nu);
-  bool first[kGroups][2] = {{true, true}, {true, true}};  // per group: nothing in dv, dv_t yet
+  for (int k = 0; k < kGrid; ++k)  // transposed: particle (i, j) at i nv + j
+    transpose(m, col(k), col(kGrid + k), nv, nu);
+  bool first[kGroups][2] = {{true, true}, {true, true}};  // per group: nothing in j, j_t yet
 #pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1)
   for (int group = 0; group < kGroups; ++group) {
-    double* t = col(kGrids + 6 * kGroups + kScratch * omp_get_thread_num());
+    Real* t = col(2 * kGrid + kScratch * omp_get_thread_num());
     const ChainScratch scratch{t,
                                t + stride,
                                t + 2 * stride,
@@ -293,41 +301,58 @@ void apply_spring_damping(const Model& m, State& s, Workspace& w, double h) {
                                t + 4 * stride,
                                t + 5 * stride,
                                t + 6 * stride};
-    double* dv = col(kGrids + 6 * group);  // on the grid, then on the transpose
-    double* dv_t = dv + 3 * stride;
     for (int e = group * kEdges / kGroups; e < (group + 1) * kEdges / kGroups; ++e) {
       const StencilEdge& st = m.stencil[e];
       if (st.damping == 0) continue;
-      const double c = damped * h * st.damping;
-      if (st.dj > 0) {
-        const DampingGrid grid{nu,     nv,     X,      X + n, X + 2 * n,   col(0),
-                               col(1), col(2), col(3), dv,    dv + stride, dv + 2 * stride};
-        damp_offset(grid, st.di, st.dj, c, scratch, first[group][0]);
-        first[group][0] = false;
-      } else {  // a horizontal offset's chains are vertical on the transposed grid
-        const DampingGrid grid{nv,     nu,     col(4),  col(5), col(6),        col(7),
-                               col(8), col(9), col(10), dv_t,   dv_t + stride, dv_t + 2 * stride};
-        damp_offset(grid, st.dj, st.di, c, scratch, first[group][1]);
-        first[group][1] = false;
-      }
+      const Real c = Real(damped * h * st.damping);
+      // A horizontal offset's chains are vertical on the transposed grid.
+      const bool transposed = st.dj == 0;
+      const Real* g = col(transposed ? kGrid : 0);
+      double* j = impulse(6 * group + (transposed ? 3 : 0));
+      const DampingGrid grid{transposed ? nv : nu,
+                             transposed ? nu : nv,
+                             g,
+                             g + stride,
+                             g + 2 * stride,
+                             g + 3 * stride,
+                             g + 4 * stride,
+                             g + 5 * stride,
+                             g + 6 * stride,
+                             j,
+                             j + n,
+                             j + 2 * n};
+      damp_offset(grid, transposed ? st.dj : st.di, transposed ? st.di : st.dj, c, scratch,
+                  first[group][transposed]);
+      first[group][transposed] = false;
     }
   }
-  // The groups' changes on the transpose, back on the grid (into the
-  // scratch of thread 0), then v += the mean change.
-  double* back = col(kGrids + 6 * kGroups);
   for (int group = 0; group < kGroups; ++group)
     for (int k = 0; k < 3; ++k) {
-      if (first[group][1]) std::fill_n(col(kGrids + 6 * group + 3 + k), n, 0.0);
-      if (first[group][0]) std::fill_n(col(kGrids + 6 * group + k), n, 0.0);
-      transpose(m, col(kGrids + 6 * group + 3 + k), back + (3 * group + k) * stride, nu, nv);
+      for (const int t : {0, 1})
+        if (first[group][t]) std::fill_n(impulse(6 * group + 3 * t + k), n, 0.0);
+      transpose(m, impulse(6 * group + 3 + k), impulse(6 * kGroups + 3 * group + k), nu, nv);
     }
+  // v += the mean change, by component in the groups' order: loops over
+  // columns vectorise.
+  static_assert(kGroups == 2);
   const double share = 1.0 / damped;
-  for_each_particle(m, [&](int a) {
-    Vec3 sum = Vec3::Zero();
-    for (int group = 0; group < kGroups; ++group)
-      for (int k = 0; k < 3; ++k)
-        sum[k] += col(kGrids + 6 * group + k)[a] + back[(3 * group + k) * stride + a];
-    s.v[a] += share * sum;
+  double* const v = s.v.data()->data();
+  parallel_for(m, nv, [&](int row) {
+    for (int k = 0; k < 3; ++k) {
+      const double* __restrict j0 = impulse(k);
+      const double* __restrict back0 = impulse(12 + k);
+      const double* __restrict j1 = impulse(6 + k);
+      const double* __restrict back1 = impulse(15 + k);
+      const double* __restrict inv_mass = m.inv_mass.data();
+      double* __restrict out = v + k;
+#pragma GCC ivdep
+      for (int a = row * nu; a < (row + 1) * nu; ++a) {
+        double sum = 0;
+        sum += j0[a] + back0[a];
+        sum += j1[a] + back1[a];
+        out[3 * a] += share * inv_mass[a] * sum;
+      }
+    }
   });
 }
 

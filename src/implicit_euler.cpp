@@ -125,20 +125,24 @@ void multiply(const Model& m, const State& s, Workspace& w, Vector in, Vector ou
       }
     }
     for (int e = 0; e < 8; ++e) {
-      const StencilEdge& st = m.stencil[e];
-      for (const int sign : {1, -1}) {
-        // The block of edge e sits at its lower end: a going forward, a + off going back.
-        const int off = sign * (st.di + st.dj * m.nu), at = sign > 0 ? 0 : off;
-        const double *s0 = edge_field(m, w, e, 0) + at, *s1 = edge_field(m, w, e, 1) + at,
-                     *s2 = edge_field(m, w, e, 2) + at, *beta = edge_field(m, w, e, 3) + at;
-        const double *n0 = x0 + off, *n1 = x1 + off, *n2 = x2 + off;
+      // Edge e's block sits at its lower end: at a going forward, at a - off
+      // coming back to a from a - off.
+      const int off = m.stencil[e].di + m.stencil[e].dj * m.nu;
+      const double *s0 = edge_field(m, w, e, 0), *s1 = edge_field(m, w, e, 1),
+                   *s2 = edge_field(m, w, e, 2), *beta = edge_field(m, w, e, 3);
+      const double *t0 = s0 - off, *t1 = s1 - off, *t2 = s2 - off, *tb = beta - off;
+      const double *n0 = x0 + off, *n1 = x1 + off, *n2 = x2 + off;
+      const double *m0 = x0 - off, *m1 = x1 - off, *m2 = x2 - off;
 #pragma GCC ivdep
-        for (int a = a0; a < a1; ++a) {
-          const double sx = s0[a] * n0[a] + s1[a] * n1[a] + s2[a] * n2[a];
-          y0[a] -= s0[a] * sx + beta[a] * n0[a];
-          y1[a] -= s1[a] * sx + beta[a] * n1[a];
-          y2[a] -= s2[a] * sx + beta[a] * n2[a];
-        }
+      for (int a = a0; a < a1; ++a) {
+        const double sx = s0[a] * n0[a] + s1[a] * n1[a] + s2[a] * n2[a];
+        const double tx = t0[a] * m0[a] + t1[a] * m1[a] + t2[a] * m2[a];
+        const double f0 = y0[a] - (s0[a] * sx + beta[a] * n0[a]);
+        const double f1 = y1[a] - (s1[a] * sx + beta[a] * n1[a]);
+        const double f2 = y2[a] - (s2[a] * sx + beta[a] * n2[a]);
+        y0[a] = f0 - (t0[a] * tx + tb[a] * m0[a]);
+        y1[a] = f1 - (t1[a] * tx + tb[a] * m1[a]);
+        y2[a] = f2 - (t2[a] * tx + tb[a] * m2[a]);
       }
     }
     for (int a = a0; a < a1; ++a)

@@ -160,14 +160,35 @@ void multiply(const Model& m, const State& s, Workspace& w, Vector in, Vector ou
     }
 }
 
+// A row's term(i) over [begin, end) folded with op (from 0) in kLanes
+// partial results, particle i into lane (i - begin) mod kLanes, then the
+// lanes in order: a fixed order (the same bits every run and for any number
+// of threads) whose lanes a vector holds. One running sum would make each
+// add wait for the last.
+constexpr int kLanes = 8;
+template <class Term, class Op>
+double fold_lanes(int begin, int end, Term term, Op op) {
+  double lane[kLanes] = {};
+  int i = begin;
+  for (; i + kLanes <= end; i += kLanes)
+    for (int l = 0; l < kLanes; ++l) lane[l] = op(lane[l], term(i + l));
+  for (int l = 0; i < end; ++i, ++l) lane[l] = op(lane[l], term(i));
+  double result = 0;
+  for (const double x : lane) result = op(result, x);
+  return result;
+}
+template <class Term>
+double lane_sum(int begin, int end, Term term) {
+  return fold_lanes(begin, end, term, [](double a, double b) { return a + b; });
+}
+
 // a · b, rows summed in order (the same bits for any number of threads).
 double dot(const Model& m, Workspace& w, Vector av, Vector bv) {
   const Columns a = columns(m, w, av), b = columns(m, w, bv);
   return ordered_sum(m, w, [&](int j) {
-    double sum = 0;
-    for (int k = j * m.nu; k < (j + 1) * m.nu; ++k)
-      sum += a.c[0][k] * b.c[0][k] + a.c[1][k] * b.c[1][k] + a.c[2][k] * b.c[2][k];
-    return sum;
+    return lane_sum(j * m.nu, (j + 1) * m.nu, [&](int k) {
+      return a.c[0][k] * b.c[0][k] + a.c[1][k] * b.c[1][k] + a.c[2][k] * b.c[2][k];
+    });
   });
 }
 
@@ -187,21 +208,20 @@ std::pair<double, double> precondition(const Model& m, Workspace& w) {
     double* __restrict z2 = z.c[2] + row;
 #pragma GCC ivdep
     for (int i = 0; i < m.nu; ++i) {
-      z0[i] = P[0][i] * r0[i] + P[3][i] * r1[i] + P[4][i] * r2[i];
-      z1[i] = P[3][i] * r0[i] + P[1][i] * r1[i] + P[5][i] * r2[i];
-      z2[i] = P[4][i] * r0[i] + P[5][i] * r1[i] + P[2][i] * r2[i];
-      const double d = z0[i] * N[0][i] + z1[i] * N[1][i] + z2[i] * N[2][i];
-      z0[i] -= d * N[0][i];
-      z1[i] -= d * N[1][i];
-      z2[i] -= d * N[2][i];
+      // In registers, then stored once: a store read straight back stalls.
+      const double a0 = P[0][i] * r0[i] + P[3][i] * r1[i] + P[4][i] * r2[i];
+      const double a1 = P[3][i] * r0[i] + P[1][i] * r1[i] + P[5][i] * r2[i];
+      const double a2 = P[4][i] * r0[i] + P[5][i] * r1[i] + P[2][i] * r2[i];
+      const double d = a0 * N[0][i] + a1 * N[1][i] + a2 * N[2][i];
+      z0[i] = a0 - d * N[0][i];
+      z1[i] = a1 - d * N[1][i];
+      z2[i] = a2 - d * N[2][i];
     }
-    double rz = 0, worst = 0;
-    for (int i = 0; i < m.nu; ++i) {
-      rz += r0[i] * z0[i] + r1[i] * z1[i] + r2[i] * z2[i];
-      worst = std::max(worst, z0[i] * z0[i] + z1[i] * z1[i] + z2[i] * z2[i]);
-    }
-    w.row_sums[j] = rz;
-    w.row_max[j] = worst;
+    w.row_sums[j] =
+        lane_sum(0, m.nu, [&](int i) { return r0[i] * z0[i] + r1[i] * z1[i] + r2[i] * z2[i]; });
+    w.row_max[j] = fold_lanes(
+        0, m.nu, [&](int i) { return z0[i] * z0[i] + z1[i] * z1[i] + z2[i] * z2[i]; },
+        [](double a, double b) { return std::max(a, b); });
   });
   double rz = 0;
   for (int j = 0; j < m.nv; ++j) rz += w.row_sums[j];

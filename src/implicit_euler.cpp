@@ -145,8 +145,8 @@ void multiply(const Model& m, const State& s, Workspace& w, Vector in, Vector ou
         y2[a] = f2 - (t2[a] * tx + tb[a] * m2[a]);
       }
     }
-    for (int a = a0; a < a1; ++a)
-      if (fixed(m, s, a)) {
+    for (const int a : w.fixed_particles)
+      if (a >= a0 && a < a1) {
         y0[a] = x0[a];
         y1[a] = x1[a];
         y2[a] = x2[a];
@@ -326,6 +326,9 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
   double* P[6];
   for (int k = 0; k < 6; ++k) P[k] = solver_column(m, w, kPreconditionerColumn + k);
   const bool guess = !w.acceleration.empty();
+  w.fixed_particles.clear();
+  for (int a = 0; a < n; ++a)
+    if (fixed(m, s, a)) w.fixed_particles.push_back(a);
   for_each_particle(m, [&](int a) {
     const Vec3& v = s.v[a];
     Sym inverse = outer(Vec3::Zero(), 0, 1);

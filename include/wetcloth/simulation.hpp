@@ -164,8 +164,10 @@ struct Workspace {
   double candidates_radius = 0;
   // Implicit Euler, in columns (see implicit_euler.cpp): the matrix (the 8
   // forward stencil edges' blocks, then the diagonal blocks), the
-  // conjugate-gradient vectors and the block-Jacobi preconditioner; per-row sums.
+  // conjugate-gradient vectors and the block-Jacobi preconditioner; per-row
+  // sums; the particles whose velocity the solve keeps (pinned, driven, held).
   std::vector<double> edge_blocks, cg_columns;
+  std::vector<int> fixed_particles;
   std::vector<double> row_sums, row_max;
   int cg_iterations = 0;              // of the last implicit solve
   long long cg_iterations_total = 0;  // of every implicit solve since reset

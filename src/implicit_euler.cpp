@@ -125,8 +125,8 @@ void multiply(const Model& m, const State& s, Workspace& w, Vector in, Vector ou
       }
     }
     for (int e = 0; e < 8; ++e) {
-      // Edge e's block sits at its lower end: at a going forward, at a - off
-      // coming back to a from a - off.
+      // Edge e's block sits at its lower end: particle a's forward edge (to
+      // a + off) at a, its backward edge (from a - off) at a - off.
       const int off = m.stencil[e].di + m.stencil[e].dj * m.nu;
       const double *s0 = edge_field(m, w, e, 0), *s1 = edge_field(m, w, e, 1),
                    *s2 = edge_field(m, w, e, 2), *beta = edge_field(m, w, e, 3);

@@ -326,6 +326,7 @@ void apply_spring_damping(const Model& m, State& s, Workspace& w, double h) {
       first[group][transposed] = false;
     }
   }
+  // The groups' impulses on the transpose, back on the grid.
   for (int group = 0; group < kGroups; ++group)
     for (int k = 0; k < 3; ++k) {
       for (const int t : {0, 1})
@@ -340,9 +341,9 @@ void apply_spring_damping(const Model& m, State& s, Workspace& w, double h) {
   parallel_for(m, nv, [&](int row) {
     for (int k = 0; k < 3; ++k) {
       const double* __restrict j0 = impulse(k);
-      const double* __restrict back0 = impulse(12 + k);
+      const double* __restrict back0 = impulse(6 * kGroups + k);
       const double* __restrict j1 = impulse(6 + k);
-      const double* __restrict back1 = impulse(15 + k);
+      const double* __restrict back1 = impulse(6 * kGroups + 3 + k);
       const double* __restrict inv_mass = m.inv_mass.data();
       double* __restrict out = v + k;
 #pragma GCC ivdep

@@ -45,39 +45,49 @@ std::size_t padding(const Model& m) { return 2 * std::size_t(m.nu) + 2; }
 std::size_t padded_size(const Model& m, int columns) {
   return columns * (std::size_t(m.n) + 2 * padding(m));
 }
-double* column(const Model& m, std::vector<double>& store, int k) {
+template <class T>
+T* column(const Model& m, std::vector<T>& store, int k) {
   return store.data() + k * (std::size_t(m.n) + 2 * padding(m)) + padding(m);
 }
 
 // The matrix. Edge e's block s sᵀ + β I (s = √α u, α ≥ 0: see
 // implicit_euler_velocities), held at its lower end as four fields, column
 // 4 e + k for s_x, s_y, s_z, β: four numbers where a symmetric block takes
-// six. An edge that leaves the grid has a zero block. Then the diagonal
-// blocks' six fields (Sym's order), columns 32 to 37.
-constexpr int kBlockFields = 4, kDiagonalField = 8 * kBlockFields, kMatrixColumns = 38;
-double* edge_field(const Model& m, Workspace& w, int e, int k) {
-  return column(m, w.edge_blocks, kBlockFields * e + k);
+// six. An edge that leaves the grid has a zero block. The edge blocks are
+// float: the product streams them, and half the bytes is what it is bound by.
+// The diagonal blocks are summed in double from the same float fields, so the
+// matrix stays symmetric and each row's blocks add up as they should; only
+// the vectors' precision decides how the solve converges.
+// The block-Jacobi preconditioner follows them in the same store, six float
+// columns (Sym's order): it only steers the solve, which converges on the
+// double residual.
+constexpr int kBlockFields = 4, kPreconditionerColumn = 8 * kBlockFields,
+              kFloatColumns = kPreconditionerColumn + 6;
+float* edge_field(const Model& m, Workspace& w, int e, int k) {
+  return column(m, w.float_columns, kBlockFields * e + k);
 }
+float* preconditioner_field(const Model& m, Workspace& w, int k) {
+  return column(m, w.float_columns, kPreconditionerColumn + k);
+}
+
+// The solver's vectors in columns, three each (x, y, z), then the normal of
+// each particle held on the contact surface (zero for the others), then the
+// matrix's diagonal blocks (Sym's order): every loop over a row vectorises.
+enum Vector { kX, kR, kZ, kP, kQ };
+constexpr int kHeldColumn = 15, kDiagonalColumn = 18, kSolverColumns = 24;
+struct Columns {
+  double* c[3];
+  Vec3 at(int a) const { return {c[0][a], c[1][a], c[2][a]}; }
+};
+double* solver_column(const Model& m, Workspace& w, int k) { return column(m, w.cg_columns, k); }
 double* diagonal_field(const Model& m, Workspace& w, int k) {
-  return column(m, w.edge_blocks, kDiagonalField + k);
+  return solver_column(m, w, kDiagonalColumn + k);
 }
 Sym diagonal_block(const Model& m, Workspace& w, int a) {
   Sym d;
   for (int k = 0; k < 6; ++k) d[k] = diagonal_field(m, w, k)[a];
   return d;
 }
-
-// The solver's vectors in columns, three each (x, y, z), then the
-// preconditioner's six fields (Sym's order), then the normal of each particle
-// held on the contact surface (zero for the others): every loop over a row
-// vectorises.
-enum Vector { kX, kR, kZ, kP, kQ };
-constexpr int kPreconditionerColumn = 15, kHeldColumn = 21, kSolverColumns = 24;
-struct Columns {
-  double* c[3];
-  Vec3 at(int a) const { return {c[0][a], c[1][a], c[2][a]}; }
-};
-double* solver_column(const Model& m, Workspace& w, int k) { return column(m, w.cg_columns, k); }
 Columns columns(const Model& m, Workspace& w, Vector v) {
   return {
       {solver_column(m, w, 3 * v), solver_column(m, w, 3 * v + 1), solver_column(m, w, 3 * v + 2)}};
@@ -128,9 +138,9 @@ void multiply(const Model& m, const State& s, Workspace& w, Vector in, Vector ou
       // Edge e's block sits at its lower end: particle a's forward edge (to
       // a + off) at a, its backward edge (from a - off) at a - off.
       const int off = m.stencil[e].di + m.stencil[e].dj * m.nu;
-      const double *s0 = edge_field(m, w, e, 0), *s1 = edge_field(m, w, e, 1),
-                   *s2 = edge_field(m, w, e, 2), *beta = edge_field(m, w, e, 3);
-      const double *t0 = s0 - off, *t1 = s1 - off, *t2 = s2 - off, *tb = beta - off;
+      const float *s0 = edge_field(m, w, e, 0), *s1 = edge_field(m, w, e, 1),
+                  *s2 = edge_field(m, w, e, 2), *beta = edge_field(m, w, e, 3);
+      const float *t0 = s0 - off, *t1 = s1 - off, *t2 = s2 - off, *tb = beta - off;
       const double *n0 = x0 + off, *n1 = x1 + off, *n2 = x2 + off;
       const double *m0 = x0 - off, *m1 = x1 - off, *m2 = x2 - off;
 #pragma GCC ivdep
@@ -198,8 +208,8 @@ std::pair<double, double> precondition(const Model& m, Workspace& w) {
   const Columns r = columns(m, w, kR), z = columns(m, w, kZ);
   parallel_for(m, m.nv, [&](int j) {
     const int row = j * m.nu;
-    const double* P[6];
-    for (int k = 0; k < 6; ++k) P[k] = solver_column(m, w, kPreconditionerColumn + k) + row;
+    const float* P[6];
+    for (int k = 0; k < 6; ++k) P[k] = preconditioner_field(m, w, k) + row;
     const double* N[3];
     for (int k = 0; k < 3; ++k) N[k] = solver_column(m, w, kHeldColumn + k) + row;
     const double *r0 = r.c[0] + row, *r1 = r.c[1] + row, *r2 = r.c[2] + row;
@@ -237,8 +247,9 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
   // the positions in columns add_spring_forces left (this substep's).
   // The solver's arrays are sized at the first implicit step: the explicit
   // integrators need none of them. Every one is written before it is read.
-  w.edge_blocks.resize(padded_size(m, kMatrixColumns));  // the padding stays zero
-  const double* const X = w.soa.data();                  // x, y, z by component
+  w.float_columns.resize(padded_size(m, kFloatColumns));  // the padding stays zero
+  w.cg_columns.resize(padded_size(m, kSolverColumns));
+  const double* const X = w.soa.data();  // x, y, z by component
   const int n = m.n, nu = m.nu;
   parallel_for(m, m.nv, [&](int j) {
     const int row = j * nu;
@@ -248,11 +259,11 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
       // Particles of the row whose edge e stays on the grid (every forward edge has dj >= 0).
       const int from = j + st.dj < m.nv ? std::max(0, -st.di) : nu;
       const int to = j + st.dj < m.nv ? std::min(nu, nu - st.di) : nu;
-      double *s0 = edge_field(m, w, e, 0) + row, *s1 = edge_field(m, w, e, 1) + row,
-             *s2 = edge_field(m, w, e, 2) + row, *beta = edge_field(m, w, e, 3) + row;
-      for (double* f : {s0, s1, s2, beta}) {  // edges off the grid: zero blocks
-        std::fill(f, f + from, 0.0);
-        std::fill(f + to, f + nu, 0.0);
+      float *s0 = edge_field(m, w, e, 0) + row, *s1 = edge_field(m, w, e, 1) + row,
+            *s2 = edge_field(m, w, e, 2) + row, *beta = edge_field(m, w, e, 3) + row;
+      for (float* f : {s0, s1, s2, beta}) {  // edges off the grid: zero blocks
+        std::fill(f, f + from, 0.0f);
+        std::fill(f + to, f + nu, 0.0f);
       }
       const double *x0 = X + row, *x1 = X + n + row, *x2 = X + 2 * n + row;
 #pragma GCC ivdep
@@ -264,10 +275,10 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
         // stretched: the block is α u uᵀ + β I, α = h k_d + h² (k - transverse) ≥ 0.
         const double transverse = len > 0 ? std::max(0.0, 1.0 - st.rest * inv) * st.k : 0.0;
         const double q = std::sqrt(h * st.damping + h2 * (st.k - transverse)) * inv;
-        s0[i] = q * dx;
-        s1[i] = q * dy;
-        s2[i] = q * dz;
-        beta[i] = h2 * transverse;
+        s0[i] = float(q * dx);
+        s1[i] = float(q * dy);
+        s2[i] = float(q * dz);
+        beta[i] = float(h2 * transverse);
       }
     }
   });
@@ -290,16 +301,17 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
       for (const int sign : {1, -1}) {
         const StencilEdge& st = m.stencil[e];
         const int at = sign > 0 ? 0 : -(st.di + st.dj * nu);
-        const double *s0 = edge_field(m, w, e, 0) + at, *s1 = edge_field(m, w, e, 1) + at,
-                     *s2 = edge_field(m, w, e, 2) + at, *beta = edge_field(m, w, e, 3) + at;
+        const float *s0 = edge_field(m, w, e, 0) + at, *s1 = edge_field(m, w, e, 1) + at,
+                    *s2 = edge_field(m, w, e, 2) + at, *beta = edge_field(m, w, e, 3) + at;
 #pragma GCC ivdep
         for (int a = a0; a < a1; ++a) {
-          d0[a] += s0[a] * s0[a] + beta[a];
-          d1[a] += s1[a] * s1[a] + beta[a];
-          d2[a] += s2[a] * s2[a] + beta[a];
-          d3[a] += s0[a] * s1[a];
-          d4[a] += s0[a] * s2[a];
-          d5[a] += s1[a] * s2[a];
+          const double x = s0[a], y = s1[a], z = s2[a], b = beta[a];
+          d0[a] += x * x + b;
+          d1[a] += y * y + b;
+          d2[a] += z * z + b;
+          d3[a] += x * y;
+          d4[a] += x * z;
+          d5[a] += y * z;
         }
       }
   });
@@ -320,11 +332,10 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
   // and drag its lifted neighbours down with it through the springs, before
   // collide stopped it: the peel front lagged, and the step control halved
   // substeps for a motion the surface takes away.
-  w.cg_columns.resize(padded_size(m, kSolverColumns));
   const Columns x = columns(m, w, kX), r = columns(m, w, kR), z = columns(m, w, kZ),
                 p = columns(m, w, kP), q = columns(m, w, kQ);
-  double* P[6];
-  for (int k = 0; k < 6; ++k) P[k] = solver_column(m, w, kPreconditionerColumn + k);
+  float* P[6];
+  for (int k = 0; k < 6; ++k) P[k] = preconditioner_field(m, w, k);
   const bool guess = !w.acceleration.empty();
   w.fixed_particles.clear();
   for (int a = 0; a < n; ++a)
@@ -339,7 +350,7 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
       b = m.mass[a] * v + h * w.force[a];
       if (guess) start += h * w.acceleration[a];
     }
-    for (int k = 0; k < 6; ++k) P[k][a] = inverse[k];
+    for (int k = 0; k < 6; ++k) P[k][a] = float(inverse[k]);
     Vec3 held = Vec3::Zero();
     if (!fixed(m, s, a) && s.contact[a] && w.force[a].dot(w.surface_normal[a]) < 0)
       held = w.surface_normal[a];

@@ -162,11 +162,13 @@ struct Workspace {
   std::vector<std::uint8_t> candidate_close;  // candidate within d_t this step
   std::vector<Vec3> candidates_anchor;
   double candidates_radius = 0;
-  // Implicit Euler, in columns (see implicit_euler.cpp): the matrix (the 8
-  // forward stencil edges' blocks, then the diagonal blocks), the
-  // conjugate-gradient vectors and the block-Jacobi preconditioner; per-row
-  // sums; the particles whose velocity the solve keeps (pinned, driven, held).
-  std::vector<double> edge_blocks, cg_columns;
+  // Implicit Euler, in columns (see implicit_euler.cpp): in float, the
+  // matrix's 8 forward stencil edges' blocks and the block-Jacobi
+  // preconditioner; in double, the conjugate-gradient vectors and the
+  // matrix's diagonal blocks; per-row sums; the particles whose velocity the
+  // solve keeps (pinned, driven, held).
+  std::vector<float> float_columns;
+  std::vector<double> cg_columns;
   std::vector<int> fixed_particles;
   std::vector<double> row_sums, row_max;
   int cg_iterations = 0;              // of the last implicit solve

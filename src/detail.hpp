@@ -69,6 +69,28 @@ void for_each_particle(const Model& m, Body&& body) {
   });
 }
 
+// One particle's Vec3 written component by component: to = v, to += v,
+// to -= v. Eigen stores a Vec3 through its packet type, which may alias
+// anything, so after each such store the compiler reloads every pointer and
+// bound of the loop and does not vectorise it (BM_gravity at 51 x 51: 6.0 µs
+// that way, 2.9 µs this way). Each component is the same arithmetic, so the
+// same bits.
+template <class E>
+void put(Vec3& to, const Eigen::MatrixBase<E>& v) {
+  double* p = to.data();
+  for (int k = 0; k < 3; ++k) p[k] = v.coeff(k);
+}
+template <class E>
+void add(Vec3& to, const Eigen::MatrixBase<E>& v) {
+  double* p = to.data();
+  for (int k = 0; k < 3; ++k) p[k] += v.coeff(k);
+}
+template <class E>
+void sub(Vec3& to, const Eigen::MatrixBase<E>& v) {
+  double* p = to.data();
+  for (int k = 0; k < 3; ++k) p[k] -= v.coeff(k);
+}
+
 // Copies v to three columns, out[k n + a] = v[a][k]: loops over a row of
 // columns vectorise where loops over Vec3s do not.
 inline void to_columns(const Model& m, const std::vector<Vec3>& v, double* out) {

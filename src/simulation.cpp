@@ -161,7 +161,7 @@ void Simulation::accumulate_forces(bool implicit) {
   State& s = state_;
   Workspace& w = ws_;
   compute_normals(m, s.x, w.normal, w.quad_normals);
-  for_each_particle(m, [&](int i) { w.force[i].setZero(); });
+  for_each_particle(m, [&](int i) { put(w.force[i], Vec3::Zero()); });
   add_spring_forces(m, s, w, m.params.integrator.type == "explicit-euler");
   add_gravity(m, w.force);
   if (!implicit) add_viscous_damping(m, s, w.force);
@@ -208,8 +208,8 @@ void Simulation::step() {
     accumulate_forces(false);
     if (integrator == "explicit-euler") {
       for (int i = 0; i < m.n; ++i) {
-        s.x[i] += dt * s.v[i];
-        s.v[i] += (dt * m.inv_mass[i]) * w.force[i];
+        add(s.x[i], dt * s.v[i]);
+        add(s.v[i], (dt * m.inv_mass[i]) * w.force[i]);
       }
       correct_air_implicitly(m, s, w, dt);
     } else {  // symplectic Euler
@@ -221,7 +221,7 @@ void Simulation::step() {
       parallel_for(m, m.nv, [&](int j) {
         for (int i = j * m.nu; i < (j + 1) * m.nu; ++i) {
           const double h = dt * m.inv_mass[i], own = 1 + h * c * m.area[i];
-          s.v[i] += (h / own) * w.force[i];
+          add(s.v[i], (h / own) * w.force[i]);
         }
       });
       apply_spring_damping(m, s, w, dt);
@@ -250,7 +250,7 @@ double Simulation::implicit_substep(double dt, int& k, double& strain) {
     if (k == kMostHalvings || strain <= m.params.integrator.max_step_strain) {
       ++w.substeps;
       w.acceleration.resize(m.n);
-      for_each_particle(m, [&](int a) { w.acceleration[a] = (s.v[a] - w.v_start[a]) / h; });
+      for_each_particle(m, [&](int a) { put(w.acceleration[a], (s.v[a] - w.v_start[a]) / h); });
       move_at_new_velocities(h);
       return h;
     }
@@ -262,7 +262,7 @@ double Simulation::implicit_substep(double dt, int& k, double& strain) {
 // The air term taken implicitly on the new velocities, then x += h v.
 void Simulation::move_at_new_velocities(double h) {
   correct_air_implicitly(model_, state_, ws_, h);
-  for_each_particle(model_, [&](int i) { state_.x[i] += h * state_.v[i]; });
+  for_each_particle(model_, [&](int i) { add(state_.x[i], h * state_.v[i]); });
 }
 
 // After integrating over h: handles; 3. collide; 4. friction; 5. strain

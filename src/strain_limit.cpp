@@ -151,11 +151,11 @@ void limit_strain(const Model& m, State& s, Workspace& w, double dt) {
     for (const int k : touched) {
       if (!w.strain_saved[k]) {
         w.strain_saved[k] = 1;
-        w.x_before[k] = s.x[k];
+        put(w.x_before[k], s.x[k]);
         w.strain_changed.push_back(k);
       }
-      s.x[k] += w.strain_delta[k] / w.strain_count[k];
-      w.strain_delta[k].setZero();
+      add(s.x[k], w.strain_delta[k] / w.strain_count[k]);
+      put(w.strain_delta[k], Vec3::Zero());
       w.strain_count[k] = 0;
     }
     for (const int k : touched) queue_springs_of(k, l);
@@ -231,11 +231,11 @@ void limit_strain(const Model& m, State& s, Workspace& w, double dt) {
       const Vec3 corr = d * ((len - sp.max_len) / len);
       if (wa > 0) {
         if (w.strain_count[sp.a]++ == 0) touched.push_back(sp.a);
-        w.strain_delta[sp.a] += wa * corr;
+        add(w.strain_delta[sp.a], wa * corr);
       }
       if (wb > 0) {
         if (w.strain_count[sp.b]++ == 0) touched.push_back(sp.b);
-        w.strain_delta[sp.b] -= wb * corr;
+        sub(w.strain_delta[sp.b], wb * corr);
       }
       if (heap.empty() && !touched.empty()) finish_level(l);
     }
@@ -244,7 +244,7 @@ void limit_strain(const Model& m, State& s, Workspace& w, double dt) {
   // Velocities follow the corrected positions (only moved particles' change).
   const double inv_dt = 1.0 / dt;
   for (const int k : w.strain_changed) {
-    s.v[k] += (s.x[k] - w.x_before[k]) * inv_dt;
+    add(s.v[k], (s.x[k] - w.x_before[k]) * inv_dt);
     w.strain_saved[k] = 0;
   }
 }

@@ -47,9 +47,9 @@ void collide(const Model& m, State& s, std::vector<std::uint8_t>* touched,
       if (!enabled[o]) continue;
       const SurfaceHit h = query_surface(p, kinds[o], s.x[i]);
       if (h.distance >= 0) continue;
-      s.x[i] -= h.distance * h.normal;
+      sub(s.x[i], h.distance * h.normal);
       const double vn = s.v[i].dot(h.normal);
-      if (vn < 0) s.v[i] -= vn * h.normal;
+      if (vn < 0) sub(s.v[i], vn * h.normal);
       if (touched) (*touched)[i] = static_cast<std::uint8_t>(kinds[o]);
     }
   };
@@ -65,7 +65,7 @@ void update_contact(const Model& m, State& s, Workspace& w) {
   for_each_particle(m, [&](int i) {
     const SurfaceHit h = query_surface(p, m.contact_surface, s.x[i]);
     w.distance[i] = h.distance;
-    w.surface_normal[i] = h.normal;
+    put(w.surface_normal[i], h.normal);
     s.contact[i] = h.distance < h_th;
   });
   // The border of the contact region: contact particles on the cloth's border or

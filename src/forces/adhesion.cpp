@@ -30,7 +30,7 @@ void add_adhesion(const Model& m, const State& s, Workspace& w) {
     if (!s.contact[i]) return;
     const double f = pressure * m.area[i] + (w.border[i] ? edge_each : 0.0);
     w.adhesion[i] = f;
-    w.force[i] -= f * w.surface_normal[i];
+    sub(w.force[i], f * w.surface_normal[i]);
   });
 }
 

@@ -206,7 +206,7 @@ void add_air_pressure(const Model& m, const State& s, Workspace& w) {
   const bool along_cloth_normal = m.params.air.force_direction == "cloth";
   for_each_particle(m, [&](int i) {
     if (off || s.contact[i] || !holds_air(m, w.distance[i])) {
-      w.air_direction[i].setZero();
+      put(w.air_direction[i], Vec3::Zero());
       return;
     }
     Vec3 n = w.surface_normal[i];
@@ -214,8 +214,8 @@ void add_air_pressure(const Model& m, const State& s, Workspace& w) {
       n = w.normal[i];
       if (n.dot(w.surface_normal[i]) < 0) n = -n;
     }
-    w.air_direction[i] = m.area[i] * n;
-    w.force[i] -= (p_atm - s.pocket_pressure[i]) * w.air_direction[i];
+    put(w.air_direction[i], m.area[i] * n);
+    sub(w.force[i], (p_atm - s.pocket_pressure[i]) * w.air_direction[i]);
   });
 }
 
@@ -269,7 +269,7 @@ void correct_air_implicitly(const Model& m, State& s, Workspace& w, double dt) {
     const int k = w.pocket[i];
     if (k < 0) return;
     const double dv = given_back(i, k) - w.pocket_sums[3 * k];
-    if (dv != 0) s.v[i] += (dv * m.inv_mass[i]) * w.air_direction[i];
+    if (dv != 0) add(s.v[i], (dv * m.inv_mass[i]) * w.air_direction[i]);
   });
 }
 

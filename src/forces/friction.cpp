@@ -9,9 +9,9 @@ namespace wetcloth::detail {
 // Δv_f = μ F_n Δt / m and never reverses. As in Bridson et al. 2002, it acts on
 // the velocity that moves the particle over the step, so the step's move is
 // taken back by Δt Δv_f too: applied after the move, a load under μ F_n would
-// still creep Δt² a a step, and a cloth that should hold would slide. On the contact surface F_n is the
-// adhesion plus, by default, the part of the other forces that presses the
-// particle in; on other obstacles it is that load alone.
+// still creep Δt² a a step, and a cloth that should hold would slide. On the contact surface F_n is
+// the adhesion plus, by default, the part of the other forces that presses the particle in; on
+// other obstacles it is that load alone.
 void apply_friction(const Model& m, State& s, const Workspace& w,
                     const std::vector<std::uint8_t>& touched, double dt) {
   const double mu = m.params.friction.mu;
@@ -38,8 +38,8 @@ void apply_friction(const Model& m, State& s, const Workspace& w,
     if (speed == 0) return;
     const double dv = mu * load * dt * m.inv_mass[i];
     const Vec3 slowed = vt * (std::min(dv, speed) / speed);  // eq. 14
-    s.v[i] -= slowed;
-    s.x[i] -= dt * slowed;
+    sub(s.v[i], slowed);
+    sub(s.x[i], dt * slowed);
   });
 }
 

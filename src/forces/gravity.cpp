@@ -5,7 +5,7 @@ namespace wetcloth::detail {
 
 void add_gravity(const Model& m, std::vector<Vec3>& f) {
   const Vec3 g = to_vec(m.params.forces.gravity);
-  for_each_particle(m, [&](int i) { f[i] += m.mass[i] * g; });
+  for_each_particle(m, [&](int i) { add(f[i], m.mass[i] * g); });
 }
 
 }  // namespace wetcloth::detail

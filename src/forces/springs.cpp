@@ -90,7 +90,8 @@ void add_spring_forces(const Model& m, const State& s, Workspace& w) {
         }
       }
       gather_row(fwd, bwd, nu, sums);
-      for (int i = 0; i < nu; ++i) w.force[j * nu + i] += Vec3(sums[0][i], sums[1][i], sums[2][i]);
+      for (int i = 0; i < nu; ++i)
+        add(w.force[j * nu + i], Vec3(sums[0][i], sums[1][i], sums[2][i]));
     }
   });
 }

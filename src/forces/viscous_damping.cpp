@@ -7,7 +7,7 @@ namespace wetcloth::detail {
 void add_viscous_damping(const Model& m, const State& s, std::vector<Vec3>& f) {
   const double c = m.params.forces.viscous_damping;
   if (c == 0) return;
-  for_each_particle(m, [&](int i) { f[i] -= c * m.area[i] * s.v[i]; });
+  for_each_particle(m, [&](int i) { sub(f[i], c * m.area[i] * s.v[i]); });
 }
 
 }  // namespace wetcloth::detail

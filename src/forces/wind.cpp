@@ -11,7 +11,7 @@ void add_wind(const Model& m, const State& s, const Workspace& w, std::vector<Ve
   for_each_particle(m, [&](int i) {
     const Vec3 rel = m.in_wind[i] ? Vec3(u - s.v[i]) : Vec3(-s.v[i]);
     const Vec3& n = w.normal[i];
-    f[i] += (k * m.area[i] * rel.dot(n)) * n;
+    add(f[i], (k * m.area[i] * rel.dot(n)) * n);
   });
 }
 

@@ -266,6 +266,7 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
         std::fill(f + to, f + nu, 0.0f);
       }
       const double *x0 = X + row, *x1 = X + n + row, *x2 = X + 2 * n + row;
+      const double rest = st.rest, k = st.k, damping = st.damping;
 #pragma GCC ivdep
       for (int i = from; i < to; ++i) {
         const double dx = x0[i + off] - x0[i], dy = x1[i + off] - x1[i], dz = x2[i + off] - x2[i];
@@ -273,8 +274,8 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
         const double inv = len > 0 ? 1.0 / len : 0.0;  // a zero-length spring: a zero block
         // K_e = k (u uᵀ + (1 - l0/|d|)(I - u uᵀ)), the transverse part only when
         // stretched: the block is α u uᵀ + β I, α = h k_d + h² (k - transverse) ≥ 0.
-        const double transverse = len > 0 ? std::max(0.0, 1.0 - st.rest * inv) * st.k : 0.0;
-        const double q = std::sqrt(h * st.damping + h2 * (st.k - transverse)) * inv;
+        const double transverse = len > 0 ? std::max(0.0, 1.0 - rest * inv) * k : 0.0;
+        const double q = std::sqrt(h * damping + h2 * (k - transverse)) * inv;
         s0[i] = float(q * dx);
         s1[i] = float(q * dy);
         s2[i] = float(q * dz);

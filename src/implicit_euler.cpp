@@ -426,16 +426,25 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
 // flat cloth, springs at rest have no stiffness across it, and a force on a
 // few particles would move them at h F / m.
 double step_strain(const Model& m, const State& s, double h) {
-  return max_over_particles(m, [&](int a) {
-    const int i = a % m.nu, j = a / m.nu;
-    double worst = 0;
+  const double* const V = s.v.data()->data();  // x, y, z of particle a at 3 a
+  const int nu = m.nu;
+  double worst = 0;
+#pragma omp parallel for reduction(max : worst) num_threads(m.threads) if (m.threads > 1)
+  for (int j = 0; j < m.nv; ++j)
     for (int e = 0; e < 4; ++e) {  // structural and shear
       const StencilEdge& st = m.stencil[e];
-      if (const int b = grid_neighbour(m, i, j, st.di, st.dj); b >= 0)
-        worst = std::max(worst, h * (s.v[b] - s.v[a]).norm() / st.rest);
+      if (j + st.dj >= m.nv) continue;
+      const int off = 3 * (st.di + st.dj * nu), end = 3 * (j * nu + std::min(nu, nu - st.di));
+      const double rest = st.rest;
+      double row_worst = 0;
+      for (int a = 3 * (j * nu + std::max(0, -st.di)); a < end; a += 3) {
+        const double dx = V[a + off] - V[a], dy = V[a + off + 1] - V[a + 1],
+                     dz = V[a + off + 2] - V[a + 2];
+        row_worst = std::max(row_worst, h * std::sqrt(dx * dx + dy * dy + dz * dz) / rest);
+      }
+      worst = std::max(worst, row_worst);
     }
-    return worst;
-  });
+  return worst;
 }
 
 }  // namespace wetcloth::detail

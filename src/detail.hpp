@@ -38,6 +38,11 @@ inline SurfaceHit query_surface(const Params& p, SurfaceKind kind, const Vec3& x
 // With `only`, just those particles (the others are known to be outside).
 void collide(const Model& m, State& s, std::vector<std::uint8_t>* touched,
              const std::vector<int>* only = nullptr);
+// simulation.cpp: compute_normals from positions by component (x, y, z
+// columns of n), with a scratch array for the triangles' normals (the step's:
+// no allocation).
+void compute_normals(const Model& m, const double* x_columns, std::vector<Vec3>& normal,
+                     std::vector<double>& quad_normals);
 // Distances to the contact surface, contact flags and the contact border.
 void update_contact(const Model& m, State& s, Workspace& w);
 

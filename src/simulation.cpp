@@ -21,14 +21,14 @@ using namespace detail;
 // even is in all eight; an odd one in four, so it adds zero for the others
 // (exact). Both passes are loops over a row that vectorise; rows are
 // independent.
-void compute_normals(const Model& m, const std::vector<Vec3>& x, std::vector<Vec3>& normal,
-                     std::vector<double>& quad_normals) {
+void detail::compute_normals(const Model& m, const double* X, std::vector<Vec3>& normal,
+                             std::vector<double>& quad_normals) {
   const int nu = m.nu, stride = nu + 1;
   const std::size_t per_row = 6 * std::size_t(stride);
   quad_normals.resize((m.nv + 1) * per_row);
   std::fill_n(quad_normals.begin(), per_row, 0.0);                          // quad row -1
   std::fill_n(quad_normals.end() - std::ptrdiff_t(per_row), per_row, 0.0);  // quad row nv - 1
-  const double* X = x.data()->data();  // x, y, z of particle a at 3 a
+  const std::size_t n = m.n;
   parallel_for(m, m.nv - 1, [&](int q) {
     double* row = quad_normals.data() + (q + 1) * per_row;
     double* t[6];
@@ -36,8 +36,8 @@ void compute_normals(const Model& m, const std::vector<Vec3>& x, std::vector<Vec
       t[f] = row + f * stride + 1;
       t[f][-1] = t[f][nu - 1] = 0.0;  // quads -1 and nu - 1
     }
-    const double* lo = X + 3 * std::size_t(q) * nu;  // corners a = lo[3 i], b = lo[3 (i + 1)]
-    const double* hi = lo + 3 * std::size_t(nu);     // d = hi[3 i], cc = hi[3 (i + 1)]
+    const double* lo = X + std::size_t(q) * nu;  // corners a = lo[i], b = lo[i + 1] (x; y at n on)
+    const double* hi = lo + nu;                  // d = hi[i], cc = hi[i + 1]
 #pragma GCC ivdep
     for (int i = 0; i + 1 < nu; ++i) {
       // Even quads (i + q even) split along a-cc: {a, b, cc}, {a, cc, d};
@@ -45,10 +45,10 @@ void compute_normals(const Model& m, const std::vector<Vec3>& x, std::vector<Vec
       const bool even = ((i + q) & 1) == 0;
       double a[3], b[3], c[3], d[3], u[3], v[3], o[3];
       for (int k = 0; k < 3; ++k) {
-        a[k] = lo[3 * i + k];
-        b[k] = lo[3 * i + 3 + k];
-        c[k] = hi[3 * i + 3 + k];
-        d[k] = hi[3 * i + k];
+        a[k] = lo[k * n + i];
+        b[k] = lo[k * n + i + 1];
+        c[k] = hi[k * n + i + 1];
+        d[k] = hi[k * n + i];
       }
       for (int k = 0; k < 3; ++k) {
         u[k] = b[k] - a[k];
@@ -99,8 +99,9 @@ void compute_normals(const Model& m, const std::vector<Vec3>& x, std::vector<Vec
 }
 
 void compute_normals(const Model& m, const std::vector<Vec3>& x, std::vector<Vec3>& normal) {
-  std::vector<double> quad_normals;
-  compute_normals(m, x, normal, quad_normals);
+  std::vector<double> columns(3 * std::size_t(m.n)), quad_normals;
+  to_columns(m, x, columns.data());
+  detail::compute_normals(m, columns.data(), normal, quad_normals);
 }
 
 Simulation::Simulation(const Params& p) : model_(build_model(p)) { reset(); }
@@ -160,9 +161,9 @@ void Simulation::accumulate_forces(bool implicit) {
   const Model& m = model_;
   State& s = state_;
   Workspace& w = ws_;
-  compute_normals(m, s.x, w.normal, w.quad_normals);
   for_each_particle(m, [&](int i) { put(w.force[i], Vec3::Zero()); });
   add_spring_forces(m, s, w, m.params.integrator.type == "explicit-euler");
+  compute_normals(m, w.soa.data(), w.normal, w.quad_normals);  // from the springs' columns
   add_gravity(m, w.force);
   if (!implicit) add_viscous_damping(m, s, w.force);
   add_wind(m, s, w, w.force);

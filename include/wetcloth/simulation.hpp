@@ -238,8 +238,5 @@ class Simulation {
 
 // Particle normals, area-weighted over the adjacent triangles.
 void compute_normals(const Model& m, const std::vector<Vec3>& x, std::vector<Vec3>& normal);
-// The same, with a scratch array for the triangles' normals (the step's: no allocation).
-void compute_normals(const Model& m, const std::vector<Vec3>& x, std::vector<Vec3>& normal,
-                     std::vector<double>& quad_normals);
 
 }  // namespace wetcloth

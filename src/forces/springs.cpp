@@ -134,6 +134,7 @@ namespace {
 // is the same float at both ends, so each pair still cancels exactly and
 // momentum is conserved to double rounding.
 using Real = float;
+constexpr int kWhole = 16;  // slots of a vector (AVX-512: 16 floats); padding after each column
 
 // A grid's particles by component (row-major over nu columns and nv rows).
 struct DampingGrid {
@@ -159,15 +160,18 @@ void damp_offset(const DampingGrid& g, int di, int dj, Real c, const ChainScratc
                  bool first_offset) {
   const int nu = g.nu, nv = g.nv, n = nu * nv, off = di + dj * nu, springs_end = (nv - dj) * nu;
   const int lo = std::max(0, -di), hi = std::min(nu, nu - di);
-  for (Real* z : {t.ux, t.uy, t.uz, t.coupling, t.lambda})  // rows where no spring starts
-    std::fill(z + springs_end, z + n, Real(0));
   // Forward elimination, row by row: a spring's predecessor starts dj rows up
-  // (at a - off; zero u where there is none).
+  // (at a - off; zero u where there is none). Each row runs in whole vectors
+  // (kWhole slots): its last one runs on into the next rows, whose
+  // predecessors are final or which that row computes again, and after the
+  // last row into slots the fill below zeroes or the padding. A row of 51
+  // had a scalar tail of 3 slots that cost as much as a vector.
+  const int width = (nu + kWhole - 1) / kWhole * kWhole;
   for (int j = 0; j + dj < nv; ++j) {
     const int row = j * nu;
     const bool first = j < dj;
 #pragma GCC ivdep
-    for (int i = 0; i < nu; ++i) {
+    for (int i = 0; i < width; ++i) {
       const int a = row + i, b = a + off;  // b: off the grid where no spring starts
       const bool on = i >= lo && i < hi;
       const Real dx = g.px[b] - g.px[a], dy = g.py[b] - g.py[a], dz = g.pz[b] - g.pz[a];
@@ -194,6 +198,9 @@ void damp_offset(const DampingGrid& g, int di, int dj, Real c, const ChainScratc
       t.rhs[a] = on ? rhs : Real(0);
     }
   }
+  // Rows where no spring starts, and the padding after them.
+  for (Real* z : {t.ux, t.uy, t.uz, t.coupling, t.lambda})
+    std::fill(z + springs_end, z + n + kWhole, Real(0));
   // Back substitution, λ = (rhs - coupling to the next spring · its λ) / diag,
   // from the last row up; once row j's λ is known, row j + dj's particles
   // take +λ u of the spring each starts and −λ u of the one each ends.
@@ -270,11 +277,12 @@ void apply_spring_damping(const Model& m, State& s, Workspace& w, double h) {
   // same for any number of threads.
   constexpr int kGroups = 2;
   // Float columns: the grid (x y z, v, 1/m) and its transpose; each thread's
-  // chain scratch. Each has zeros before and after it for the slots two
-  // springs beyond the grid's ends. Double columns: each group's impulses on
+  // chain scratch. Each has kPad zeros before and after it, for the slots
+  // two springs beyond the grid's ends and those the last row's last vector
+  // runs into (damp_offset). Double columns: each group's impulses on
   // the grid and on the transpose, then those on the transpose back on the
   // grid.
-  constexpr int kPad = 4, kGrid = 7, kScratch = 7;
+  constexpr int kPad = kWhole, kGrid = 7, kScratch = 7;
   const int threads = std::min(m.threads, kGroups);
   const std::size_t stride = std::size_t(n) + 2 * kPad;
   w.damping_columns.resize((2 * kGrid + kScratch * threads) * stride);

@@ -88,9 +88,9 @@ void filter(const Model& m, Workspace& w, Vector v) {
   const Columns c = columns(m, w, v);
   const double *n0 = solver_column(m, w, kHeldColumn), *n1 = solver_column(m, w, kHeldColumn + 1),
                *n2 = solver_column(m, w, kHeldColumn + 2);
-  parallel_for(m, m.nv, [&](int j) {
+  for_each_row_block(m, [&](int j0, int j1, int) {
 #pragma GCC ivdep
-    for (int a = j * m.nu; a < (j + 1) * m.nu; ++a) {
+    for (int a = j0 * m.nu; a < j1 * m.nu; ++a) {
       const double d = c.c[0][a] * n0[a] + c.c[1][a] * n1[a] + c.c[2][a] * n2[a];
       c.c[0][a] -= d * n0[a];
       c.c[1][a] -= d * n1[a];
@@ -195,32 +195,39 @@ double dot(const Model& m, Workspace& w, Vector av, Vector bv) {
 // the convergence test. Returns {r·z, max |z|}.
 std::pair<double, double> precondition(const Model& m, Workspace& w) {
   const Columns r = columns(m, w, kR), z = columns(m, w, kZ);
-  parallel_for(m, m.nv, [&](int j) {
-    const int row = j * m.nu;
-    const float* P[6];
-    for (int k = 0; k < 6; ++k) P[k] = preconditioner_field(m, w, k) + row;
-    const double* N[3];
-    for (int k = 0; k < 3; ++k) N[k] = solver_column(m, w, kHeldColumn + k) + row;
-    const double *r0 = r.c[0] + row, *r1 = r.c[1] + row, *r2 = r.c[2] + row;
-    double* __restrict z0 = z.c[0] + row;
-    double* __restrict z1 = z.c[1] + row;
-    double* __restrict z2 = z.c[2] + row;
+  const float* P[6];
+  for (int k = 0; k < 6; ++k) P[k] = preconditioner_field(m, w, k);
+  const double* N[3];
+  for (int k = 0; k < 3; ++k) N[k] = solver_column(m, w, kHeldColumn + k);
+  const double *r0 = r.c[0], *r1 = r.c[1], *r2 = r.c[2];
+  double* __restrict z0 = z.c[0];
+  double* __restrict z1 = z.c[1];
+  double* __restrict z2 = z.c[2];
+  // By chunks of kChunkRows rows: z over the chunk in one loop (a loop per
+  // row of 51 ended in a scalar tail of 3), then each row's sums while the
+  // chunk is still in cache.
+  constexpr int kChunkRows = 4;
+  parallel_for(m, (m.nv + kChunkRows - 1) / kChunkRows, [&](int chunk) {
+    const int j0 = chunk * kChunkRows, j1 = std::min(m.nv, j0 + kChunkRows);
 #pragma GCC ivdep
-    for (int i = 0; i < m.nu; ++i) {
+    for (int a = j0 * m.nu; a < j1 * m.nu; ++a) {
       // In registers, then stored once: a store read straight back stalls.
-      const double a0 = P[0][i] * r0[i] + P[3][i] * r1[i] + P[4][i] * r2[i];
-      const double a1 = P[3][i] * r0[i] + P[1][i] * r1[i] + P[5][i] * r2[i];
-      const double a2 = P[4][i] * r0[i] + P[5][i] * r1[i] + P[2][i] * r2[i];
-      const double d = a0 * N[0][i] + a1 * N[1][i] + a2 * N[2][i];
-      z0[i] = a0 - d * N[0][i];
-      z1[i] = a1 - d * N[1][i];
-      z2[i] = a2 - d * N[2][i];
+      const double a0 = P[0][a] * r0[a] + P[3][a] * r1[a] + P[4][a] * r2[a];
+      const double a1 = P[3][a] * r0[a] + P[1][a] * r1[a] + P[5][a] * r2[a];
+      const double a2 = P[4][a] * r0[a] + P[5][a] * r1[a] + P[2][a] * r2[a];
+      const double d = a0 * N[0][a] + a1 * N[1][a] + a2 * N[2][a];
+      z0[a] = a0 - d * N[0][a];
+      z1[a] = a1 - d * N[1][a];
+      z2[a] = a2 - d * N[2][a];
     }
-    w.row_sums[j] =
-        lane_sum(0, m.nu, [&](int i) { return r0[i] * z0[i] + r1[i] * z1[i] + r2[i] * z2[i]; });
-    w.row_max[j] = fold_lanes(
-        0, m.nu, [&](int i) { return z0[i] * z0[i] + z1[i] * z1[i] + z2[i] * z2[i]; },
-        [](double a, double b) { return std::max(a, b); });
+    for (int j = j0; j < j1; ++j) {
+      const int b = j * m.nu, e = b + m.nu;
+      w.row_sums[j] =
+          lane_sum(b, e, [&](int a) { return r0[a] * z0[a] + r1[a] * z1[a] + r2[a] * z2[a]; });
+      w.row_max[j] = fold_lanes(
+          b, e, [&](int a) { return z0[a] * z0[a] + z1[a] * z1[a] + z2[a] * z2[a]; },
+          [](double x, double y) { return std::max(x, y); });
+    }
   });
   double rz = 0;
   for (int j = 0; j < m.nv; ++j) rz += w.row_sums[j];
@@ -373,10 +380,10 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
   });
   filter(m, w, kX);
   multiply(m, s, w, kX, kQ);
-  const auto each_row = [&](auto&& body) {  // body(first, end) of each row's particles
-    parallel_for(m, m.nv, [&](int j) { body(j * nu, (j + 1) * nu); });
+  const auto each_block = [&](auto&& body) {  // body(first, end) of each thread's particles
+    for_each_row_block(m, [&](int j0, int j1, int) { body(j0 * nu, j1 * nu); });
   };
-  each_row([&](int a0, int a1) {
+  each_block([&](int a0, int a1) {
     for (int k = 0; k < 3; ++k)
 #pragma GCC ivdep
       for (int a = a0; a < a1; ++a) r.c[k][a] -= q.c[k][a];
@@ -387,7 +394,7 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
   // cloth would let the adhesion and weight of thousands of particles drown
   // out the few the hand pulls.)
   auto [rz, worst] = precondition(m, w);
-  each_row([&](int a0, int a1) {
+  each_block([&](int a0, int a1) {
     for (int k = 0; k < 3; ++k) std::copy(z.c[k] + a0, z.c[k] + a1, p.c[k] + a0);
   });
   int it = 0;
@@ -398,7 +405,7 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
     const double pq = dot(m, w, kP, kQ);
     if (pq <= 0) break;
     const double alpha = rz / pq;
-    each_row([&](int a0, int a1) {
+    each_block([&](int a0, int a1) {
       for (int k = 0; k < 3; ++k)
 #pragma GCC ivdep
         for (int a = a0; a < a1; ++a) {
@@ -410,7 +417,7 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
     const double beta = rz_next / rz;
     rz = rz_next;
     worst = worst_next;
-    each_row([&](int a0, int a1) {
+    each_block([&](int a0, int a1) {
       for (int k = 0; k < 3; ++k)
 #pragma GCC ivdep
         for (int a = a0; a < a1; ++a) p.c[k][a] = z.c[k][a] + beta * p.c[k][a];

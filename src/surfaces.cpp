@@ -62,19 +62,40 @@ void collide(const Model& m, State& s, std::vector<std::uint8_t>* touched,
 void update_contact(const Model& m, State& s, Workspace& w) {
   const Params& p = m.params;
   const double h_th = p.contact.bridge_height;
-  for_each_particle(m, [&](int i) {
-    const SurfaceHit h = query_surface(p, m.contact_surface, s.x[i]);
-    w.distance[i] = h.distance;
-    put(w.surface_normal[i], h.normal);
-    s.contact[i] = h.distance < h_th;
+  parallel_for(m, m.nv, [&](int j) {
+    // Locals: a byte store may alias anything, so the loop would otherwise
+    // reload after each one every pointer and bound it reads through a
+    // reference.
+    const SurfaceKind kind = m.contact_surface;
+    const Vec3* const x = s.x.data();
+    double* const distance = w.distance.data();
+    Vec3* const normal = w.surface_normal.data();
+    std::uint8_t* const contact = s.contact.data();
+    const int end = (j + 1) * m.nu;
+    for (int i = j * m.nu; i < end; ++i) {
+      const SurfaceHit h = query_surface(p, kind, x[i]);
+      distance[i] = h.distance;
+      put(normal[i], h.normal);
+      contact[i] = h.distance < h_th;
+    }
   });
   // The border of the contact region: contact particles on the cloth's border or
-  // next to a lifted particle. They carry eq. 13's edge term.
-  for_each_particle(m, [&](int k) {
-    bool b = s.contact[k] && m.on_border[k];
-    if (s.contact[k] && !b)
-      b = !s.contact[k - 1] || !s.contact[k + 1] || !s.contact[k - m.nu] || !s.contact[k + m.nu];
-    w.border[k] = b;
+  // next to a lifted particle. They carry eq. 13's edge term. Inside the
+  // cloth's border, flags combined with & and | over a row: a loop over bytes
+  // that vectorises, where a branch per particle did not (locals, as above).
+  parallel_for(m, m.nv, [&](int j) {
+    const int nu = m.nu, row = j * nu, end = row + nu;
+    const std::uint8_t* const c = s.contact.data();
+    std::uint8_t* const b = w.border.data();
+    if (j == 0 || j == m.nv - 1 || nu < 3) {
+      for (int k = row; k < end; ++k) b[k] = c[k];  // on the cloth's border
+      return;
+    }
+    b[row] = c[row];
+    b[end - 1] = c[end - 1];
+#pragma GCC ivdep
+    for (int k = row + 1; k < end - 1; ++k)
+      b[k] = c[k] & ((c[k - 1] & c[k + 1] & c[k - nu] & c[k + nu]) ^ 1);
   });
 }
 

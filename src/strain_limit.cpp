@@ -175,15 +175,18 @@ void limit_strain(const Model& m, State& s, Workspace& w, double dt) {
       for (const int e : w.strain_over) queue(e);
     } else {
       parallel_for(m, m.nv, [&](int j) {
-        const Vec3* x = s.x.data();  // locals: a byte store could alias the vectors
-        std::uint8_t* flag = w.strain_stretched.data() + kStrainOffsets * std::size_t(j) * m.nu;
-        std::fill(flag, flag + kStrainOffsets * m.nu, 0);
+        // Locals: a byte store could alias the vectors, the model and the bounds.
+        const Vec3* x = s.x.data();
+        const int nu = m.nu, row = j * nu;
+        std::uint8_t* flag = w.strain_stretched.data() + kStrainOffsets * std::size_t(row);
+        std::fill(flag, flag + kStrainOffsets * nu, 0);
         for (int e = 0; e < kStrainOffsets; ++e) {
           const StencilEdge& st = m.stencil[e];
           if (j + st.dj >= m.nv) continue;
-          const int off = st.di + st.dj * m.nu, row = j * m.nu;
+          const int off = st.di + st.dj * nu, lo = std::max(0, -st.di),
+                    hi = std::min(nu, nu - st.di);
           const double limit = max_len2[e];
-          for (int i = std::max(0, -st.di); i < std::min(m.nu, m.nu - st.di); ++i)
+          for (int i = lo; i < hi; ++i)
             flag[kStrainOffsets * i + e] = (x[row + i + off] - x[row + i]).squaredNorm() > limit;
         }
       });

@@ -105,6 +105,42 @@ TEST(Adhesion, ParticleForcesSumToEquation13) {
   }
 }
 
+// The contact border (eq. 13's edge term) is every contact particle on the
+// cloth's border or next to a lifted one (4-neighbours), on any grid shape.
+TEST(Contact, BorderIsContactOnTheClothsBorderOrNextToLifted) {
+  for (const auto& [nu, nv] : {std::pair{2, 7}, {7, 2}, {3, 3}, {9, 6}, {51, 51}}) {
+    Simulation sim = flat_on_table(
+        1.0, {"cloth.resolution=[" + std::to_string(nu) + "," + std::to_string(nv) + "]"});
+    const Model& m = sim.model();
+    State& s = sim.state();
+    const double h_th = m.params.contact.bridge_height;
+    unsigned pattern = 12345;  // a fixed pseudo-random third of the particles lifted
+    for (auto& x : s.x) {
+      pattern = pattern * 1103515245u + 12345u;
+      x.z() = (pattern >> 16) % 3 == 0 ? 2 * h_th : 0.0;
+    }
+    Workspace& w = const_cast<Workspace&>(sim.workspace());
+    detail::update_contact(m, s, w);
+    int borders = 0;
+    for (int j = 0; j < nv; ++j)
+      for (int i = 0; i < nu; ++i) {
+        const int k = m.index(i, j);
+        ASSERT_EQ(s.contact[k] != 0, s.x[k].z() < h_th);
+        bool expected = false;
+        if (s.contact[k]) {
+          expected = i == 0 || j == 0 || i == nu - 1 || j == nv - 1;
+          for (const auto& [di, dj] : {std::pair{-1, 0}, {1, 0}, {0, -1}, {0, 1}})
+            if (const int b = detail::grid_neighbour(m, i, j, di, dj); b >= 0 && !s.contact[b])
+              expected = true;
+        }
+        EXPECT_EQ(w.border[k] != 0, expected)
+            << nu << " x " << nv << " at (" << i << ", " << j << ")";
+        borders += expected;
+      }
+    EXPECT_GT(borders, 0);
+  }
+}
+
 TEST(Adhesion, SwitchedOffAboveTheLiquidBridge) {
   Simulation sim = flat_on_table(1.0);
   for (auto& x : sim.state().x) x.z() = 1.5e-3;  // above h_th = 1 mm

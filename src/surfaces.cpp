@@ -81,8 +81,9 @@ void update_contact(const Model& m, State& s, Workspace& w) {
   });
   // The border of the contact region: contact particles on the cloth's border or
   // next to a lifted particle. They carry eq. 13's edge term. Inside the
-  // cloth's border, flags combined with & and | over a row: a loop over bytes
-  // that vectorises, where a branch per particle did not (locals, as above).
+  // cloth's border, c & ~(left & right & up & down) over a row of 0/1 bytes:
+  // a loop that vectorises, where a branch per particle did not (locals, as
+  // above).
   parallel_for(m, m.nv, [&](int j) {
     const int nu = m.nu, row = j * nu, end = row + nu;
     const std::uint8_t* const c = s.contact.data();

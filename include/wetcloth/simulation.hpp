@@ -119,8 +119,9 @@ struct Workspace {
   std::vector<PocketAir> pocket_air;  // per pocket: how its deficit answers V_sum
   std::vector<double> pocket_sums;    // scratch for the implicit air correction
   std::vector<Vec3> air_direction;    // A_i n_i of eq. 3 (zero where no air force)
-  // Springs (forces/springs.cpp): positions and velocities by component, a
-  // zero row, then per thread its ring of edge rows and a row of sums.
+  // Springs (forces/springs.cpp): positions and velocities by component (the
+  // positions also read by the normals, the damping solve and implicit Euler),
+  // a zero row, then per thread its ring of edge rows and a row of sums.
   std::vector<double> soa;
   std::vector<float> damping_columns;    // apply_spring_damping's columns and scratch
   std::vector<double> damping_impulses;  // and its impulses

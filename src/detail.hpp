@@ -41,7 +41,7 @@ void collide(const Model& m, State& s, std::vector<std::uint8_t>* touched,
 // simulation.cpp: compute_normals from positions by component (x, y, z
 // columns of n), with a scratch array for the triangles' normals (the step's:
 // no allocation).
-void compute_normals(const Model& m, const double* x_columns, std::vector<Vec3>& normal,
+void compute_normals(const Model& m, const double* x_columns, Vec3Array& normal,
                      std::vector<double>& quad_normals);
 // Distances to the contact surface, contact flags and the contact border.
 void update_contact(const Model& m, State& s, Workspace& w);
@@ -80,28 +80,35 @@ void for_each_particle(const Model& m, Body&& body) {
 // bound of the loop and does not vectorise it (BM_gravity at 51 x 51: 6.0 µs
 // that way, 2.9 µs this way). Each component is the same arithmetic, so the
 // same bits.
-template <class E>
-void put(Vec3& to, const Eigen::MatrixBase<E>& v) {
-  double* p = to.data();
-  for (int k = 0; k < 3; ++k) p[k] = v.coeff(k);
+// (A strided view of a Vec3Array takes the same path.)
+template <class To, class E>
+void put(To&& to, const Eigen::MatrixBase<E>& v) {
+  for (int k = 0; k < 3; ++k) to.coeffRef(k) = v.coeff(k);
 }
-template <class E>
-void add(Vec3& to, const Eigen::MatrixBase<E>& v) {
-  double* p = to.data();
-  for (int k = 0; k < 3; ++k) p[k] += v.coeff(k);
+template <class To, class E>
+void add(To&& to, const Eigen::MatrixBase<E>& v) {
+  for (int k = 0; k < 3; ++k) to.coeffRef(k) += v.coeff(k);
 }
-template <class E>
-void sub(Vec3& to, const Eigen::MatrixBase<E>& v) {
-  double* p = to.data();
-  for (int k = 0; k < 3; ++k) p[k] -= v.coeff(k);
+template <class To, class E>
+void sub(To&& to, const Eigen::MatrixBase<E>& v) {
+  for (int k = 0; k < 3; ++k) to.coeffRef(k) -= v.coeff(k);
 }
 
-// Copies v to three columns, out[k n + a] = v[a][k]: loops over a row of
-// columns vectorise where loops over Vec3s do not.
-inline void to_columns(const Model& m, const std::vector<Vec3>& v, double* out) {
-  for_each_particle(m, [&](int a) {
-    for (int k = 0; k < 3; ++k) out[k * m.n + a] = v[a][k];
-  });
+// A loop that reads byte flags along with doubles is vectorised a vector of
+// bytes (64 particles) at a time, so a row of 51 would run in its scalar tail.
+// Such loops take particles [begin, end) in chunks of at most kChunk:
+// value(i) (a double made from the flags, in a scalar loop) into
+// chunk_values[i - i0], then body(i0, count, chunk_values), whose loop over
+// doubles alone vectorises 8 at a time.
+constexpr int kChunk = 64;
+template <class Value, class Body>
+void for_each_chunk(int begin, int end, Value&& value, Body&& body) {
+  for (int i0 = begin; i0 < end; i0 += kChunk) {
+    const int count = std::min(kChunk, end - i0);
+    double chunk_values[kChunk];
+    for (int k = 0; k < count; ++k) chunk_values[k] = value(i0 + k);
+    body(i0, count, chunk_values);
+  }
 }
 
 // The largest value(i) over the particles: a maximum, so the same for any
@@ -145,12 +152,12 @@ inline int grid_neighbour(const Model& m, int i, int j, int di, int dj) {
 // Springs: with_damping adds eq. 1's damping too (explicit Euler); without it,
 // only the elastic part. Implicit Euler takes the damping into its matrix, the
 // symplectic step takes it with apply_spring_damping, after its velocity
-// update, on w.soa's positions as add_spring_forces left them.
+// update and before the move.
 void add_spring_forces(const Model& m, const State& s, Workspace& w, bool with_damping);
 void apply_spring_damping(const Model& m, State& s, Workspace& w, double h);
-void add_gravity(const Model& m, std::vector<Vec3>& f);
-void add_viscous_damping(const Model& m, const State& s, std::vector<Vec3>& f);
-void add_wind(const Model& m, const State& s, const Workspace& w, std::vector<Vec3>& f);
+void add_gravity(const Model& m, Vec3Array& f);
+void add_viscous_damping(const Model& m, const State& s, Vec3Array& f);
+void add_wind(const Model& m, const State& s, const Workspace& w, Vec3Array& f);
 void add_air_pressure(const Model& m, const State& s, Workspace& w);
 void add_adhesion(const Model& m, const State& s, Workspace& w);
 // Self-collision records its pairs in w.collision_pairs; with_damping adds the
@@ -165,8 +172,7 @@ void update_air(const Model& m, State& s, Workspace& w, double dt);
 // The air term taken implicitly, after the explicit velocity update.
 void correct_air_implicitly(const Model& m, State& s, Workspace& w, double dt);
 // implicit_euler.cpp: the new velocities by backward Euler (s.v in, s.v out),
-// from the forces in w.force without their damping, and the positions in
-// columns that add_spring_forces left in w.soa.
+// from the forces in w.force without their damping.
 void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h);
 // The largest change of a structural or shear spring over a step of h at the
 // velocities s.v, relative to its rest length: the step control's measure.

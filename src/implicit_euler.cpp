@@ -240,12 +240,12 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
   const double h2 = h * h, c = m.params.forces.viscous_damping;
   const double kf = m.params.self_collision.damping;
   // Each forward stencil edge's block h k_d u uᵀ + h² K_e, row by row, from
-  // the positions in columns add_spring_forces left (this substep's).
+  // the substep's positions.
   // The solver's arrays are sized at the first implicit step: the explicit
   // integrators need none of them. Every one is written before it is read.
   w.float_columns.resize(padded_size(m, kFloatColumns));  // the padding stays zero
   w.cg_columns.resize(padded_size(m, kSolverColumns));
-  const double* const X = w.soa.data();  // x, y, z by component
+  const double* const X = s.x.column(0);  // x, y, z by component
   const int n = m.n, nu = m.nu;
   parallel_for(m, m.nv, [&](int j) {
     const int row = j * nu;
@@ -433,7 +433,7 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
 // flat cloth, springs at rest have no stiffness across it, and a force on a
 // few particles would move them at h F / m.
 double step_strain(const Model& m, const State& s, double h) {
-  const double* const V = s.v.data()->data();  // x, y, z of particle a at 3 a
+  const double *const VX = s.v.column(0), *const VY = s.v.column(1), *const VZ = s.v.column(2);
   const int nu = m.nu;
   double worst = 0;
 #pragma omp parallel for reduction(max : worst) num_threads(m.threads) if (m.threads > 1)
@@ -441,12 +441,11 @@ double step_strain(const Model& m, const State& s, double h) {
     for (int e = 0; e < 4; ++e) {  // structural and shear
       const StencilEdge& st = m.stencil[e];
       if (j + st.dj >= m.nv) continue;
-      const int off = 3 * (st.di + st.dj * nu), end = 3 * (j * nu + std::min(nu, nu - st.di));
+      const int off = st.di + st.dj * nu, end = j * nu + std::min(nu, nu - st.di);
       const double rest = st.rest;
       double row_worst = 0;
-      for (int a = 3 * (j * nu + std::max(0, -st.di)); a < end; a += 3) {
-        const double dx = V[a + off] - V[a], dy = V[a + off + 1] - V[a + 1],
-                     dz = V[a + off + 2] - V[a + 2];
+      for (int a = j * nu + std::max(0, -st.di); a < end; ++a) {
+        const double dx = VX[a + off] - VX[a], dy = VY[a + off] - VY[a], dz = VZ[a + off] - VZ[a];
         row_worst = std::max(row_worst, h * std::sqrt(dx * dx + dy * dy + dz * dz) / rest);
       }
       worst = std::max(worst, row_worst);

@@ -26,13 +26,14 @@ std::string format_number(double v) {
 }
 
 std::string cloth_obj(const Model& m, const State& s) {
-  std::vector<Vec3> normal(m.n);
+  Vec3Array normal(m.n);
   compute_normals(m, s.x, normal);
   std::string o;
   o.reserve(static_cast<std::size_t>(m.n) * 80);
   o += "# wetcloth cloth t=" + format_number(s.time) + "\n";
   char line[128];
-  for (const auto& x : s.x) {
+  for (int i = 0; i < m.n; ++i) {
+    const Vec3 x = s.x[i];
     std::snprintf(line, sizeof line, "v %.7g %.7g %.7g\n", x.x(), x.y(), x.z());
     o += line;
   }
@@ -70,7 +71,8 @@ std::string obstacles_obj(const Model& m) {
       const double th = std::numbers::pi * r / rings;
       for (int s = 0; s < segs; ++s) {
         const double ph = 2 * std::numbers::pi * s / segs;
-        const Vec3 x = c + p.ball.radius * Vec3(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th));
+        const Vec3 x = c + p.ball.radius * Vec3(std::sin(th) * std::cos(ph),
+                                                std::sin(th) * std::sin(ph), std::cos(th));
         o << "v " << x.x() << " " << x.y() << " " << x.z() << "\n";
       }
     }

@@ -21,7 +21,7 @@ using namespace detail;
 // even is in all eight; an odd one in four, so it adds zero for the others
 // (exact). Both passes are loops over a row that vectorise; rows are
 // independent.
-void detail::compute_normals(const Model& m, const double* X, std::vector<Vec3>& normal,
+void detail::compute_normals(const Model& m, const double* X, Vec3Array& normal,
                              std::vector<double>& quad_normals) {
   const int nu = m.nu, stride = nu + 1;
   const std::size_t per_row = 6 * std::size_t(stride);
@@ -67,12 +67,13 @@ void detail::compute_normals(const Model& m, const double* X, std::vector<Vec3>&
       t[5][i] = u[0] * v[1] - u[1] * v[0];
     }
   });
-  double* N = normal.data()->data();
   parallel_for(m, m.nv, [&](int j) {
     // Quad (i - 1, r) of quad row r at [i], quad (i, r) at [i + 1].
     const double* below = quad_normals.data() + j * per_row;
     const double* here = below + per_row;
-    double* out = N + 3 * std::size_t(j) * nu;
+    double* __restrict out_x = normal.column(0) + std::size_t(j) * nu;
+    double* __restrict out_y = normal.column(1) + std::size_t(j) * nu;
+    double* __restrict out_z = normal.column(2) + std::size_t(j) * nu;
 #pragma GCC ivdep
     for (int i = 0; i < nu; ++i) {
       const bool even = ((i + j) & 1) == 0;
@@ -91,17 +92,17 @@ void detail::compute_normals(const Model& m, const double* X, std::vector<Vec3>&
         n[k] = sum;
       }
       const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-      out[3 * i] = len > 0 ? n[0] / len : 0.0;
-      out[3 * i + 1] = len > 0 ? n[1] / len : 0.0;
-      out[3 * i + 2] = len > 0 ? n[2] / len : 1.0;
+      out_x[i] = len > 0 ? n[0] / len : 0.0;
+      out_y[i] = len > 0 ? n[1] / len : 0.0;
+      out_z[i] = len > 0 ? n[2] / len : 1.0;
     }
   });
 }
 
-void compute_normals(const Model& m, const std::vector<Vec3>& x, std::vector<Vec3>& normal) {
-  std::vector<double> columns(3 * std::size_t(m.n)), quad_normals;
-  to_columns(m, x, columns.data());
-  detail::compute_normals(m, columns.data(), normal, quad_normals);
+void compute_normals(const Model& m, const Vec3Array& x, Vec3Array& normal) {
+  if (normal.size() != x.size()) normal.assign(x.size(), Vec3::Zero());
+  std::vector<double> quad_normals;
+  detail::compute_normals(m, x.column(0), normal, quad_normals);
 }
 
 Simulation::Simulation(const Params& p) : model_(build_model(p)) { reset(); }
@@ -109,7 +110,7 @@ Simulation::Simulation(const Params& p) : model_(build_model(p)) { reset(); }
 void Simulation::reset() {
   const int n = model_.n;
   state_ = State{};
-  state_.x = model_.rest_position;
+  state_.x = Vec3Array(model_.rest_position);
   state_.v.assign(n, Vec3::Zero());
   state_.contact.assign(n, 0);
   state_.held.assign(n, 0);
@@ -121,8 +122,9 @@ void Simulation::reset() {
   const int grab = ws_.grab_particle;
   ws_ = Workspace{};
   ws_.grab_particle = grab;
-  for (auto* a : {&ws_.force, &ws_.normal, &ws_.surface_normal, &ws_.x_before, &ws_.air_direction})
+  for (auto* a : {&ws_.force, &ws_.normal, &ws_.surface_normal, &ws_.air_direction})
     a->assign(n, Vec3::Zero());
+  ws_.x_before.assign(n, Vec3::Zero());
   ws_.row_sums.assign(model_.nv, 0.0);
   ws_.row_max.assign(model_.nv, 0.0);
   ws_.distance.assign(n, kInf);
@@ -163,7 +165,7 @@ void Simulation::accumulate_forces(bool implicit) {
   Workspace& w = ws_;
   for_each_particle(m, [&](int i) { put(w.force[i], Vec3::Zero()); });
   add_spring_forces(m, s, w, m.params.integrator.type == "explicit-euler");
-  compute_normals(m, w.soa.data(), w.normal, w.quad_normals);  // from the springs' columns
+  compute_normals(m, s.x.column(0), w.normal, w.quad_normals);
   add_gravity(m, w.force);
   if (!implicit) add_viscous_damping(m, s, w.force);
   add_wind(m, s, w, w.force);
@@ -220,9 +222,15 @@ void Simulation::step() {
       // springs is unstable at Δt = 5e-5 s from 51 × 51 up: h Σk_d / m ≈ 2.
       const double c = m.params.forces.viscous_damping;
       parallel_for(m, m.nv, [&](int j) {
+        const double *__restrict fx = w.force.column(0), *__restrict fy = w.force.column(1),
+                                     *__restrict fz = w.force.column(2);
+        double* __restrict vx = s.v.column(0), * __restrict vy = s.v.column(1), * __restrict vz = s.v.column(2);
+#pragma GCC ivdep
         for (int i = j * m.nu; i < (j + 1) * m.nu; ++i) {
-          const double h = dt * m.inv_mass[i], own = 1 + h * c * m.area[i];
-          add(s.v[i], (h / own) * w.force[i]);
+          const double h = dt * m.inv_mass[i], own = 1 + h * c * m.area[i], scale = h / own;
+          vx[i] += scale * fx[i];
+          vy[i] += scale * fy[i];
+          vz[i] += scale * fz[i];
         }
       });
       apply_spring_damping(m, s, w, dt);
@@ -250,7 +258,7 @@ double Simulation::implicit_substep(double dt, int& k, double& strain) {
     strain = step_strain(m, s, h);
     if (k == kMostHalvings || strain <= m.params.integrator.max_step_strain) {
       ++w.substeps;
-      w.acceleration.resize(m.n);
+      if (w.acceleration.size() != std::size_t(m.n)) w.acceleration.assign(m.n, Vec3::Zero());
       for_each_particle(m, [&](int a) { put(w.acceleration[a], (s.v[a] - w.v_start[a]) / h); });
       move_at_new_velocities(h);
       return h;
@@ -263,7 +271,14 @@ double Simulation::implicit_substep(double dt, int& k, double& strain) {
 // The air term taken implicitly on the new velocities, then x += h v.
 void Simulation::move_at_new_velocities(double h) {
   correct_air_implicitly(model_, state_, ws_, h);
-  for_each_particle(model_, [&](int i) { add(state_.x[i], h * state_.v[i]); });
+  parallel_for(model_, model_.nv, [&](int j) {
+    for (int k = 0; k < 3; ++k) {
+      const double* __restrict v = state_.v.column(k);
+      double* __restrict x = state_.x.column(k);
+#pragma GCC ivdep
+      for (int i = j * model_.nu; i < (j + 1) * model_.nu; ++i) x[i] += h * v[i];
+    }
+  });
 }
 
 // After integrating over h: handles; 3. collide; 4. friction; 5. strain

@@ -176,7 +176,7 @@ void limit_strain(const Model& m, State& s, Workspace& w, double dt) {
     } else {
       parallel_for(m, m.nv, [&](int j) {
         // Locals: a byte store could alias the vectors, the model and the bounds.
-        const Vec3* x = s.x.data();
+        const double *X = s.x.column(0), *Y = s.x.column(1), *Z = s.x.column(2);
         const int nu = m.nu, row = j * nu;
         std::uint8_t* flag = w.strain_stretched.data() + kStrainOffsets * std::size_t(row);
         std::fill(flag, flag + kStrainOffsets * nu, 0);
@@ -186,8 +186,20 @@ void limit_strain(const Model& m, State& s, Workspace& w, double dt) {
           const int off = st.di + st.dj * nu, lo = std::max(0, -st.di),
                     hi = std::min(nu, nu - st.di);
           const double limit = max_len2[e];
-          for (int i = lo; i < hi; ++i)
-            flag[kStrainOffsets * i + e] = (x[row + i + off] - x[row + i]).squaredNorm() > limit;
+          // Squared lengths in a loop over doubles (it vectorises), then the
+          // flags: one loop over both would run 64 springs to a vector.
+          for (int a0 = row + lo; a0 < row + hi; a0 += kChunk) {
+            const int count = std::min(kChunk, row + hi - a0);
+            double len2[kChunk];
+#pragma omp simd
+            for (int k = 0; k < count; ++k) {
+              const int a = a0 + k;
+              const double dx = X[a + off] - X[a], dy = Y[a + off] - Y[a], dz = Z[a + off] - Z[a];
+              len2[k] = dx * dx + dy * dy + dz * dz;
+            }
+            for (int k = 0; k < count; ++k)
+              flag[kStrainOffsets * (a0 + k - row) + e] = len2[k] > limit;
+          }
         }
       });
       for (std::size_t slot = 0; slot < w.strain_stretched.size(); ++slot)

@@ -16,15 +16,16 @@ void collide_with_table(const Model& m, State& s, std::uint8_t* touched) {
   const int nu = m.nu;  // locals: a store through X could alias m's fields
   parallel_for(m, m.nv, [&, nu, height](int j) {
     const std::size_t first = std::size_t(j) * nu;
-    double* X = s.x[first].data();
-    double* V = s.v[first].data();
+    double* Z = s.x.column(2) + first;
+    double* VZ = s.v.column(2) + first;
     const std::uint8_t* driven = m.driven.data() + first;
     std::uint8_t* hit = record ? touched + first : nullptr;
+#pragma omp simd simdlen(8)
     for (int i = 0; i < nu; ++i) {
-      const double z = X[3 * i + 2], d = z - height, vz = V[3 * i + 2];
+      const double z = Z[i], d = z - height, vz = VZ[i];
       const bool in = (d < 0) & (driven[i] == 0);  // &, not &&: no branch
-      X[3 * i + 2] = in ? z - d : z;
-      V[3 * i + 2] = in & (vz < 0) ? vz - vz : vz;
+      Z[i] = in ? z - d : z;
+      VZ[i] = in & (vz < 0) ? vz - vz : vz;
       if constexpr (record) hit[i] = in ? table : 0;
     }
   });
@@ -67,15 +68,30 @@ void update_contact(const Model& m, State& s, Workspace& w) {
     // reload after each one every pointer and bound it reads through a
     // reference.
     const SurfaceKind kind = m.contact_surface;
-    const Vec3* const x = s.x.data();
-    double* const distance = w.distance.data();
-    Vec3* const normal = w.surface_normal.data();
-    std::uint8_t* const contact = s.contact.data();
-    const int end = (j + 1) * m.nu;
-    for (int i = j * m.nu; i < end; ++i) {
-      const SurfaceHit h = query_surface(p, kind, x[i]);
+    const int begin = j * m.nu, end = begin + m.nu;
+    double* __restrict const distance = w.distance.data();
+    std::uint8_t* __restrict const contact = s.contact.data();
+    double* __restrict const nx = w.surface_normal.column(0);
+    double* __restrict const ny = w.surface_normal.column(1);
+    double* __restrict const nz = w.surface_normal.column(2);
+    if (kind == SurfaceKind::Table) {  // query_surface's table, in a loop that vectorises
+      const double* __restrict const z = s.x.column(2);
+      const double height = p.table.height;
+#pragma omp simd simdlen(8)
+      for (int i = begin; i < end; ++i) {
+        distance[i] = z[i] - height;
+        nx[i] = ny[i] = 0.0;
+        nz[i] = 1.0;
+        contact[i] = distance[i] < h_th;
+      }
+      return;
+    }
+    for (int i = begin; i < end; ++i) {
+      const SurfaceHit h = query_surface(p, kind, s.x[i]);
       distance[i] = h.distance;
-      put(normal[i], h.normal);
+      nx[i] = h.normal.x();
+      ny[i] = h.normal.y();
+      nz[i] = h.normal.z();
       contact[i] = h.distance < h_th;
     }
   });

@@ -108,7 +108,7 @@ TEST(ImplicitEuler, StartsFromTheLastAccelerationAndLandsOnTheSameAnswer) {
 
   State cold = sim.state();
   Workspace cold_w = sim.workspace();
-  cold_w.acceleration.clear();  // start from v
+  cold_w.acceleration = {};  // start from v
   detail::implicit_euler_velocities(m, cold, cold_w, h);
   EXPECT_GT(cold_w.cg_iterations, 10);
 

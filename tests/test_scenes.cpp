@@ -22,7 +22,8 @@ void expect_never_inside(const Params& p, double duration) {
   bool touched = false;
   for (long long k = 0; k < steps; ++k) {
     sim.step();
-    for (const Vec3& x : sim.state().x) {
+    for (std::size_t i = 0; i < sim.state().x.size(); ++i) {
+      const Vec3 x = sim.state().x[i];
       if (p.table.enabled)
         worst = std::min(worst, detail::query_surface(p, SurfaceKind::Table, x).distance);
       if (p.ball.enabled)

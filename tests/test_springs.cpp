@@ -10,7 +10,7 @@ namespace {
 // A 2 x 2 cloth of 1 cm cells with structural springs only (k, k_d); particles
 // 2 and 3 sit 1 cm above 0 and 1 and move with them, so that their springs
 // are at rest and only the spring 0-1 acts on particles 0 and 1.
-std::vector<Vec3> forces_on_pair(double k, double kd, const Vec3& x1, const Vec3& v1) {
+Vec3Array forces_on_pair(double k, double kd, const Vec3& x1, const Vec3& v1) {
   Params p = test::bare(2);
   p.springs.structural_k = k;
   p.springs.structural_damping = kd;
@@ -21,7 +21,7 @@ std::vector<Vec3> forces_on_pair(double k, double kd, const Vec3& x1, const Vec3
   s.x = {Vec3::Zero(), x1, up, x1 + up};
   s.v = {Vec3::Zero(), v1, Vec3::Zero(), v1};
   Workspace& w = const_cast<Workspace&>(sim.workspace());
-  std::fill(w.force.begin(), w.force.end(), Vec3::Zero());
+  w.force.assign(w.force.size(), Vec3::Zero());
   detail::add_spring_forces(sim.model(), s, w, true);
   return w.force;
 }
@@ -102,11 +102,11 @@ TEST_P(DampingSolve, ConservesMomentumAndMatchesEquation1) {
   // Eq. 1's damping force: the springs' force with damping minus without.
   std::vector<Vec3> damping(m.n, Vec3::Zero());
   for (const bool with : {true, false}) {
-    std::fill(w.force.begin(), w.force.end(), Vec3::Zero());
+    w.force.assign(w.force.size(), Vec3::Zero());
     detail::add_spring_forces(m, s, w, with);
     for (int i = 0; i < m.n; ++i) damping[i] += (with ? 1.0 : -1.0) * w.force[i];
   }
-  const std::vector<Vec3> v0 = s.v;
+  const Vec3Array v0 = s.v;
   const auto momentum = [&] {
     Vec3 p = Vec3::Zero();
     for (int i = 0; i < m.n; ++i) p += m.mass[i] * s.v[i];
@@ -134,7 +134,7 @@ TEST_P(DampingSolve, ConservesMomentumAndMatchesEquation1) {
     EXPECT_LT((momentum() - p0).norm(), 1e-12 * p0.norm() + 1e-15) << h;
     EXPECT_LT(energy(), e0) << h;
   }
-  for (auto& v : s.v) v = Vec3(0.3, -0.2, 0.1);
+  s.v.assign(m.n, Vec3(0.3, -0.2, 0.1));
   detail::apply_spring_damping(m, s, w, 5e-5);
-  for (const auto& v : s.v) EXPECT_LT((v - Vec3(0.3, -0.2, 0.1)).norm(), 1e-14);
+  for (int i = 0; i < m.n; ++i) EXPECT_LT((s.v[i] - Vec3(0.3, -0.2, 0.1)).norm(), 1e-14);
 }

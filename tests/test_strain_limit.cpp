@@ -59,7 +59,7 @@ namespace {
 // The plain form of MODEL.md section 2: every pass looks at every spring, level
 // by level, each level's corrections averaged per particle.
 void limit_strain_plainly(const Model& m, State& s, const Workspace& w, double dt) {
-  const std::vector<Vec3> before = s.x;
+  const Vec3Array before = s.x;
   for (int pass = 0; pass < m.params.strain_limit.passes; ++pass) {
     bool corrected = false;
     for (std::size_t l = 0; l + 1 < w.strain_levels.size(); ++l) {

@@ -23,7 +23,7 @@ Simulation flat_on_table(double omega, std::vector<std::string> sets = {}) {
 
 // Lifts the particles within `radius` of the centre into a cone of height h.
 void make_tent(Simulation& sim, double h, double radius) {
-  for (auto& x : sim.state().x) {
+  for (auto&& x : sim.state().x) {
     const double r = std::hypot(x.x(), x.y());
     if (r < radius) x.z() = h * (1 - r / radius);
   }
@@ -87,7 +87,7 @@ TEST(Adhesion, ParticleForcesSumToEquation13) {
     make_tent(sim, lift, 0.08);  // a contact region with an inner border too
     Workspace& w = const_cast<Workspace&>(sim.workspace());
     detail::update_contact(sim.model(), sim.state(), w);
-    std::fill(w.force.begin(), w.force.end(), Vec3::Zero());
+    w.force.assign(w.force.size(), Vec3::Zero());
     detail::add_adhesion(sim.model(), sim.state(), w);
     double s_now = 0;
     Vec3 total = Vec3::Zero();
@@ -115,7 +115,7 @@ TEST(Contact, BorderIsContactOnTheClothsBorderOrNextToLifted) {
     State& s = sim.state();
     const double h_th = m.params.contact.bridge_height;
     unsigned pattern = 12345;  // a fixed pseudo-random third of the particles lifted
-    for (auto& x : s.x) {
+    for (auto&& x : s.x) {
       pattern = pattern * 1103515245u + 12345u;
       x.z() = (pattern >> 16) % 3 == 0 ? 2 * h_th : 0.0;
     }
@@ -143,7 +143,7 @@ TEST(Contact, BorderIsContactOnTheClothsBorderOrNextToLifted) {
 
 TEST(Adhesion, SwitchedOffAboveTheLiquidBridge) {
   Simulation sim = flat_on_table(1.0);
-  for (auto& x : sim.state().x) x.z() = 1.5e-3;  // above h_th = 1 mm
+  for (auto&& x : sim.state().x) x.z() = 1.5e-3;  // above h_th = 1 mm
   Workspace& w = const_cast<Workspace&>(sim.workspace());
   detail::update_contact(sim.model(), sim.state(), w);
   detail::add_adhesion(sim.model(), sim.state(), w);
@@ -227,15 +227,15 @@ TEST(Air, OneStepFeelsTheDeficitAtItsEnd) {
     const double dt = t.dt;
     // The tent's velocities for one more step of the same growth, then the
     // explicit air force over it and the correction.
-    const std::vector<Vec3> x0 = s.x;
+    const Vec3Array x0 = s.x;
     make_tent(sim, t.height + t.rise * dt, 0.08);
     for (int i = 0; i < m.n; ++i) {
       s.v[i] = (s.x[i] - x0[i]) / dt;
       s.x[i] = x0[i];
     }
-    std::fill(w.force.begin(), w.force.end(), Vec3::Zero());
+    w.force.assign(w.force.size(), Vec3::Zero());
     detail::add_air_pressure(m, s, w);
-    const std::vector<Vec3> v0 = s.v;
+    const Vec3Array v0 = s.v;
     for (int i = 0; i < m.n; ++i) s.v[i] += dt * m.inv_mass[i] * w.force[i];
     detail::correct_air_implicitly(m, s, w, dt);
     for (int i = 0; i < m.n; ++i) s.x[i] += dt * s.v[i];
@@ -277,7 +277,9 @@ TEST(Normals, AreTheAreaWeightedSumOverEachParticlesTriangles) {
     p.cloth.resolution = {nu, nv};
     Simulation sim(p);
     const Model& m = sim.model();
-    std::vector<Vec3> x = m.rest_position, normal(m.n), expected(m.n, Vec3::Zero());
+    Vec3Array x(m.rest_position);
+    Vec3Array normal(m.n);
+    std::vector<Vec3> expected(m.n, Vec3::Zero());
     for (int i = 0; i < m.n; ++i)
       x[i] += 0.004 * Vec3(std::sin(3.1 * i), std::cos(1.3 * i), std::sin(0.7 * i * i));
     for (const auto& t : m.triangles) {
@@ -298,7 +300,7 @@ TEST(Air, ForcePointsTowardTheSurfaceUnderSuction) {
     make_tent(table, 0.03, 0.1);
     Simulation ball(test::coarse("drape-ball", {std::string("air.force_direction=") + direction}));
     const Params& bp = ball.model().params;
-    for (auto& x : ball.state().x) {  // wrap the cloth 1 cm above the ball's top
+    for (auto&& x : ball.state().x) {  // wrap the cloth 1 cm above the ball's top
       const Vec3 c = to_vec(bp.ball.center);
       x = c + (x - c).normalized() * (bp.ball.radius + 0.01);
     }
@@ -309,7 +311,7 @@ TEST(Air, ForcePointsTowardTheSurfaceUnderSuction) {
       detail::update_contact(sim->model(), s, w);
       std::fill(s.pocket_pressure.begin(), s.pocket_pressure.end(),
                 sim->model().params.air.p_atm - 200);
-      std::fill(w.force.begin(), w.force.end(), Vec3::Zero());
+      w.force.assign(w.force.size(), Vec3::Zero());
       detail::add_air_pressure(sim->model(), s, w);
       int pushed = 0;
       for (int i = 0; i < sim->model().n; ++i) {
@@ -328,12 +330,12 @@ TEST(Friction, NeverReversesOrGrowsAndStopsASlowParticle) {
   State& s = sim.state();
   Workspace& w = const_cast<Workspace&>(sim.workspace());
   detail::update_contact(m, s, w);
-  std::fill(w.force.begin(), w.force.end(), Vec3::Zero());
+  w.force.assign(w.force.size(), Vec3::Zero());
   detail::add_adhesion(m, s, w);
   std::vector<std::uint8_t> touched(m.n, 0);
   const double dt = 5e-5;
   for (int i = 0; i < m.n; ++i) s.v[i] = Vec3(0.01 * (i % 7) - 0.03, 0.002 * (i % 5), 0);
-  const std::vector<Vec3> before = s.v;
+  const Vec3Array before = s.v;
   detail::apply_friction(m, s, w, touched, dt);
   int stopped = 0;
   for (int i = 0; i < m.n; ++i) {
@@ -383,7 +385,7 @@ TEST(Friction, DryClothStillHasFrictionFromItsWeight) {
   for (const char* normal : {"contact", "adhesion"}) {
     Simulation sim =
         flat_on_table(0.0, {std::string("friction.normal=") + normal, "cloth.resolution=[15,15]"});
-    for (auto& v : sim.state().v) v = Vec3(0.05, 0, 0);
+    for (auto&& v : sim.state().v) v = Vec3(0.05, 0, 0);
     ASSERT_TRUE(sim.advance_to(0.2));
     const double speed = sim.metrics().kinetic_energy_j;
     if (std::string(normal) == "contact") {
@@ -433,7 +435,7 @@ TEST(SelfCollision, CandidatesSearchedAroundMoversAreTheWholeSearch) {
   const int reach = std::max(2, static_cast<int>(std::ceil(d_t / step)));
   int partial = 0;
   for (int k = 0; k < 400; ++k) {
-    const std::vector<Vec3> x = sim.state().x;  // where the step found the pairs
+    const Vec3Array x = sim.state().x;  // where the step found the pairs
     sim.step();
     const Workspace& w = sim.workspace();
     const auto& a = w.candidates_anchor;
@@ -470,7 +472,7 @@ TEST(SelfCollision, KeepsTwoFoldedLayersApart) {
     std::vector<int> top;
     for (int j = fold; j < m.nv; ++j)
       for (int i = 0; i < m.nu; ++i) {
-        Vec3& x = sim.state().x[m.index(i, j)];
+        auto x = sim.state().x[m.index(i, j)];
         x = Vec3(x.x(), 2 * y_fold - x.y(), 1.2 * d_t);
         if (j > fold + 1) top.push_back(m.index(i, j));
       }

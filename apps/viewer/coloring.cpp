@@ -35,7 +35,7 @@ Legend cloth_mesh(const Simulation& sim, ColorBy mode, float& scale, ClothMesh& 
   const Workspace& w = sim.workspace();
   const int n = m.n;
 
-  std::vector<Vec3> normal(n);
+  Vec3Array normal(n);
   compute_normals(m, s.x, normal);
   mesh.position.resize(n);
   mesh.normal.resize(n);

@@ -6,8 +6,10 @@
 
 #include <Eigen/Core>
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <array>
 #include <cstdint>
+#include <initializer_list>
 #include <string>
 #include <vector>
 
@@ -19,6 +21,58 @@ using Vec3 = Eigen::Vector3d;
 using Mat3 = Eigen::Matrix3d;
 
 inline Vec3 to_vec(const Vec3d& a) { return {a[0], a[1], a[2]}; }
+
+// n 3-vectors held by component: every x, then every y, then every z. A loop
+// over particles then reads each component contiguously and the compiler
+// vectorises it, which it cannot do over an array of Vec3 (three interleaved
+// doubles). a[i] is particle i's vector as a strided view that reads and
+// writes like a Vec3; column(k) is component k of all of them.
+class Vec3Array {
+ public:
+  using Ref = Eigen::Map<Vec3, Eigen::Unaligned, Eigen::InnerStride<>>;
+  using ConstRef = Eigen::Map<const Vec3, Eigen::Unaligned, Eigen::InnerStride<>>;
+
+  Vec3Array() = default;
+  explicit Vec3Array(std::size_t n, const Vec3& value = Vec3::Zero()) { assign(n, value); }
+  explicit Vec3Array(const std::vector<Vec3>& v) : Vec3Array(v.size()) {
+    for (std::size_t i = 0; i < v.size(); ++i) (*this)[i] = v[i];
+  }
+  Vec3Array(std::initializer_list<Vec3> v) : Vec3Array(std::vector<Vec3>(v)) {}
+  void assign(std::size_t n, const Vec3& value) {
+    n_ = n;
+    data_.resize(3 * n);
+    for (int k = 0; k < 3; ++k) std::fill_n(data_.begin() + k * n, n, value[k]);
+  }
+  std::size_t size() const { return n_; }
+  bool empty() const { return n_ == 0; }
+  Ref operator[](std::size_t i) { return Ref(data_.data() + i, Eigen::InnerStride<>(n_)); }
+  ConstRef operator[](std::size_t i) const {
+    return ConstRef(data_.data() + i, Eigen::InnerStride<>(n_));
+  }
+  // Range-for yields the views: for (const Vec3& x : a) copies each one.
+  template <class Array, class View>
+  struct Iterator {
+    Array* array;
+    std::size_t i;
+    View operator*() const { return (*array)[i]; }
+    Iterator& operator++() {
+      ++i;
+      return *this;
+    }
+    bool operator==(const Iterator& o) const { return i == o.i; }
+  };
+  Iterator<Vec3Array, Ref> begin() { return {this, 0}; }
+  Iterator<Vec3Array, Ref> end() { return {this, n_}; }
+  Iterator<const Vec3Array, ConstRef> begin() const { return {this, 0}; }
+  Iterator<const Vec3Array, ConstRef> end() const { return {this, n_}; }
+  double* column(int k) { return data_.data() + k * n_; }
+  const double* column(int k) const { return data_.data() + k * n_; }
+  bool operator==(const Vec3Array&) const = default;
+
+ private:
+  std::size_t n_ = 0;
+  std::vector<double> data_;
+};
 
 // One kind of spring (structural, shear or bending), as flat arrays.
 struct SpringSet {
@@ -76,7 +130,7 @@ void set_humidity(Model& m, double omega);
 struct State {
   double time = 0;
   long long steps = 0;
-  std::vector<Vec3> x, v;
+  Vec3Array x, v;
   std::vector<std::uint8_t> contact;  // 1: within h_th of the contact surface
   std::vector<std::uint8_t> held;     // 1: held where a capped force handle stopped
   std::vector<Vec3> held_at;
@@ -110,7 +164,8 @@ struct PocketAir {
 
 // Scratch arrays, reused every step: nothing is allocated per step.
 struct Workspace {
-  std::vector<Vec3> force, normal, x_before, surface_normal;
+  Vec3Array force, normal, surface_normal;
+  std::vector<Vec3> x_before;
   std::vector<double> quad_normals;   // compute_normals' scratch
   std::vector<double> distance;       // signed distance to the contact surface
   std::vector<double> adhesion;       // |adhesion force| per particle, N
@@ -118,11 +173,10 @@ struct Workspace {
   std::vector<int> pocket;            // air pocket of each particle, -1 none
   std::vector<PocketAir> pocket_air;  // per pocket: how its deficit answers V_sum
   std::vector<double> pocket_sums;    // scratch for the implicit air correction
-  std::vector<Vec3> air_direction;    // A_i n_i of eq. 3 (zero where no air force)
-  // Springs (forces/springs.cpp): positions and velocities by component (the
-  // positions also read by the normals, the damping solve and implicit Euler),
-  // a zero row, then per thread its ring of edge rows and a row of sums.
-  std::vector<double> soa;
+  Vec3Array air_direction;            // A_i n_i of eq. 3 (zero where no air force)
+  // Springs (forces/springs.cpp): a zero row, then per thread its ring of
+  // edge rows and a row of sums.
+  std::vector<double> spring_rows;
   std::vector<float> damping_columns;    // apply_spring_damping's columns and scratch
   std::vector<double> damping_impulses;  // and its impulses
   std::vector<int> queue;
@@ -179,7 +233,7 @@ struct Workspace {
   // step for the other integrators), and solves (the tries thrown away
   // included). The last substep's solved change of velocity per second: the
   // next solve starts from v + h times it.
-  std::vector<Vec3> v_start, acceleration;
+  Vec3Array v_start, acceleration;
   int halvings = 0;
   long long substeps = 0, solves = 0;
   // Interactive grab (viewer).
@@ -238,6 +292,6 @@ class Simulation {
 };
 
 // Particle normals, area-weighted over the adjacent triangles.
-void compute_normals(const Model& m, const std::vector<Vec3>& x, std::vector<Vec3>& normal);
+void compute_normals(const Model& m, const Vec3Array& x, Vec3Array& normal);
 
 }  // namespace wetcloth

@@ -26,11 +26,25 @@ void add_adhesion(const Model& m, const State& s, Workspace& w) {
     return static_cast<double>(count);
   });
   const double edge_each = border > 0 ? 2.0 * std::sqrt(s_now) * tension / border : 0.0;
-  for_each_particle(m, [&](int i) {
-    if (!s.contact[i]) return;
-    const double f = pressure * m.area[i] + (w.border[i] ? edge_each : 0.0);
-    w.adhesion[i] = f;
-    sub(w.force[i], f * w.surface_normal[i]);
+  parallel_for(m, m.nv, [&](int j) {
+    const double *__restrict nx = w.surface_normal.column(0),
+                             *__restrict ny = w.surface_normal.column(1),
+                             *__restrict nz = w.surface_normal.column(2);
+    double *__restrict fx = w.force.column(0), *__restrict fy = w.force.column(1),
+                       *__restrict fz = w.force.column(2), *__restrict adhesion = w.adhesion.data();
+    const auto force = [&](int i) {  // zero off the contact region
+      return s.contact[i] ? pressure * m.area[i] + (w.border[i] ? edge_each : 0.0) : 0.0;
+    };
+    for_each_chunk(j * m.nu, (j + 1) * m.nu, force, [&](int i0, int count, const double* f) {
+#pragma omp simd
+      for (int k = 0; k < count; ++k) {
+        const int i = i0 + k;
+        adhesion[i] = f[k];
+        fx[i] -= f[k] * nx[i];
+        fy[i] -= f[k] * ny[i];
+        fz[i] -= f[k] * nz[i];
+      }
+    });
   });
 }
 

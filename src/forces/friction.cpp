@@ -1,45 +1,84 @@
 // Friction (MODEL.md section 5; paper eq. 14, after Bridson et al. 2002).
+#include <algorithm>
 #include <cmath>
 
 #include "../detail.hpp"
 
 namespace wetcloth::detail {
 
+namespace {
+
+// Eq. 14 on particle i, given its surface normal n and load (the loop over
+// the contact surface below does the same arithmetic in columns).
+void slow_down(const Model& m, State& s, int i, const Vec3& n, double load, double mu, double dt) {
+  if (load <= 0) return;
+  const Vec3 vt = s.v[i] - s.v[i].dot(n) * n;
+  const double speed = vt.norm();
+  if (speed == 0) return;
+  const double dv = mu * load * dt * m.inv_mass[i];
+  const Vec3 slowed = vt * (std::min(dv, speed) / speed);
+  sub(s.v[i], slowed);
+  sub(s.x[i], dt * slowed);
+}
+
+}  // namespace
+
 // Velocity-level Coulomb friction: the tangential velocity shrinks by
 // Δv_f = μ F_n Δt / m and never reverses. As in Bridson et al. 2002, it acts on
 // the velocity that moves the particle over the step, so the step's move is
 // taken back by Δt Δv_f too: applied after the move, a load under μ F_n would
-// still creep Δt² a a step, and a cloth that should hold would slide. On the contact surface F_n is
-// the adhesion plus, by default, the part of the other forces that presses the particle in; on
-// other obstacles it is that load alone.
+// still creep Δt² a a step, and a cloth that should hold would slide. On the
+// contact surface F_n is the adhesion plus, by default, the part of the other
+// forces that presses the particle in; on other obstacles it is that load
+// alone.
 void apply_friction(const Model& m, State& s, const Workspace& w,
                     const std::vector<std::uint8_t>& touched, double dt) {
   const double mu = m.params.friction.mu;
   if (mu == 0) return;
   const bool with_load = m.params.friction.normal == "contact";
+  // On the contact surface, slow_down's arithmetic without a branch (a factor
+  // of zero where it does not apply), over columns: a loop that vectorises.
+  // w.force holds the step's forces, adhesion included (it is -adhesion·n_s).
+  parallel_for(m, m.nv, [&](int j) {
+    const double *__restrict nx = w.surface_normal.column(0),
+                             *__restrict ny = w.surface_normal.column(1),
+                             *__restrict nz = w.surface_normal.column(2);
+    const double *__restrict fx = w.force.column(0), *__restrict fy = w.force.column(1),
+                             *__restrict fz = w.force.column(2);
+    double* __restrict vx = s.v.column(0), * __restrict vy = s.v.column(1), * __restrict vz = s.v.column(2);
+    double* __restrict xx = s.x.column(0), * __restrict xy = s.x.column(1), * __restrict xz = s.x.column(2);
+    const double* __restrict adhesion = w.adhesion.data(), * __restrict inv_mass =
+                                                               m.inv_mass.data();
+    const auto acts = [&](int i) { return s.contact[i] && !m.driven[i] ? 1.0 : 0.0; };
+    for_each_chunk(j * m.nu, (j + 1) * m.nu, acts, [&](int i0, int count, const double* gate) {
+#pragma omp simd
+      for (int k = 0; k < count; ++k) {
+        const int i = i0 + k;
+        const double pressing = -((fx[i] * nx[i] + fy[i] * ny[i] + fz[i] * nz[i]) + adhesion[i]);
+        const double load = adhesion[i] + (with_load && pressing > 0 ? pressing : 0.0);
+        const double vn = vx[i] * nx[i] + vy[i] * ny[i] + vz[i] * nz[i];
+        const double tx = vx[i] - vn * nx[i], ty = vy[i] - vn * ny[i], tz = vz[i] - vn * nz[i];
+        const double speed = std::sqrt(tx * tx + ty * ty + tz * tz);
+        const double dv = mu * load * dt * inv_mass[i];
+        const bool on = (gate[k] != 0) & (load > 0) & (speed != 0);
+        const double factor = on ? std::min(dv, speed) / speed : 0.0;
+        const double sx = tx * factor, sy = ty * factor, sz = tz * factor;
+        vx[i] -= sx;
+        vy[i] -= sy;
+        vz[i] -= sz;
+        xx[i] -= dt * sx;
+        xy[i] -= dt * sy;
+        xz[i] -= dt * sz;
+      }
+    });
+  });
+  // Off the contact surface, a particle pushed out of another obstacle this
+  // step: its load is the part of the forces that presses it in.
+  if (!with_load) return;
   for_each_particle(m, [&](int i) {
-    if (m.driven[i]) return;
-    double load = 0;
-    Vec3 n;
-    if (s.contact[i]) {
-      n = w.surface_normal[i];
-      // w.force holds the step's forces, adhesion included (it is -adhesion·n_s).
-      const double pressing = -(w.force[i].dot(n) + w.adhesion[i]);
-      load = w.adhesion[i] + (with_load && pressing > 0 ? pressing : 0.0);
-    } else if (touched[i] != 0 && with_load) {
-      n = query_surface(m.params, static_cast<SurfaceKind>(touched[i]), s.x[i]).normal;
-      load = std::max(0.0, -w.force[i].dot(n));
-    } else {
-      return;
-    }
-    if (load <= 0) return;
-    const Vec3 vt = s.v[i] - s.v[i].dot(n) * n;
-    const double speed = vt.norm();
-    if (speed == 0) return;
-    const double dv = mu * load * dt * m.inv_mass[i];
-    const Vec3 slowed = vt * (std::min(dv, speed) / speed);  // eq. 14
-    sub(s.v[i], slowed);
-    sub(s.x[i], dt * slowed);
+    if (m.driven[i] || s.contact[i] || touched[i] == 0) return;
+    const Vec3 n = query_surface(m.params, static_cast<SurfaceKind>(touched[i]), s.x[i]).normal;
+    slow_down(m, s, i, n, std::max(0.0, -w.force[i].dot(n)), mu, dt);
   });
 }
 

@@ -3,9 +3,16 @@
 
 namespace wetcloth::detail {
 
-void add_gravity(const Model& m, std::vector<Vec3>& f) {
+void add_gravity(const Model& m, Vec3Array& f) {
   const Vec3 g = to_vec(m.params.forces.gravity);
-  for_each_particle(m, [&](int i) { add(f[i], m.mass[i] * g); });
+  parallel_for(m, m.nv, [&](int j) {
+    for (int k = 0; k < 3; ++k) {
+      const double gk = g[k];
+      double* __restrict out = f.column(k);
+#pragma GCC ivdep
+      for (int i = j * m.nu; i < (j + 1) * m.nu; ++i) out[i] += m.mass[i] * gk;
+    }
+  });
 }
 
 }  // namespace wetcloth::detail

@@ -51,7 +51,8 @@ void add_self_collision(const Model& m, const State& s, Workspace& w, bool with_
   if (search_all) {
     // The search, by blocks of rows on the step's threads.
     w.candidates_radius = radius;
-    anchor = s.x;
+    anchor.resize(m.n);
+    for_each_particle(m, [&](int i) { anchor[i] = s.x[i]; });
     build_hash(anchor, 2 * radius, w, m.threads);
     w.thread_candidates.resize(m.threads);
     for (auto& list : w.thread_candidates) list.clear();  // the runtime may give fewer threads

@@ -7,8 +7,8 @@
 // a fixed order: forward edge of an offset, then the backward one (minus the
 // force stored at its other end). Rows are independent, so any number of
 // threads gives the same bits, and both passes are loops over a row the
-// compiler vectorises. Positions (and, with damping, velocities) are first
-// copied to columns. Edge rows live in a ring of three per thread: a
+// compiler vectorises, reading the state's position and velocity columns
+// (Vec3Array). Edge rows live in a ring of three per thread: a
 // particle's backward springs start at most two rows back.
 //
 // The damping, in the symplectic step, is taken implicitly on its own
@@ -42,19 +42,16 @@ void gather_row(const double* const fwd[kEdges][kSpringFields],
 
 template <bool damped>
 void add_spring_forces(const Model& m, const State& s, Workspace& w) {
-  const int n = m.n, nu = m.nu, stride = nu + 2 * kReach;
+  const int nu = m.nu, stride = nu + 2 * kReach;
   const std::size_t per_row = std::size_t(kEdges) * kSpringFields * stride;
   const std::size_t per_thread = kRing * per_row + kSpringFields * stride;  // edge rows, then sums
-  w.soa.resize(6 * std::size_t(n) + kSpringFields * stride + per_thread * m.threads);
-  double* const X = w.soa.data();
-  double* const zero_row = X + 6 * std::size_t(n);  // stands for edges above the first row
+  w.spring_rows.resize(kSpringFields * stride + per_thread * m.threads);
+  double* const zero_row = w.spring_rows.data();  // stands for edges above the first row
   std::fill(zero_row, zero_row + kSpringFields * stride, 0.0);
-  const SpringColumns<double> c{X, X + n, X + 2 * n, X + 3 * n, X + 4 * n, X + 5 * n};
-
-  to_columns(m, s.x, X);
-  if (damped) to_columns(m, s.v, X + 3 * std::size_t(n));
+  const SpringColumns<double> c{s.x.column(0), s.x.column(1), s.x.column(2),
+                                s.v.column(0), s.v.column(1), s.v.column(2)};
   for_each_row_block(m, [&](int j0, int j1, int thread) {
-    double* const ring = X + 6 * std::size_t(n) + kSpringFields * stride + per_thread * thread;
+    double* const ring = zero_row + kSpringFields * stride + per_thread * thread;
     double* sums[kSpringFields];
     for (int k = 0; k < kSpringFields; ++k) sums[k] = ring + kRing * per_row + k * stride;
     // Field k of offset e's edge row j, at its particle i = 0.
@@ -90,8 +87,12 @@ void add_spring_forces(const Model& m, const State& s, Workspace& w) {
         }
       }
       gather_row(fwd, bwd, nu, sums);
-      for (int i = 0; i < nu; ++i)
-        add(w.force[j * nu + i], Vec3(sums[0][i], sums[1][i], sums[2][i]));
+      for (int k = 0; k < kSpringFields; ++k) {
+        double* __restrict out = w.force.column(k) + j * nu;
+        const double* __restrict sum = sums[k];
+#pragma GCC ivdep
+        for (int i = 0; i < nu; ++i) out[i] += sum[i];
+      }
     }
   });
 }
@@ -289,13 +290,19 @@ void apply_spring_damping(const Model& m, State& s, Workspace& w, double h) {
   w.damping_impulses.resize(9 * kGroups * std::size_t(n));
   const auto col = [&](int k) { return w.damping_columns.data() + k * stride + kPad; };
   const auto impulse = [&](int k) { return w.damping_impulses.data() + k * std::size_t(n); };
-  const double* X = w.soa.data();  // x y z by component, then more of w.soa
-  for_each_particle(m, [&](int a) {
+  parallel_for(m, m.nv, [&](int j) {
     for (int k = 0; k < 3; ++k) {
-      col(k)[a] = Real(X[k * std::size_t(n) + a]);
-      col(3 + k)[a] = Real(s.v[a][k]);
+      const double* __restrict x = s.x.column(k);
+      const double* __restrict v = s.v.column(k);
+      Real* __restrict to_x = col(k);
+      Real* __restrict to_v = col(3 + k);
+      for (int a = j * nu; a < (j + 1) * nu; ++a) {
+        to_x[a] = Real(x[a]);
+        to_v[a] = Real(v[a]);
+      }
     }
-    col(6)[a] = Real(m.inv_mass[a]);
+    Real* __restrict to_w = col(6);
+    for (int a = j * nu; a < (j + 1) * nu; ++a) to_w[a] = Real(m.inv_mass[a]);
   });
   for (int k = 0; k < kGrid; ++k)  // transposed: particle (i, j) at i nv + j
     transpose(m, col(k), col(kGrid + k), nv, nu);
@@ -346,7 +353,6 @@ void apply_spring_damping(const Model& m, State& s, Workspace& w, double h) {
   // columns vectorise.
   static_assert(kGroups == 2);
   const double share = 1.0 / damped;
-  double* const v = s.v.data()->data();
   parallel_for(m, nv, [&](int row) {
     for (int k = 0; k < 3; ++k) {
       const double* __restrict j0 = impulse(k);
@@ -354,13 +360,13 @@ void apply_spring_damping(const Model& m, State& s, Workspace& w, double h) {
       const double* __restrict j1 = impulse(6 + k);
       const double* __restrict back1 = impulse(6 * kGroups + 3 + k);
       const double* __restrict inv_mass = m.inv_mass.data();
-      double* __restrict out = v + k;
+      double* __restrict out = s.v.column(k);
 #pragma GCC ivdep
       for (int a = row * nu; a < (row + 1) * nu; ++a) {
         double sum = 0;
         sum += j0[a] + back0[a];
         sum += j1[a] + back1[a];
-        out[3 * a] += share * inv_mass[a] * sum;
+        out[a] += share * inv_mass[a] * sum;
       }
     }
   });

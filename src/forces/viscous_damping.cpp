@@ -4,10 +4,17 @@
 
 namespace wetcloth::detail {
 
-void add_viscous_damping(const Model& m, const State& s, std::vector<Vec3>& f) {
+void add_viscous_damping(const Model& m, const State& s, Vec3Array& f) {
   const double c = m.params.forces.viscous_damping;
   if (c == 0) return;
-  for_each_particle(m, [&](int i) { sub(f[i], c * m.area[i] * s.v[i]); });
+  parallel_for(m, m.nv, [&](int j) {
+    for (int k = 0; k < 3; ++k) {
+      const double* __restrict v = s.v.column(k);
+      double* __restrict out = f.column(k);
+#pragma GCC ivdep
+      for (int i = j * m.nu; i < (j + 1) * m.nu; ++i) out[i] -= c * m.area[i] * v[i];
+    }
+  });
 }
 
 }  // namespace wetcloth::detail

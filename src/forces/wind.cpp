@@ -4,14 +4,31 @@
 
 namespace wetcloth::detail {
 
-void add_wind(const Model& m, const State& s, const Workspace& w, std::vector<Vec3>& f) {
+void add_wind(const Model& m, const State& s, const Workspace& w, Vec3Array& f) {
   const double k = m.params.wind.k;
   if (k == 0) return;
   const Vec3 u = to_vec(m.params.wind.velocity);
-  for_each_particle(m, [&](int i) {
-    const Vec3 rel = m.in_wind[i] ? Vec3(u - s.v[i]) : Vec3(-s.v[i]);
-    const Vec3& n = w.normal[i];
-    add(f[i], (k * m.area[i] * rel.dot(n)) * n);
+  parallel_for(m, m.nv, [&](int j) {
+    const double* __restrict vx = s.v.column(0), * __restrict vy = s.v.column(1), * __restrict vz = s.v.column(2);
+    const double *__restrict nx = w.normal.column(0), *__restrict ny = w.normal.column(1),
+                                 *__restrict nz = w.normal.column(2);
+    double* __restrict fx = f.column(0), * __restrict fy = f.column(1), * __restrict fz = f.column(2);
+    const double* __restrict area = m.area.data();
+    const double ux = u[0], uy = u[1], uz = u[2];
+    const auto in_wind = [&](int i) { return m.in_wind[i] ? 1.0 : 0.0; };
+    for_each_chunk(j * m.nu, (j + 1) * m.nu, in_wind, [&](int i0, int count, const double* in) {
+#pragma omp simd
+      for (int c = 0; c < count; ++c) {
+        const int i = i0 + c;
+        const bool blown = in[c] != 0;
+        const double rx = blown ? ux - vx[i] : -vx[i], ry = blown ? uy - vy[i] : -vy[i],
+                     rz = blown ? uz - vz[i] : -vz[i];
+        const double t = k * area[i] * (rx * nx[i] + ry * ny[i] + rz * nz[i]);
+        fx[i] += t * nx[i];
+        fy[i] += t * ny[i];
+        fz[i] += t * nz[i];
+      }
+    });
   });
 }
 

@@ -259,7 +259,13 @@ double Simulation::implicit_substep(double dt, int& k, double& strain) {
     if (k == kMostHalvings || strain <= m.params.integrator.max_step_strain) {
       ++w.substeps;
       if (w.acceleration.size() != std::size_t(m.n)) w.acceleration.assign(m.n, Vec3::Zero());
-      for_each_particle(m, [&](int a) { put(w.acceleration[a], (s.v[a] - w.v_start[a]) / h); });
+      parallel_for(m, m.nv, [&](int j) {
+        for (int k = 0; k < 3; ++k) {
+          const double* __restrict v = s.v.column(k), * __restrict v0 = w.v_start.column(k);
+          double* __restrict a = w.acceleration.column(k);
+          for (int i = j * m.nu; i < (j + 1) * m.nu; ++i) a[i] = (v[i] - v0[i]) / h;
+        }
+      });
       move_at_new_velocities(h);
       return h;
     }

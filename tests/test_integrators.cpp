@@ -28,6 +28,33 @@ double max_spring_strain(const Simulation& sim) {
 
 }  // namespace
 
+// The state's arrays hold x, y, z columns; a[i] is a view that reads and
+// writes particle i's three components in them.
+TEST(Vec3Array, ViewsReadAndWriteTheColumns) {
+  Vec3Array a{Vec3(1, 2, 3), Vec3(4, 5, 6)};
+  ASSERT_EQ(a.size(), 2u);
+  EXPECT_EQ(a.column(0)[1], 4.0);
+  EXPECT_EQ(a.column(2)[0], 3.0);
+  a[1] += Vec3(1, 1, 1);
+  a[0].z() = 9;
+  EXPECT_EQ(a.column(1)[1], 6.0);
+  EXPECT_EQ(a.column(2)[0], 9.0);
+  Vec3 sum = Vec3::Zero();
+  for (const Vec3& v : a) sum += v;
+  EXPECT_EQ(sum, Vec3(6, 8, 16));
+  for (auto&& v : a) v *= 2;
+  EXPECT_EQ(Vec3(a[1]), Vec3(10, 12, 14));
+  Vec3Array b = a;
+  EXPECT_TRUE(b == a);
+  b[0].x() = 0;
+  EXPECT_FALSE(b == a);
+  EXPECT_EQ(Vec3(Vec3Array(std::vector<Vec3>{Vec3(1, 0, 0)})[0]), Vec3(1, 0, 0));
+  b.assign(3, Vec3(7, 8, 9));
+  ASSERT_EQ(b.size(), 3u);
+  EXPECT_EQ(b.column(1)[2], 8.0);
+  EXPECT_EQ(Vec3(b[2]), Vec3(7, 8, 9));
+}
+
 // A dropped cloth at Δt = 1/240 s, 200 times the explicit step: no blow-up, no
 // penetration, and it comes to rest on the table.
 TEST(ImplicitEuler, StableAtAFrameRateStepWithDefaultStiffness) {

@@ -352,6 +352,46 @@ TEST(Friction, NeverReversesOrGrowsAndStopsASlowParticle) {
   EXPECT_GT(stopped, 0);
 }
 
+// The friction pass runs over columns in chunks of kChunk particles, with
+// the contact and driven flags made doubles first: on rows longer than a
+// chunk, with flags, loads and velocities varying particle by particle, each
+// particle must get eq. 14 exactly as it would alone.
+TEST(Friction, EachParticleAloneOnRowsLongerThanAChunk) {
+  Simulation sim = flat_on_table(0.7, {"cloth.resolution=[70,4]"});
+  Model& m = const_cast<Model&>(sim.model());
+  ASSERT_GT(m.nu, detail::kChunk);
+  State& s = sim.state();
+  Workspace& w = const_cast<Workspace&>(sim.workspace());
+  detail::update_contact(m, s, w);
+  w.force.assign(w.force.size(), Vec3::Zero());
+  detail::add_adhesion(m, s, w);
+  for (int i = 0; i < m.n; ++i) {
+    s.contact[i] = i % 5 != 3;
+    m.driven[i] = i % 11 == 4;
+    w.force[i] += Vec3(0.01 * std::sin(i), 0.01 * std::cos(i), 0.002 * std::sin(3.0 * i));
+    s.v[i] = Vec3(0.02 * std::sin(0.7 * i), 0.02 * std::cos(1.3 * i), 0.001 * std::sin(i));
+  }
+  const Vec3Array x0 = s.x, v0 = s.v;
+  const double dt = 5e-5, mu = m.params.friction.mu;
+  detail::apply_friction(m, s, w, std::vector<std::uint8_t>(m.n, 0), dt);
+  int slowed = 0, stopped = 0;
+  for (int i = 0; i < m.n; ++i) {
+    const Vec3 n = w.surface_normal[i], v = v0[i];
+    const double load = w.adhesion[i] + std::max(0.0, -(w.force[i].dot(n) + w.adhesion[i]));
+    const Vec3 vt = v - v.dot(n) * n;
+    Vec3 slowed_by = Vec3::Zero();
+    if (s.contact[i] && !m.driven[i] && load > 0 && vt.norm() > 0)
+      slowed_by = vt * (std::min(mu * load * dt / m.mass[i], vt.norm()) / vt.norm());
+    slowed += slowed_by.norm() > 0;
+    stopped += slowed_by.norm() > 0 && slowed_by == vt;
+    const double scale = 1e-15 * v.norm();
+    EXPECT_LE((s.v[i] - (v - slowed_by)).norm(), scale) << "particle " << i;
+    EXPECT_LE((s.x[i] - (x0[i] - dt * slowed_by)).norm(), 1e-15 * x0[i].norm()) << "particle " << i;
+  }
+  EXPECT_GT(slowed, m.n / 2);
+  EXPECT_GT(stopped, 0);
+}
+
 // Friction acts on the velocity that moves the particle over the step
 // (Bridson et al. 2002), so a load below μ F_n holds a cloth still; applied
 // after the move it would let the cloth creep by Δt² a every step. Then above

@@ -17,8 +17,10 @@ inline std::uint32_t hash_cell(long long ix, long long iy, long long iz, std::ui
 }
 
 // Sorts particles into buckets of cubic cells of side `cell`; the cells are
-// found on `threads` threads, the counting sort is in particle order.
-inline void build_hash(const std::vector<Vec3>& x, double cell, Workspace& w, int threads = 1) {
+// found on `threads` threads, the counting sort is in particle order. Points
+// x are a Vec3Array or a std::vector<Vec3>.
+template <class Points>
+void build_hash(const Points& x, double cell, Workspace& w, int threads = 1) {
   const int n = static_cast<int>(x.size());
   std::size_t size = 1;
   while (size < 2 * std::size_t(n)) size <<= 1;
@@ -45,9 +47,9 @@ inline void build_hash(const std::vector<Vec3>& x, double cell, Workspace& w, in
 // with d = y - x[j] shorter than `radius`, bucket by bucket. The hash must
 // have been built with cell = 2 radius: the ball of radius r around y then
 // meets at most 2 x 2 x 2 cells.
-template <class Fn>
-void for_each_near(const std::vector<Vec3>& x, double radius, const Workspace& w, const Vec3& y,
-                   int self, int after, Fn fn) {
+template <class Points, class Fn>
+void for_each_near(const Points& x, double radius, const Workspace& w, const Vec3& y, int self,
+                   int after, Fn fn) {
   const auto mask = static_cast<std::uint32_t>(w.cell_start.size() - 2);
   const double r2 = radius * radius, cell = 2 * radius;
   const long long cx = std::llround(std::floor((y.x() - radius) / cell));
@@ -75,9 +77,9 @@ void for_each_near(const std::vector<Vec3>& x, double radius, const Workspace& w
 // Calls fn(i, j, d_ij, |d_ij|) once for every pair i < j closer than `radius`
 // that `skip(i, j)` does not exclude, with i in [first, last) (all particles by
 // default), in order of i. The hash must have been built with cell = 2 radius.
-template <class Skip, class Fn>
-void for_each_close_pair(const std::vector<Vec3>& x, double radius, const Workspace& w, Skip skip,
-                         Fn fn, int first = 0, int last = -1) {
+template <class Points, class Skip, class Fn>
+void for_each_close_pair(const Points& x, double radius, const Workspace& w, Skip skip, Fn fn,
+                         int first = 0, int last = -1) {
   if (last < 0) last = static_cast<int>(x.size());
   for (int i = first; i < last; ++i)
     for_each_near(x, radius, w, x[i], i, i, [&](int j, const Vec3& d, double len2) {

@@ -215,7 +215,7 @@ struct Workspace {
   std::vector<std::vector<std::array<int, 2>>>
       thread_candidates;                      // each thread's share of the search
   std::vector<std::uint8_t> candidate_close;  // candidate within d_t this step
-  std::vector<Vec3> candidates_anchor;
+  Vec3Array candidates_anchor;
   double candidates_radius = 0;
   // Implicit Euler, in columns (see implicit_euler.cpp): in float, the
   // matrix's 8 forward stencil edges' blocks and the block-Jacobi

@@ -9,6 +9,35 @@
 
 namespace wetcloth::detail {
 
+namespace {
+
+// The largest squared distance of a particle from its anchor: a maximum over
+// columns, which vectorises (and is the same in any order).
+double from_anchor2(const Vec3Array& x, const Vec3Array& anchor, int i) {
+  const double dx = x.column(0)[i] - anchor.column(0)[i], dy = x.column(1)[i] - anchor.column(1)[i],
+               dz = x.column(2)[i] - anchor.column(2)[i];
+  return dx * dx + dy * dy + dz * dz;
+}
+
+double farthest_from_anchor(const Model& m, const Vec3Array& x, const Vec3Array& anchor) {
+  double most = 0;
+#pragma omp parallel for reduction(max : most) num_threads(m.threads) if (m.threads > 1)
+  for (int j = 0; j < m.nv; ++j) {
+    double row = 0;
+    const double *X = x.column(0), *Y = x.column(1), *Z = x.column(2);
+    const double *AX = anchor.column(0), *AY = anchor.column(1), *AZ = anchor.column(2);
+#pragma omp simd reduction(max : row)
+    for (int i = j * m.nu; i < (j + 1) * m.nu; ++i) {
+      const double dx = X[i] - AX[i], dy = Y[i] - AY[i], dz = Z[i] - AZ[i];  // as from_anchor2
+      row = std::max(row, dx * dx + dy * dy + dz * dz);
+    }
+    most = std::max(most, row);
+  }
+  return most;
+}
+
+}  // namespace
+
 void add_self_collision(const Model& m, const State& s, Workspace& w, bool with_damping) {
   const auto& p = m.params.self_collision;
   if (!p.enabled) return;
@@ -40,10 +69,9 @@ void add_self_collision(const Model& m, const State& s, Workspace& w, bool with_
   auto& movers = w.candidate_movers;
   movers.clear();
   bool search_all = w.candidates_radius != radius || anchor.size() != s.x.size();
-  const auto far = [&](int i) {
-    return (s.x[i] - anchor[i]).squaredNorm() > 0.25 * margin * margin;
-  };
-  if (!search_all && max_over_particles(m, [&](int i) { return far(i) ? 1.0 : 0.0; }) > 0) {
+  const double far2 = 0.25 * margin * margin;
+  const auto far = [&](int i) { return from_anchor2(s.x, anchor, i) > far2; };
+  if (!search_all && farthest_from_anchor(m, s.x, anchor) > far2) {
     for (int i = 0; i < m.n; ++i)
       if (far(i)) movers.push_back(i);
     search_all = 4 * movers.size() > std::size_t(m.n);
@@ -51,8 +79,7 @@ void add_self_collision(const Model& m, const State& s, Workspace& w, bool with_
   if (search_all) {
     // The search, by blocks of rows on the step's threads.
     w.candidates_radius = radius;
-    anchor.resize(m.n);
-    for_each_particle(m, [&](int i) { anchor[i] = s.x[i]; });
+    anchor = s.x;
     build_hash(anchor, 2 * radius, w, m.threads);
     w.thread_candidates.resize(m.threads);
     for (auto& list : w.thread_candidates) list.clear();  // the runtime may give fewer threads

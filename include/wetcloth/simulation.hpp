@@ -26,7 +26,9 @@ inline Vec3 to_vec(const Vec3d& a) { return {a[0], a[1], a[2]}; }
 // over particles then reads each component contiguously and the compiler
 // vectorises it, which it cannot do over an array of Vec3 (three interleaved
 // doubles). a[i] is particle i's vector as a strided view that reads and
-// writes like a Vec3; column(k) is component k of all of them.
+// writes like a Vec3; column(k) is component k of all of them. (Eigen sums a
+// view's dot product as x + (y + z), a Vec3's as (x + y) + z; the loops over
+// columns sum as a Vec3 does.)
 class Vec3Array {
  public:
   using Ref = Eigen::Map<Vec3, Eigen::Unaligned, Eigen::InnerStride<>>;

@@ -202,12 +202,10 @@ void BM_self_collision(benchmark::State& st) {
         [](const Model& m, State& s, Workspace& w) { add_self_collision(m, s, w, true); });
 }
 void BM_build_hash(benchmark::State& st) {
-  const State& from = warm(st).state();
-  std::vector<Vec3> anchor(from.x.size());  // where add_self_collision searches from
-  for (std::size_t i = 0; i < anchor.size(); ++i) anchor[i] = from.x[i];
+  const Vec3Array anchor = warm(st).state().x;  // where add_self_collision searches from
   stage(st, warm(st), false, [&anchor](const Model& m, State&, Workspace& w) {
-    build_hash(anchor, 2 * m.params.self_collision.distance,
-               w);  // the cell add_self_collision uses
+    // The cell add_self_collision uses.
+    build_hash(anchor, 2 * m.params.self_collision.distance, w);
   });
 }
 void BM_limit_strain(benchmark::State& st) {

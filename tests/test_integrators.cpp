@@ -2,7 +2,10 @@
 // converges as the step shrinks.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <cmath>
+#include <cstdlib>
+#include <new>
 
 #include "common.hpp"
 #include "detail.hpp"
@@ -10,6 +13,17 @@
 #include "wetcloth/simulation.hpp"
 
 using namespace wetcloth;
+
+// Allocations counted while g_count_allocations is set (Step.AllocatesNothingOnceWarm):
+// the test binary's operator new counts, then allocates with malloc as
+// libstdc++'s does (its operator delete, kept, frees with free).
+std::atomic<bool> g_count_allocations{false};
+std::atomic<long> g_allocations{0};
+void* operator new(std::size_t size) {
+  if (g_count_allocations) ++g_allocations;
+  if (void* p = std::malloc(size ? size : 1)) return p;
+  throw std::bad_alloc();
+}
 
 namespace {
 
@@ -196,6 +210,25 @@ TEST(ImplicitEuler, RunsThePullWithEveryEffectOn) {
 // Every force is gathered per particle and every sum is taken in a fixed
 // order, so the thread count never changes a bit. At the paper's 51 x 51: a
 // smaller grid runs on one thread whatever it asks for.
+// Nothing is allocated per step: the scratch arrays of the Workspace grow to
+// what the scene needs during the first steps, then are reused. Symplectic
+// Euler on two threads with self-collision on, then implicit Euler.
+TEST(Step, AllocatesNothingOnceWarm) {
+  const auto allocations = [](std::vector<std::string> sets, int warm, int counted) {
+    sets.push_back("self_collision.enabled=true");
+    Simulation sim(load_scene("pull-straight", sets));
+    for (int k = 0; k < warm; ++k) sim.step();
+    g_allocations = 0;
+    g_count_allocations = true;
+    for (int k = 0; k < counted; ++k) sim.step();
+    g_count_allocations = false;
+    EXPECT_TRUE(sim.blow_up_reason().empty()) << sim.blow_up_reason();
+    return g_allocations.load();
+  };
+  EXPECT_EQ(allocations({"integrator.threads=2"}, 300, 300), 0);
+  EXPECT_EQ(allocations({kImplicit, kLargeStep}, 30, 30), 0);
+}
+
 TEST(Threads, TwoThreadsGiveTheSameBitsAsOne) {
   for (const bool implicit : {false, true}) {
     const char* integrator = implicit ? kImplicit : "integrator.type=symplectic-euler";

@@ -20,7 +20,7 @@ void collide_with_table(const Model& m, State& s, std::uint8_t* touched) {
     double* VZ = s.v.column(2) + first;
     const std::uint8_t* driven = m.driven.data() + first;
     std::uint8_t* hit = record ? touched + first : nullptr;
-#pragma omp simd simdlen(8)
+#pragma omp simd
     for (int i = 0; i < nu; ++i) {
       const double z = Z[i], d = z - height, vz = VZ[i];
       const bool in = (d < 0) & (driven[i] == 0);  // &, not &&: no branch
@@ -77,7 +77,7 @@ void update_contact(const Model& m, State& s, Workspace& w) {
     if (kind == SurfaceKind::Table) {  // query_surface's table, in a loop that vectorises
       const double* __restrict const z = s.x.column(2);
       const double height = p.table.height;
-#pragma omp simd simdlen(8)
+#pragma omp simd
       for (int i = begin; i < end; ++i) {
         distance[i] = z[i] - height;
         nx[i] = ny[i] = 0.0;

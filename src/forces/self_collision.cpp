@@ -11,26 +11,33 @@ namespace wetcloth::detail {
 
 namespace {
 
-// The largest squared distance of a particle from its anchor: a maximum over
-// columns, which vectorises (and is the same in any order).
-double from_anchor2(const Vec3Array& x, const Vec3Array& anchor, int i) {
-  const double dx = x.column(0)[i] - anchor.column(0)[i], dy = x.column(1)[i] - anchor.column(1)[i],
-               dz = x.column(2)[i] - anchor.column(2)[i];
-  return dx * dx + dy * dy + dz * dz;
-}
+// Squared distance of particle i from its anchor, by columns (pointers taken
+// once, so that a loop over i vectorises).
+struct AnchorGap {
+  const double *x, *y, *z, *ax, *ay, *az;
+  AnchorGap(const Vec3Array& p, const Vec3Array& anchor)
+      : x(p.column(0)),
+        y(p.column(1)),
+        z(p.column(2)),
+        ax(anchor.column(0)),
+        ay(anchor.column(1)),
+        az(anchor.column(2)) {}
+  double operator()(int i) const {
+    const double dx = x[i] - ax[i], dy = y[i] - ay[i], dz = z[i] - az[i];
+    return dx * dx + dy * dy + dz * dz;
+  }
+};
 
-double farthest_from_anchor(const Model& m, const Vec3Array& x, const Vec3Array& anchor) {
+// The largest of them: a maximum over columns, which vectorises (and is the
+// same in any order).
+double farthest(const Model& m, const AnchorGap& gap) {
   double most = 0;
 #pragma omp parallel for reduction(max : most) num_threads(m.threads) if (m.threads > 1)
   for (int j = 0; j < m.nv; ++j) {
+    const AnchorGap local = gap;  // a copy: through the reference GCC gathered
     double row = 0;
-    const double *X = x.column(0), *Y = x.column(1), *Z = x.column(2);
-    const double *AX = anchor.column(0), *AY = anchor.column(1), *AZ = anchor.column(2);
 #pragma omp simd reduction(max : row)
-    for (int i = j * m.nu; i < (j + 1) * m.nu; ++i) {
-      const double dx = X[i] - AX[i], dy = Y[i] - AY[i], dz = Z[i] - AZ[i];  // as from_anchor2
-      row = std::max(row, dx * dx + dy * dy + dz * dz);
-    }
+    for (int i = j * m.nu; i < (j + 1) * m.nu; ++i) row = std::max(row, local(i));
     most = std::max(most, row);
   }
   return most;
@@ -70,8 +77,9 @@ void add_self_collision(const Model& m, const State& s, Workspace& w, bool with_
   movers.clear();
   bool search_all = w.candidates_radius != radius || anchor.size() != s.x.size();
   const double far2 = 0.25 * margin * margin;
-  const auto far = [&](int i) { return from_anchor2(s.x, anchor, i) > far2; };
-  if (!search_all && farthest_from_anchor(m, s.x, anchor) > far2) {
+  const AnchorGap gap(s.x, anchor);
+  const auto far = [&](int i) { return gap(i) > far2; };
+  if (!search_all && farthest(m, gap) > far2) {
     for (int i = 0; i < m.n; ++i)
       if (far(i)) movers.push_back(i);
     search_all = 4 * movers.size() > std::size_t(m.n);

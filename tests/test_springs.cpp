@@ -82,11 +82,23 @@ TEST(Springs, UndampedSpringKeepsEnergyUnderSymplecticEuler) {
 // velocities stay bounded, and the relative motion only loses energy; and a
 // velocity shared by the whole cloth is left alone. On 25 x 25, and on grids
 // narrower than a vector (16 floats), whose rows' last vector runs on over
-// several rows and past the grid's end.
-class DampingSolve : public testing::TestWithParam<std::string> {};
-INSTANTIATE_TEST_SUITE_P(Grids, DampingSolve, testing::Values("[25,25]", "[7,12]", "[12,7]"));
+// several rows and past the grid's end; and with the structural or the
+// bending springs undamped, where a group of offsets (its horizontal one
+// among them) has nothing to solve.
+class DampingSolve : public testing::TestWithParam<std::vector<std::string>> {};
+INSTANTIATE_TEST_SUITE_P(Grids, DampingSolve,
+                         testing::Values(std::vector<std::string>{"cloth.resolution=[25,25]"},
+                                         std::vector<std::string>{"cloth.resolution=[7,12]"},
+                                         std::vector<std::string>{"cloth.resolution=[12,7]"},
+                                         std::vector<std::string>{"cloth.resolution=[25,25]",
+                                                                  "springs.structural_damping=0"},
+                                         std::vector<std::string>{"cloth.resolution=[12,7]",
+                                                                  "springs.bending_damping=0"},
+                                         std::vector<std::string>{"cloth.resolution=[25,25]",
+                                                                  "springs.structural_damping=0",
+                                                                  "springs.shear_damping=0"}));
 TEST_P(DampingSolve, ConservesMomentumAndMatchesEquation1) {
-  Simulation sim(test::coarse("pull-straight", {"cloth.resolution=" + GetParam()}));
+  Simulation sim(test::coarse("pull-straight", GetParam()));
   const Model& m = sim.model();
   State& s = sim.state();
   Workspace& w = const_cast<Workspace&>(sim.workspace());

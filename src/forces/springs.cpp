@@ -153,12 +153,12 @@ struct ChainScratch {
   Real* lambda;
 };
 
-// One offset (di, dj), dj > 0, of grid g: solves its chains and adds each
-// particle's impulse (the first offset into a j sets it). Every
-// loop runs over whole rows (a spring slot off the grid computes zeros), so
-// that it vectorises.
+// One offset (di, dj), dj > 0, of grid g: solves its chains for λ (in
+// t.lambda) and, with take_impulses, adds each particle's impulse (the first
+// offset into a j sets it). Every loop runs over whole rows (a spring slot
+// off the grid computes zeros), so that it vectorises.
 void damp_offset(const DampingGrid& g, int di, int dj, Real c, const ChainScratch& t,
-                 bool first_offset) {
+                 bool take_impulses, bool first_offset) {
   const int nu = g.nu, nv = g.nv, n = nu * nv, off = di + dj * nu, springs_end = (nv - dj) * nu;
   const int lo = std::max(0, -di), hi = std::min(nu, nu - di);
   // Forward elimination, row by row: a spring's predecessor starts dj rows up
@@ -246,24 +246,47 @@ void damp_offset(const DampingGrid& g, int di, int dj, Real c, const ChainScratc
       const int a = row + i;
       t.lambda[a] = (t.rhs[a] - t.coupling[a + off] * t.lambda[a + off]) * t.inv_diag[a];
     }
-    take_row(j + dj, std::true_type{});
+    if (take_impulses) take_row(j + dj, std::true_type{});
   }
-  for (int r = 0; r < std::min(dj, nv); ++r) take_row(r, std::false_type{});
+  if (take_impulses)
+    for (int r = 0; r < std::min(dj, nv); ++r) take_row(r, std::false_type{});
 }
 
-// out[i rows + j] = in[j cols + i]: by tiles, so that both sides stay in cache.
-template <class T>
-void transpose(const Model& m, const T* __restrict in, T* __restrict out, int rows, int cols) {
-  constexpr int kTile = 16;
-  parallel_for(m, (rows + kTile - 1) / kTile, [&](int tile) {
-    const int j0 = tile * kTile, j1 = std::min(rows, j0 + kTile);
-    for (int i0 = 0; i0 < cols; i0 += kTile) {
-      const int i1 = std::min(cols, i0 + kTile);
-      for (int i = i0; i < i1; ++i)
-        for (int j = j0; j < j1; ++j) out[i * rows + j] = in[j * cols + i];
+// Eigen's packet types carry alignment attributes that a template argument
+// drops; Eigen silences the same warning inside itself.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wignored-attributes"
+// out[i rows + j] = in[j cols + i]: by blocks of a vector's width square,
+// each transposed in registers (Eigen's packet transpose); the rows and
+// columns left over one by one.
+void transpose(const Model& m, const Real* __restrict in, Real* __restrict out, int rows,
+               int cols) {
+  namespace ei = Eigen::internal;
+  // Half a vector: 8 floats with AVX-512, where 16 left a 51-wide grid a
+  // fifth in the scalar edges.
+  using Packet = ei::unpacket_traits<ei::packet_traits<Real>::type>::half;
+  constexpr int kWidth = ei::unpacket_traits<Packet>::size;
+  const int strips = rows / kWidth;
+  parallel_for(m, strips + 1, [&](int strip) {
+    const int j0 = strip * kWidth;
+    if (strip == strips) {  // the rows left over
+      for (int i = 0; i < cols; ++i)
+        for (int j = j0; j < rows; ++j) out[i * rows + j] = in[j * cols + i];
+      return;
     }
+    int i0 = 0;
+    for (; i0 + kWidth <= cols; i0 += kWidth) {
+      ei::PacketBlock<Packet, kWidth> block;
+      for (int r = 0; r < kWidth; ++r)
+        block.packet[r] = ei::ploadu<Packet>(in + (j0 + r) * cols + i0);
+      ei::ptranspose(block);
+      for (int r = 0; r < kWidth; ++r) ei::pstoreu(out + (i0 + r) * rows + j0, block.packet[r]);
+    }
+    for (int i = i0; i < cols; ++i)
+      for (int j = j0; j < j0 + kWidth; ++j) out[i * rows + j] = in[j * cols + i];
   });
 }
+#pragma GCC diagnostic pop
 
 }  // namespace
 
@@ -273,22 +296,30 @@ void apply_spring_damping(const Model& m, State& s, Workspace& w, double h) {
   if (damped == 0) return;
   const int n = m.n, nu = m.nu, nv = m.nv;
   // The offsets in two fixed groups (structural and shear; bending), each
-  // adding its offsets in stencil order into its own impulses on the grid and
-  // on the transpose: the groups may run on two threads, and the sums are the
-  // same for any number of threads.
+  // adding its offsets in stencil order into its own impulses: the groups may
+  // run on two threads, and the sums are the same for any number of threads.
+  // Each group has one horizontal offset, solved on the transposed grid; its
+  // λ come back to the grid and its impulses are taken there, at the end.
   constexpr int kGroups = 2;
+  std::array<int, kGroups> horizontal{};  // each group's horizontal offset, di
+  for (int group = 0; group < kGroups; ++group)
+    for (int e = group * kEdges / kGroups; e < (group + 1) * kEdges / kGroups; ++e)
+      if (m.stencil[e].dj == 0) horizontal[group] = m.stencil[e].di;
   // Float columns: the grid (x y z, v, 1/m) and its transpose; each thread's
-  // chain scratch. Each has kPad zeros before and after it, for the slots
-  // two springs beyond the grid's ends and those the last row's last vector
-  // runs into (damp_offset). Double columns: each group's impulses on
-  // the grid and on the transpose, then those on the transpose back on the
-  // grid.
-  constexpr int kPad = kWhole, kGrid = 7, kScratch = 7;
+  // chain scratch; per group the horizontal offset's λ on the grid, and its
+  // λ u (x y z). Each has kPad zeros before and after it, for the slots two
+  // springs beyond the grid's ends and those the last row's last vector runs
+  // into (damp_offset). Double columns: each group's impulses from its
+  // offsets along the columns of the grid.
+  constexpr int kPad = kWhole, kGrid = 7, kScratch = 7, kBack = 4;
   const int threads = std::min(m.threads, kGroups);
   const std::size_t stride = std::size_t(n) + 2 * kPad;
-  w.damping_columns.resize((2 * kGrid + kScratch * threads) * stride);
-  w.damping_impulses.resize(9 * kGroups * std::size_t(n));
+  w.damping_columns.resize((2 * kGrid + kScratch * threads + kBack * kGroups) * stride);
+  w.damping_impulses.resize(3 * kGroups * std::size_t(n));
   const auto col = [&](int k) { return w.damping_columns.data() + k * stride + kPad; };
+  const auto back = [&](int group, int k) {  // k: 0 λ, 1 + c λ u_c
+    return col(2 * kGrid + kScratch * threads + kBack * group + k);
+  };
   const auto impulse = [&](int k) { return w.damping_impulses.data() + k * std::size_t(n); };
   parallel_for(m, m.nv, [&](int j) {
     for (int k = 0; k < 3; ++k) {
@@ -306,7 +337,8 @@ void apply_spring_damping(const Model& m, State& s, Workspace& w, double h) {
   });
   for (int k = 0; k < kGrid; ++k)  // transposed: particle (i, j) at i nv + j
     transpose(m, col(k), col(kGrid + k), nv, nu);
-  bool first[kGroups][2] = {{true, true}, {true, true}};  // per group: nothing in j, j_t yet
+  bool first[kGroups] = {true, true};     // per group: nothing in its impulses yet
+  bool solved[kGroups] = {false, false};  // per group: its horizontal λ solved
 #pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1)
   for (int group = 0; group < kGroups; ++group) {
     Real* t = col(2 * kGrid + kScratch * omp_get_thread_num());
@@ -324,7 +356,7 @@ void apply_spring_damping(const Model& m, State& s, Workspace& w, double h) {
       // A horizontal offset's chains are vertical on the transposed grid.
       const bool transposed = st.dj == 0;
       const Real* g = col(transposed ? kGrid : 0);
-      double* j = impulse(6 * group + (transposed ? 3 : 0));
+      double* j = impulse(3 * group);
       const DampingGrid grid{transposed ? nv : nu,
                              transposed ? nu : nv,
                              g,
@@ -338,34 +370,63 @@ void apply_spring_damping(const Model& m, State& s, Workspace& w, double h) {
                              j + n,
                              j + 2 * n};
       damp_offset(grid, transposed ? st.dj : st.di, transposed ? st.di : st.dj, c, scratch,
-                  first[group][transposed]);
-      first[group][transposed] = false;
+                  !transposed, first[group]);
+      if (transposed) {
+        transpose(m, scratch.lambda, back(group, 0), nu, nv);
+        solved[group] = true;
+      } else {
+        first[group] = false;
+      }
     }
   }
-  // The groups' impulses on the transpose, back on the grid.
   for (int group = 0; group < kGroups; ++group)
-    for (int k = 0; k < 3; ++k) {
-      for (const int t : {0, 1})
-        if (first[group][t]) std::fill_n(impulse(6 * group + 3 * t + k), n, 0.0);
-      transpose(m, impulse(6 * group + 3 + k), impulse(6 * kGroups + 3 * group + k), nu, nv);
-    }
-  // v += the mean change, by component in the groups' order: loops over
-  // columns vectorise.
+    if (first[group])
+      for (int k = 0; k < 3; ++k) std::fill_n(impulse(3 * group + k), n, 0.0);
+  // v += the mean change, by component in the groups' order: per group its
+  // offsets along the columns, then its horizontal one, whose spring starting
+  // at a particle gives it +λ u and the one ending there −λ u (u as the
+  // transposed solve had it: the same floats, so the same bits).
   static_assert(kGroups == 2);
   const double share = 1.0 / damped;
+  const Real *const px = col(0), *const py = col(1), *const pz = col(2);
   parallel_for(m, nv, [&](int row) {
+    const int r0 = row * nu, r1 = r0 + nu;
+    for (int group = 0; group < kGroups; ++group) {
+      const int di = horizontal[group];
+      Real* __restrict lu[3] = {back(group, 1), back(group, 2), back(group, 3)};
+      if (!solved[group]) {
+        for (Real* c : lu) std::fill(c + r0, c + r1, Real(0));
+        continue;
+      }
+      const Real* __restrict lambda = back(group, 0);
+#pragma GCC ivdep
+      for (int a = r0; a < r1; ++a) {
+        const int b = a + di;
+        const bool on = a - r0 < nu - di;
+        const Real dx = px[b] - px[a], dy = py[b] - py[a], dz = pz[b] - pz[a];
+        const Real len = std::sqrt(dx * dx + dy * dy + dz * dz);
+        const Real inv = on && len > 0 ? Real(1) / len : Real(0);
+        lu[0][a] = on ? lambda[a] * (dx * inv) : Real(0);
+        lu[1][a] = on ? lambda[a] * (dy * inv) : Real(0);
+        lu[2][a] = on ? lambda[a] * (dz * inv) : Real(0);
+      }
+    }
     for (int k = 0; k < 3; ++k) {
       const double* __restrict j0 = impulse(k);
-      const double* __restrict back0 = impulse(6 * kGroups + k);
-      const double* __restrict j1 = impulse(6 + k);
-      const double* __restrict back1 = impulse(6 * kGroups + 3 + k);
+      const double* __restrict j1 = impulse(3 + k);
+      const Real* __restrict lu0 = back(0, 1 + k);
+      const Real* __restrict lu1 = back(1, 1 + k);
+      const int di0 = horizontal[0], di1 = horizontal[1];
       const double* __restrict inv_mass = m.inv_mass.data();
       double* __restrict out = s.v.column(k);
 #pragma GCC ivdep
-      for (int a = row * nu; a < (row + 1) * nu; ++a) {
+      for (int a = r0; a < r1; ++a) {
+        const int i = a - r0;
+        const double back0 = i >= di0 ? double(lu0[a]) - double(lu0[a - di0]) : double(lu0[a]);
+        const double back1 = i >= di1 ? double(lu1[a]) - double(lu1[a - di1]) : double(lu1[a]);
         double sum = 0;
-        sum += j0[a] + back0[a];
-        sum += j1[a] + back1[a];
+        sum += j0[a] + back0;
+        sum += j1[a] + back1;
         out[a] += share * inv_mass[a] * sum;
       }
     }

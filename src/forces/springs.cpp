@@ -299,25 +299,25 @@ void apply_spring_damping(const Model& m, State& s, Workspace& w, double h) {
   // adding its offsets in stencil order into its own impulses: the groups may
   // run on two threads, and the sums are the same for any number of threads.
   // Each group has one horizontal offset, solved on the transposed grid; its
-  // λ come back to the grid and its impulses are taken there, at the end.
+  // λ u come back to the grid and its impulses are taken there, at the end.
   constexpr int kGroups = 2;
   std::array<int, kGroups> horizontal{};  // each group's horizontal offset, di
   for (int group = 0; group < kGroups; ++group)
     for (int e = group * kEdges / kGroups; e < (group + 1) * kEdges / kGroups; ++e)
       if (m.stencil[e].dj == 0) horizontal[group] = m.stencil[e].di;
   // Float columns: the grid (x y z, v, 1/m) and its transpose; each thread's
-  // chain scratch; per group the horizontal offset's λ on the grid, and its
-  // λ u (x y z). Each has kPad zeros before and after it, for the slots two
+  // chain scratch; per group the horizontal offset's λ u (x y z) on the
+  // grid. Each has kPad zeros before and after it, for the slots two
   // springs beyond the grid's ends and those the last row's last vector runs
   // into (damp_offset). Double columns: each group's impulses from its
   // offsets along the columns of the grid.
-  constexpr int kPad = kWhole, kGrid = 7, kScratch = 7, kBack = 4;
+  constexpr int kPad = kWhole, kGrid = 7, kScratch = 7, kBack = 3;
   const int threads = std::min(m.threads, kGroups);
   const std::size_t stride = std::size_t(n) + 2 * kPad;
   w.damping_columns.resize((2 * kGrid + kScratch * threads + kBack * kGroups) * stride);
   w.damping_impulses.resize(3 * kGroups * std::size_t(n));
   const auto col = [&](int k) { return w.damping_columns.data() + k * stride + kPad; };
-  const auto back = [&](int group, int k) {  // k: 0 λ, 1 + c λ u_c
+  const auto back = [&](int group, int k) {  // λ u_k
     return col(2 * kGrid + kScratch * threads + kBack * group + k);
   };
   const auto impulse = [&](int k) { return w.damping_impulses.data() + k * std::size_t(n); };
@@ -371,62 +371,47 @@ void apply_spring_damping(const Model& m, State& s, Workspace& w, double h) {
                              j + 2 * n};
       damp_offset(grid, transposed ? st.dj : st.di, transposed ? st.di : st.dj, c, scratch,
                   !transposed, first[group]);
-      if (transposed) {
-        transpose(m, scratch.lambda, back(group, 0), nu, nv);
+      if (transposed) {  // λ u, zero where no spring starts (u is)
+        Real* const u[3] = {scratch.ux, scratch.uy, scratch.uz};
+        for (int k = 0; k < 3; ++k) {
+          Real* __restrict lu = u[k];
+          const Real* __restrict lambda = scratch.lambda;
+          for (int a = 0; a < n; ++a) lu[a] = lambda[a] * lu[a];
+          transpose(m, lu, back(group, k), nu, nv);
+        }
         solved[group] = true;
       } else {
         first[group] = false;
       }
     }
   }
-  for (int group = 0; group < kGroups; ++group)
+  for (int group = 0; group < kGroups; ++group) {
     if (first[group])
       for (int k = 0; k < 3; ++k) std::fill_n(impulse(3 * group + k), n, 0.0);
+    for (int k = 0; k < 3; ++k)  // and the zeros before the first row (see below)
+      std::fill(back(group, k) - kPad, back(group, k) + (solved[group] ? 0 : n), Real(0));
+  }
   // v += the mean change, by component in the groups' order: per group its
   // offsets along the columns, then its horizontal one, whose spring starting
-  // at a particle gives it +λ u and the one ending there −λ u (u as the
-  // transposed solve had it: the same floats, so the same bits).
+  // at a particle gives it +λ u and the one ending there −λ u. (Before the
+  // di first particles of a row, where no spring ends, are the zeros of the
+  // row before it, where none starts: x − 0 is x.)
   static_assert(kGroups == 2);
   const double share = 1.0 / damped;
-  const Real *const px = col(0), *const py = col(1), *const pz = col(2);
-  parallel_for(m, nv, [&](int row) {
-    const int r0 = row * nu, r1 = r0 + nu;
-    for (int group = 0; group < kGroups; ++group) {
-      const int di = horizontal[group];
-      Real* __restrict lu[3] = {back(group, 1), back(group, 2), back(group, 3)};
-      if (!solved[group]) {
-        for (Real* c : lu) std::fill(c + r0, c + r1, Real(0));
-        continue;
-      }
-      const Real* __restrict lambda = back(group, 0);
-#pragma GCC ivdep
-      for (int a = r0; a < r1; ++a) {
-        const int b = a + di;
-        const bool on = a - r0 < nu - di;
-        const Real dx = px[b] - px[a], dy = py[b] - py[a], dz = pz[b] - pz[a];
-        const Real len = std::sqrt(dx * dx + dy * dy + dz * dz);
-        const Real inv = on && len > 0 ? Real(1) / len : Real(0);
-        lu[0][a] = on ? lambda[a] * (dx * inv) : Real(0);
-        lu[1][a] = on ? lambda[a] * (dy * inv) : Real(0);
-        lu[2][a] = on ? lambda[a] * (dz * inv) : Real(0);
-      }
-    }
+  const int di0 = horizontal[0], di1 = horizontal[1];
+  for_each_row_block(m, [&](int j0, int j1, int) {
     for (int k = 0; k < 3; ++k) {
-      const double* __restrict j0 = impulse(k);
-      const double* __restrict j1 = impulse(3 + k);
-      const Real* __restrict lu0 = back(0, 1 + k);
-      const Real* __restrict lu1 = back(1, 1 + k);
-      const int di0 = horizontal[0], di1 = horizontal[1];
+      const double* __restrict jv0 = impulse(k);
+      const double* __restrict jv1 = impulse(3 + k);
+      const Real* __restrict lu0 = back(0, k);
+      const Real* __restrict lu1 = back(1, k);
       const double* __restrict inv_mass = m.inv_mass.data();
       double* __restrict out = s.v.column(k);
 #pragma GCC ivdep
-      for (int a = r0; a < r1; ++a) {
-        const int i = a - r0;
-        const double back0 = i >= di0 ? double(lu0[a]) - double(lu0[a - di0]) : double(lu0[a]);
-        const double back1 = i >= di1 ? double(lu1[a]) - double(lu1[a - di1]) : double(lu1[a]);
+      for (int a = j0 * nu; a < j1 * nu; ++a) {
         double sum = 0;
-        sum += j0[a] + back0;
-        sum += j1[a] + back1;
+        sum += jv0[a] + (double(lu0[a]) - double(lu0[a - di0]));
+        sum += jv1[a] + (double(lu1[a]) - double(lu1[a - di1]));
         out[a] += share * inv_mass[a] * sum;
       }
     }

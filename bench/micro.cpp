@@ -188,6 +188,20 @@ void BM_viscous_damping(benchmark::State& st) {
   stage(st, warm(st), false,
         [](const Model& m, State& s, Workspace& w) { add_viscous_damping(m, s, w.force); });
 }
+// The cloth's drag against the air (wind.k; pull-straight has no wind
+// velocity, which costs the same).
+void BM_wind(benchmark::State& st) {
+  stage(st, warm(st), false,
+        [](const Model& m, State& s, Workspace& w) { add_wind(m, s, w, w.force); });
+}
+// The pulling hand: its force on the patch, then its constraints after the
+// update (a handle that has stopped holds its particles).
+void BM_handles(benchmark::State& st) {
+  stage(st, warm(st), true, [](const Model& m, State& s, Workspace& w) {
+    add_handle_forces(m, s, w);
+    apply_handle_constraints(m, s, w);
+  });
+}
 void BM_air(benchmark::State& st) {
   stage(st, warm(st), false, [](const Model& m, State& s, Workspace& w) {
     add_air_pressure(m, s, w);
@@ -251,6 +265,8 @@ BENCHMARK(BM_spring_edges<double>)->Apply(grids);
 BENCHMARK(BM_spring_edges<float>)->Apply(grids);
 BENCHMARK(BM_gravity)->Apply(grids);
 BENCHMARK(BM_viscous_damping)->Apply(grids);
+BENCHMARK(BM_wind)->Apply(grids);
+BENCHMARK(BM_handles)->Apply(grids);
 BENCHMARK(BM_air)->Apply(grids);
 BENCHMARK(BM_adhesion)->Apply(grids);
 BENCHMARK(BM_self_collision)->Apply(grids);

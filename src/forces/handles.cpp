@@ -15,11 +15,13 @@ double height(const Model& m, const Vec3& x) {
 void add_handle_forces(const Model& m, const State& s, Workspace& w) {
   for (const Handle& h : m.handles) {
     if (h.type != HandleType::Force || !active(h, s) || s.held[h.particles[0]]) continue;
-    for (std::size_t e = 0; e < h.particles.size(); ++e) w.force[h.particles[e]] += h.share[e] * h.force;
+    for (std::size_t e = 0; e < h.particles.size(); ++e)
+      w.force[h.particles[e]] += h.share[e] * h.force;
   }
   if (w.grab_particle >= 0) {
     const int k = w.grab_particle;
-    w.force[k] += w.grab_k * (w.grab_target - s.x[k]) - 2.0 * std::sqrt(w.grab_k * m.mass[k]) * s.v[k];
+    w.force[k] +=
+        w.grab_k * (w.grab_target - s.x[k]) - 2.0 * std::sqrt(w.grab_k * m.mass[k]) * s.v[k];
   }
 }
 

@@ -66,6 +66,16 @@ void for_each_row_block(const Model& m, Body&& body) {
   }
 }
 
+// Runs body(first, end) on each thread's own particles, whole rows: for a
+// pass in which each particle stands alone, one loop across the rows (a loop
+// per row of 51 ends in a scalar tail).
+template <class Body>
+void for_each_particle_block(const Model& m, Body&& body) {
+  for_each_row_block(m, [&](int j0, int j1, int) {
+    if (j0 < j1) body(j0 * m.nu, j1 * m.nu);
+  });
+}
+
 // Runs body(i) for every particle, whole rows to each thread.
 template <class Body>
 void for_each_particle(const Model& m, Body&& body) {

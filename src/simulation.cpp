@@ -221,12 +221,12 @@ void Simulation::step() {
       // (apply_spring_damping). Explicit, the 0.01 N·s/m of a particle's
       // springs is unstable at Δt = 5e-5 s from 51 × 51 up: h Σk_d / m ≈ 2.
       const double c = m.params.forces.viscous_damping;
-      parallel_for(m, m.nv, [&](int j) {
+      for_each_particle_block(m, [&](int first, int end) {
         const double *__restrict fx = w.force.column(0), *__restrict fy = w.force.column(1),
                                      *__restrict fz = w.force.column(2);
         double* __restrict vx = s.v.column(0), * __restrict vy = s.v.column(1), * __restrict vz = s.v.column(2);
 #pragma GCC ivdep
-        for (int i = j * m.nu; i < (j + 1) * m.nu; ++i) {
+        for (int i = first; i < end; ++i) {
           const double h = dt * m.inv_mass[i], own = 1 + h * c * m.area[i], scale = h / own;
           vx[i] += scale * fx[i];
           vy[i] += scale * fy[i];
@@ -259,11 +259,11 @@ double Simulation::implicit_substep(double dt, int& k, double& strain) {
     if (k == kMostHalvings || strain <= m.params.integrator.max_step_strain) {
       ++w.substeps;
       if (w.acceleration.size() != std::size_t(m.n)) w.acceleration.assign(m.n, Vec3::Zero());
-      parallel_for(m, m.nv, [&](int j) {
+      for_each_particle_block(m, [&](int first, int end) {
         for (int k = 0; k < 3; ++k) {
           const double* __restrict v = s.v.column(k), * __restrict v0 = w.v_start.column(k);
           double* __restrict a = w.acceleration.column(k);
-          for (int i = j * m.nu; i < (j + 1) * m.nu; ++i) a[i] = (v[i] - v0[i]) / h;
+          for (int i = first; i < end; ++i) a[i] = (v[i] - v0[i]) / h;
         }
       });
       move_at_new_velocities(h);
@@ -277,12 +277,16 @@ double Simulation::implicit_substep(double dt, int& k, double& strain) {
 // The air term taken implicitly on the new velocities, then x += h v.
 void Simulation::move_at_new_velocities(double h) {
   correct_air_implicitly(model_, state_, ws_, h);
-  parallel_for(model_, model_.nv, [&](int j) {
-    for (int k = 0; k < 3; ++k) {
-      const double* __restrict v = state_.v.column(k);
-      double* __restrict x = state_.x.column(k);
+  for_each_particle_block(model_, [&](int first, int end) {
+    const double *__restrict vx = state_.v.column(0), *__restrict vy = state_.v.column(1),
+                             *__restrict vz = state_.v.column(2);
+    double *__restrict x = state_.x.column(0), *__restrict y = state_.x.column(1),
+                       *__restrict z = state_.x.column(2);
 #pragma GCC ivdep
-      for (int i = j * model_.nu; i < (j + 1) * model_.nu; ++i) x[i] += h * v[i];
+    for (int i = first; i < end; ++i) {
+      x[i] += h * vx[i];
+      y[i] += h * vy[i];
+      z[i] += h * vz[i];
     }
   });
 }

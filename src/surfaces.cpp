@@ -13,15 +13,14 @@ template <bool record>
 void collide_with_table(const Model& m, State& s, std::uint8_t* touched) {
   const double height = m.params.table.height;
   const auto table = static_cast<std::uint8_t>(SurfaceKind::Table);
-  const int nu = m.nu;  // locals: a store through X could alias m's fields
-  parallel_for(m, m.nv, [&, nu, height](int j) {
-    const std::size_t first = std::size_t(j) * nu;
+  for_each_particle_block(m, [&, height](int first, int end) {
     double* Z = s.x.column(2) + first;
     double* VZ = s.v.column(2) + first;
     const std::uint8_t* driven = m.driven.data() + first;
     std::uint8_t* hit = record ? touched + first : nullptr;
+    const int count = end - first;
 #pragma omp simd
-    for (int i = 0; i < nu; ++i) {
+    for (int i = 0; i < count; ++i) {
       const double z = Z[i], d = z - height, vz = VZ[i];
       const bool in = (d < 0) & (driven[i] == 0);  // &, not &&: no branch
       Z[i] = in ? z - d : z;
@@ -63,12 +62,11 @@ void collide(const Model& m, State& s, std::vector<std::uint8_t>* touched,
 void update_contact(const Model& m, State& s, Workspace& w) {
   const Params& p = m.params;
   const double h_th = p.contact.bridge_height;
-  parallel_for(m, m.nv, [&](int j) {
+  for_each_particle_block(m, [&](const int begin, const int end) {
     // Locals: a byte store may alias anything, so the loop would otherwise
     // reload after each one every pointer and bound it reads through a
     // reference.
     const SurfaceKind kind = m.contact_surface;
-    const int begin = j * m.nu, end = begin + m.nu;
     double* __restrict const distance = w.distance.data();
     std::uint8_t* __restrict const contact = s.contact.data();
     double* __restrict const nx = w.surface_normal.column(0);

@@ -26,7 +26,7 @@ void add_adhesion(const Model& m, const State& s, Workspace& w) {
     return static_cast<double>(count);
   });
   const double edge_each = border > 0 ? 2.0 * std::sqrt(s_now) * tension / border : 0.0;
-  parallel_for(m, m.nv, [&](int j) {
+  for_each_particle_block(m, [&](int first, int end) {
     const double *__restrict nx = w.surface_normal.column(0),
                              *__restrict ny = w.surface_normal.column(1),
                              *__restrict nz = w.surface_normal.column(2);
@@ -35,7 +35,7 @@ void add_adhesion(const Model& m, const State& s, Workspace& w) {
     const auto force = [&](int i) {  // zero off the contact region
       return s.contact[i] ? pressure * m.area[i] + (w.border[i] ? edge_each : 0.0) : 0.0;
     };
-    for_each_chunk(j * m.nu, (j + 1) * m.nu, force, [&](int i0, int count, const double* f) {
+    for_each_chunk(first, end, force, [&](int i0, int count, const double* f) {
 #pragma omp simd
       for (int k = 0; k < count; ++k) {
         const int i = i0 + k;

@@ -39,7 +39,7 @@ void apply_friction(const Model& m, State& s, const Workspace& w,
   // On the contact surface, slow_down's arithmetic without a branch (a factor
   // of zero where it does not apply), over columns: a loop that vectorises.
   // w.force holds the step's forces, adhesion included (it is -adhesion·n_s).
-  parallel_for(m, m.nv, [&](int j) {
+  for_each_particle_block(m, [&](int first, int end) {
     const double *__restrict nx = w.surface_normal.column(0),
                              *__restrict ny = w.surface_normal.column(1),
                              *__restrict nz = w.surface_normal.column(2);
@@ -50,7 +50,7 @@ void apply_friction(const Model& m, State& s, const Workspace& w,
     const double* __restrict adhesion = w.adhesion.data(), * __restrict inv_mass =
                                                                m.inv_mass.data();
     const auto acts = [&](int i) { return s.contact[i] && !m.driven[i] ? 1.0 : 0.0; };
-    for_each_chunk(j * m.nu, (j + 1) * m.nu, acts, [&](int i0, int count, const double* gate) {
+    for_each_chunk(first, end, acts, [&](int i0, int count, const double* gate) {
 #pragma omp simd
       for (int k = 0; k < count; ++k) {
         const int i = i0 + k;

@@ -5,12 +5,16 @@ namespace wetcloth::detail {
 
 void add_gravity(const Model& m, Vec3Array& f) {
   const Vec3 g = to_vec(m.params.forces.gravity);
-  parallel_for(m, m.nv, [&](int j) {
-    for (int k = 0; k < 3; ++k) {
-      const double gk = g[k];
-      double* __restrict out = f.column(k);
+  // All three components in one loop: the masses are read once.
+  for_each_particle_block(m, [&](int first, int end) {
+    double* __restrict fx = f.column(0), * __restrict fy = f.column(1), * __restrict fz = f.column(2);
+    const double* __restrict mass = m.mass.data();
+    const double gx = g[0], gy = g[1], gz = g[2];
 #pragma GCC ivdep
-      for (int i = j * m.nu; i < (j + 1) * m.nu; ++i) out[i] += m.mass[i] * gk;
+    for (int i = first; i < end; ++i) {
+      fx[i] += mass[i] * gx;
+      fy[i] += mass[i] * gy;
+      fz[i] += mass[i] * gz;
     }
   });
 }

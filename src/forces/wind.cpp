@@ -8,7 +8,7 @@ void add_wind(const Model& m, const State& s, const Workspace& w, Vec3Array& f) 
   const double k = m.params.wind.k;
   if (k == 0) return;
   const Vec3 u = to_vec(m.params.wind.velocity);
-  parallel_for(m, m.nv, [&](int j) {
+  for_each_particle_block(m, [&](int first, int end) {
     const double* __restrict vx = s.v.column(0), * __restrict vy = s.v.column(1), * __restrict vz = s.v.column(2);
     const double *__restrict nx = w.normal.column(0), *__restrict ny = w.normal.column(1),
                                  *__restrict nz = w.normal.column(2);
@@ -16,7 +16,7 @@ void add_wind(const Model& m, const State& s, const Workspace& w, Vec3Array& f) 
     const double* __restrict area = m.area.data();
     const double ux = u[0], uy = u[1], uz = u[2];
     const auto in_wind = [&](int i) { return m.in_wind[i] ? 1.0 : 0.0; };
-    for_each_chunk(j * m.nu, (j + 1) * m.nu, in_wind, [&](int i0, int count, const double* in) {
+    for_each_chunk(first, end, in_wind, [&](int i0, int count, const double* in) {
 #pragma omp simd
       for (int c = 0; c < count; ++c) {
         const int i = i0 + c;

@@ -19,6 +19,11 @@ void write_file_atomic(const std::filesystem::path& path, const std::string& con
   std::filesystem::rename(tmp, path);
 }
 
+long long last_frame_index(double duration, double fps) {
+  const auto whole = static_cast<long long>(std::floor(duration * fps + 1e-9));
+  return whole + (duration > (static_cast<double>(whole) + 1e-9) / fps ? 1 : 0);
+}
+
 std::string format_number(double v) {
   char buf[32];
   auto r = std::to_chars(buf, buf + sizeof buf, v);

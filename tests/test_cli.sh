@@ -52,6 +52,12 @@ cmp -s "$T/a/metrics.csv" "$T/b/metrics.csv" && ok "identical metrics.csv twice"
 cmp -s "$T/a/metrics.csv" "$T/c/metrics.csv" && ok "scene.toml reproduces the run" || bad "scene.toml does not reproduce"
 grep -q '"realtime_factor"' "$T/a/summary.json" && grep -q '"final"' "$T/a/summary.json" && ok "summary.json" || bad "summary.json"
 
+# A duration between two frames: the run goes on to it, with a last frame there.
+"$W" run pull-straight --out "$T/d" --set cloth.resolution=[9,9] --duration 0.05 --quiet
+[ "$(tail -1 "$T/d/metrics.csv" | cut -d, -f1)" = "0.05" ] && [ -s "$T/d/frames/frame_00002.obj" ] &&
+  [ ! -e "$T/d/frames/frame_00003.obj" ] && ok "a run covers its whole duration" ||
+  bad "duration 0.05 at 30 fps ended at $(tail -1 "$T/d/metrics.csv" | cut -d, -f1)"
+
 # A blow-up: exit 3, a message naming the time step, the outputs so far intact.
 "$W" run hang --out "$T/boom" --set integrator.dt=2e-3 --duration 1 --quiet 2>"$T/err"; code=$?
 [ $code -eq 3 ] && ok "blow-up exits 3" || bad "blow-up exit code $code"

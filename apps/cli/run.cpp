@@ -60,13 +60,13 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress) {
   write_file_atomic(out / "obstacles.obj", obstacles_obj(sim.model()));
 
   MetricsTable table;
-  const auto frames = static_cast<long long>(std::floor(p.run.duration * p.run.fps + 1e-9));
+  const long long frames = last_frame_index(p.run.duration, p.run.fps);
   const auto start = std::chrono::steady_clock::now();
   auto wall = [&] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   };
   for (long long f = 0; f <= frames; ++f) {
-    const double t = std::min(p.run.duration, f / p.run.fps);
+    const double t = frame_time(f, p.run.duration, p.run.fps);
     const bool ok = sim.advance_to(t);
     const Metrics m = sim.metrics();
     table.add(m);

@@ -118,14 +118,14 @@ int render_frames(const RenderOptions& o) {
     DrawOptions opt;
     opt.fabric = o.color == ColorBy::Fabric;
     opt.wetness = static_cast<float>(p.cloth.humidity);
-    const auto frames = static_cast<long long>(std::floor(p.run.duration * fps + 1e-9));
+    const long long frames = last_frame_index(p.run.duration, fps);
     const bool progress = !o.quiet && isatty(STDERR_FILENO);
     ClothMesh mesh;
     float scale = 0;
     double draw_ms = 0, png_ms = 0;
     long long written = 0;
     for (long long f = 0; f <= frames; ++f) {
-      const bool ok = sim.advance_to(std::min(p.run.duration, f / fps));
+      const bool ok = sim.advance_to(frame_time(f, p.run.duration, fps));
       cloth_mesh(sim, o.color, scale, mesh);
       auto t0 = Clock::now();
       target.bind();

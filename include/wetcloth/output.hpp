@@ -2,6 +2,7 @@
 // temporary name and then renamed, so that a reader never sees half a file.
 #pragma once
 
+#include <algorithm>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -29,5 +30,13 @@ class MetricsTable {
 };
 
 std::string format_number(double v);  // shortest text that reads back to v
+
+// Output frames over a run of `duration` s: at 0, 1/fps, 2/fps, ... and,
+// where the duration falls between two, one more at the duration, so that a
+// run covers the whole time asked for. Frame f is at frame_time(f, ...).
+long long last_frame_index(double duration, double fps);
+inline double frame_time(long long f, double duration, double fps) {
+  return std::min(duration, static_cast<double>(f) / fps);
+}
 
 }  // namespace wetcloth

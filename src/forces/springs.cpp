@@ -24,18 +24,18 @@ constexpr int kRing = kReach + 1;  // edge rows a thread keeps
 constexpr int kEdges = 8;          // forward offsets of the stencil
 
 // Each particle of a row sums its springs: per offset the forward edge (+F)
-// and the backward one (-F), into sums[k][i].
+// and the backward one (-F), and adds the sum to its force, out[k][i].
 void gather_row(const double* const fwd[kEdges][kSpringFields],
                 const double* const bwd[kEdges][kSpringFields], const int nu,
-                double* const sums[kSpringFields]) {
+                double* const force[kSpringFields]) {
   for (int k = 0; k < kSpringFields; ++k) {
-    double* __restrict out = sums[k];
+    double* __restrict out = force[k];
 #pragma GCC ivdep
     for (int i = 0; i < nu; ++i) {
       double total = 0;
 #pragma GCC unroll 8
       for (int e = 0; e < kEdges; ++e) total = total + fwd[e][k][i] - bwd[e][k][i];
-      out[i] = total;
+      out[i] += total;
     }
   }
 }
@@ -44,7 +44,7 @@ template <bool damped>
 void add_spring_forces(const Model& m, const State& s, Workspace& w) {
   const int nu = m.nu, stride = nu + 2 * kReach;
   const std::size_t per_row = std::size_t(kEdges) * kSpringFields * stride;
-  const std::size_t per_thread = kRing * per_row + kSpringFields * stride;  // edge rows, then sums
+  const std::size_t per_thread = kRing * per_row;  // edge rows
   w.spring_rows.resize(kSpringFields * stride + per_thread * m.threads);
   double* const zero_row = w.spring_rows.data();  // stands for edges above the first row
   std::fill(zero_row, zero_row + kSpringFields * stride, 0.0);
@@ -52,8 +52,6 @@ void add_spring_forces(const Model& m, const State& s, Workspace& w) {
                                 s.v.column(0), s.v.column(1), s.v.column(2)};
   for_each_row_block(m, [&](int j0, int j1, int thread) {
     double* const ring = zero_row + kSpringFields * stride + per_thread * thread;
-    double* sums[kSpringFields];
-    for (int k = 0; k < kSpringFields; ++k) sums[k] = ring + kRing * per_row + k * stride;
     // Field k of offset e's edge row j, at its particle i = 0.
     const auto edges = [&](int j, int e, int k) {
       return ring + (j % kRing) * per_row + (std::size_t(e) * kSpringFields + k) * stride + kReach;
@@ -86,13 +84,9 @@ void add_spring_forces(const Model& m, const State& s, Workspace& w) {
           bwd[e][k] = (j >= st.dj ? edges(j - st.dj, e, k) : zero_row + kReach) - st.di;
         }
       }
-      gather_row(fwd, bwd, nu, sums);
-      for (int k = 0; k < kSpringFields; ++k) {
-        double* __restrict out = w.force.column(k) + j * nu;
-        const double* __restrict sum = sums[k];
-#pragma GCC ivdep
-        for (int i = 0; i < nu; ++i) out[i] += sum[i];
-      }
+      double* force[kSpringFields];
+      for (int k = 0; k < kSpringFields; ++k) force[k] = w.force.column(k) + j * nu;
+      gather_row(fwd, bwd, nu, force);
     }
   });
 }

@@ -473,13 +473,17 @@ TEST(SelfCollision, CandidatesSearchedAroundMoversAreTheWholeSearch) {
   const double d_t = p.self_collision.distance, step = 0.12 / 19;
   const double margin = std::min(0.5 * d_t, 1.5 * step);
   const int reach = std::max(2, static_cast<int>(std::ceil(d_t / step)));
-  int partial = 0;
+  int partial = 0, with_stale = 0, rebuilt = 0;
   for (int k = 0; k < 400; ++k) {
     const Vec3Array x = sim.state().x;  // where the step found the pairs
     sim.step();
     const Workspace& w = sim.workspace();
     const auto& a = w.candidates_anchor;
-    partial += !w.candidate_movers.empty() && 4 * w.candidate_movers.size() <= std::size_t(m.n);
+    const bool moved = !w.candidate_movers.empty() && 4 * w.candidate_movers.size() <= std::size_t(m.n);
+    partial += moved;
+    // Particles anchored again in earlier steps are still out of the hash.
+    with_stale += moved && w.hash_stale.size() > w.candidate_movers.size();
+    rebuilt += moved && w.hash_stale.empty();
     std::vector<std::array<int, 2>> expected;
     for (int i = 0; i < m.n; ++i) {
       ASSERT_LE((x[i] - a[i]).norm(), 0.5 * margin) << "particle " << i;
@@ -493,7 +497,41 @@ TEST(SelfCollision, CandidatesSearchedAroundMoversAreTheWholeSearch) {
     }
     ASSERT_EQ(w.candidates, expected) << "step " << k;
   }
-  EXPECT_GT(partial, 10);  // the test can fail: the partial search ran
+  // The test can fail: the partial search ran, with stale particles found one
+  // by one, and with the hash built again once they were many.
+  EXPECT_GT(partial, 10);
+  EXPECT_GT(with_stale, 50);
+  EXPECT_GT(rebuilt, 0);
+}
+
+// Movers that meet: two particles far apart on the grid are moved next to
+// each other (both searched again, without building the hash), then a third
+// next to the first, which the hash still holds where it was.
+TEST(SelfCollision, MoversMeetingEachOtherArePaired) {
+  Params p = load_scene("drop-table", {"cloth.resolution=[20,20]", "cloth.size=[0.12,0.12]"});
+  p.self_collision.enabled = true;
+  Simulation sim(p);
+  const Model& m = sim.model();
+  State& s = sim.state();
+  auto& w = const_cast<Workspace&>(sim.workspace());
+  detail::add_self_collision(m, s, w, true);  // the whole search
+  const auto paired = [&](int i, int j) {
+    return std::binary_search(w.candidates.begin(), w.candidates.end(),
+                              std::array<int, 2>{std::min(i, j), std::max(i, j)});
+  };
+  const int a = m.index(3, 3), b = m.index(15, 14), c = m.index(9, 17);
+  const Vec3 lift(0, 0, 0.5 * p.self_collision.distance);
+  detail::put(s.x[a], Vec3(s.x[b] + lift));
+  detail::put(s.x[b], Vec3(s.x[b] - lift));
+  detail::add_self_collision(m, s, w, true);
+  ASSERT_EQ(w.candidate_movers, (std::vector<int>{a, b}));
+  EXPECT_TRUE(paired(a, b));
+  detail::put(s.x[c], Vec3(s.x[a] + lift));
+  detail::add_self_collision(m, s, w, true);
+  ASSERT_EQ(w.candidate_movers, std::vector<int>{c});
+  EXPECT_FALSE(w.hash_stale.empty());  // a and b: out of the hash
+  EXPECT_TRUE(paired(c, a));
+  EXPECT_TRUE(paired(a, b));
 }
 
 // A cloth folded onto itself on the table: the top layer rests on the bottom one.

@@ -214,6 +214,10 @@ struct Workspace {
   std::vector<std::array<int, 2>> candidates, candidates_merged;
   std::vector<int> candidate_movers;
   std::vector<std::uint8_t> candidate_moved;
+  // Particles anchored again since the hash was built (its entries for them
+  // are out of date), and their flags.
+  std::vector<int> hash_stale;
+  std::vector<std::uint8_t> hash_stale_flag;
   std::vector<std::vector<std::array<int, 2>>>
       thread_candidates;                      // each thread's share of the search
   std::vector<std::uint8_t> candidate_close;  // candidate within d_t this step

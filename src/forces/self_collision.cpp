@@ -84,11 +84,19 @@ void add_self_collision(const Model& m, const State& s, Workspace& w, bool with_
       if (far(i)) movers.push_back(i);
     search_all = 4 * movers.size() > std::size_t(m.n);
   }
+  auto& stale = w.hash_stale;
+  auto& is_stale = w.hash_stale_flag;
+  is_stale.resize(m.n, 0);
+  const auto clear_stale = [&] {
+    for (const int i : stale) is_stale[i] = 0;
+    stale.clear();
+  };
   if (search_all) {
     // The search, by blocks of rows on the step's threads.
     w.candidates_radius = radius;
     anchor = s.x;
     build_hash(anchor, 2 * radius, w, m.threads);
+    clear_stale();
     w.thread_candidates.resize(m.threads);
     for (auto& list : w.thread_candidates) list.clear();  // the runtime may give fewer threads
     for_each_row_block(m, [&](int j0, int j1, int t) {
@@ -118,12 +126,48 @@ void add_self_collision(const Model& m, const State& s, Workspace& w, bool with_
     // a flat cloth at 401 x 401 lists a million pairs, too many to sort again.
     std::erase_if(list, [&](const auto& c) { return moved[c[0]] || moved[c[1]]; });
     const auto kept = static_cast<std::ptrdiff_t>(list.size());
-    build_hash(anchor, 2 * radius, w, m.threads);
-    for (int i : movers)
-      for_each_near(anchor, radius, w, anchor[i], i, -1, [&](int j, const Vec3&, double len2) {
-        if ((moved[j] && j < i) || len2 == 0 || near_in_grid(i, j)) return;  // j < i: found from j
-        list.push_back({std::min(i, j), std::max(i, j)});
-      });
+    const auto take = [&](int i, int j, double len2) {
+      if (len2 == 0 || near_in_grid(i, j)) return;
+      list.push_back({std::min(i, j), std::max(i, j)});
+    };
+    // The hash is not built again for a few movers (a pulled handle moves a
+    // few particles every other step, and a build costs a pass over the
+    // cloth): a mover finds through it the particles it holds where they
+    // are, and the stale ones (anchored again since) and the other movers
+    // one by one. Once those are many, it is built again. The pairs are the
+    // same either way, found by the same sums.
+    constexpr std::size_t kMostStale = 256;
+    if (stale.size() + movers.size() > kMostStale) {
+      build_hash(anchor, 2 * radius, w, m.threads);
+      clear_stale();
+      for (int i : movers)
+        for_each_near(anchor, radius, w, anchor[i], i, -1, [&](int j, const Vec3&, double len2) {
+          if (!(moved[j] && j < i)) take(i, j, len2);  // j < i: found from j
+        });
+    } else {
+      const double r2 = radius * radius;
+      const auto check = [&](int i, int j) {
+        const Vec3 y = anchor[i];  // as for_each_near has it
+        const Vec3 d = y - anchor[j];
+        const double len2 = d.squaredNorm();
+        if (len2 < r2) take(i, j, len2);
+      };
+      for (int i : movers) {
+        for_each_near(anchor, radius, w, anchor[i], i, -1, [&](int j, const Vec3&, double len2) {
+          if (!moved[j] && !is_stale[j]) take(i, j, len2);
+        });
+        for (const int j : stale)
+          if (!moved[j]) check(i, j);
+        for (const int j : movers)
+          if (j > i) check(i, j);
+      }
+      stale.reserve(kMostStale);  // never more: no allocation once warm
+      for (const int i : movers)
+        if (!is_stale[i]) {
+          is_stale[i] = 1;
+          stale.push_back(i);
+        }
+    }
     for (int i : movers) moved[i] = 0;
     std::sort(list.begin() + kept, list.end());
     w.candidates_merged.resize(list.size());  // a scratch list: no allocation once warm

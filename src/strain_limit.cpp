@@ -2,6 +2,7 @@
 // Vassilev 2003): over-stretched structural and shear springs are shortened back
 // to (1 + τ_c) l0, starting from the particles that move first.
 #include <algorithm>
+#include <cstring>
 #include <functional>
 
 #include "detail.hpp"
@@ -202,8 +203,20 @@ void limit_strain(const Model& m, State& s, Workspace& w, double dt) {
           }
         }
       });
-      for (std::size_t slot = 0; slot < w.strain_stretched.size(); ++slot)
-        if (w.strain_stretched[slot]) heap.push_back(w.strain_index[slot]);
+      // The flags in grid order, eight at a time: most are zero (a serial
+      // pass over four bytes a particle).
+      const std::uint8_t* const flags = w.strain_stretched.data();
+      const std::size_t slots = w.strain_stretched.size();
+      std::size_t slot = 0;
+      for (; slot + 8 <= slots; slot += 8) {
+        std::uint64_t eight;
+        std::memcpy(&eight, flags + slot, 8);
+        if (eight == 0) continue;
+        for (std::size_t k = slot; k < slot + 8; ++k)
+          if (flags[k]) heap.push_back(w.strain_index[k]);
+      }
+      for (; slot < slots; ++slot)
+        if (flags[slot]) heap.push_back(w.strain_index[slot]);
       std::make_heap(heap.begin(), heap.end(), std::greater<>());
       for (const int order : heap) w.strain_queued[order] = 1;
     }

@@ -315,19 +315,20 @@ void apply_spring_damping(const Model& m, State& s, Workspace& w, double h) {
     return col(2 * kGrid + kScratch * threads + kBack * group + k);
   };
   const auto impulse = [&](int k) { return w.damping_impulses.data() + k * std::size_t(n); };
-  parallel_for(m, m.nv, [&](int j) {
+  for_each_particle_block(m, [&](int first, int end) {
     for (int k = 0; k < 3; ++k) {
       const double* __restrict x = s.x.column(k);
       const double* __restrict v = s.v.column(k);
       Real* __restrict to_x = col(k);
       Real* __restrict to_v = col(3 + k);
-      for (int a = j * nu; a < (j + 1) * nu; ++a) {
+      for (int a = first; a < end; ++a) {
         to_x[a] = Real(x[a]);
         to_v[a] = Real(v[a]);
       }
     }
+    const double* __restrict inv_mass = m.inv_mass.data();
     Real* __restrict to_w = col(6);
-    for (int a = j * nu; a < (j + 1) * nu; ++a) to_w[a] = Real(m.inv_mass[a]);
+    for (int a = first; a < end; ++a) to_w[a] = Real(inv_mass[a]);
   });
   for (int k = 0; k < kGrid; ++k)  // transposed: particle (i, j) at i nv + j
     transpose(m, col(k), col(kGrid + k), nv, nu);

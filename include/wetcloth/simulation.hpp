@@ -177,7 +177,7 @@ struct Workspace {
   std::vector<double> pocket_sums;    // scratch for the implicit air correction
   Vec3Array air_direction;            // A_i n_i of eq. 3 (zero where no air force)
   // Springs (forces/springs.cpp): a zero row, then per thread its ring of
-  // edge rows and a row of sums.
+  // edge rows.
   std::vector<double> spring_rows;
   std::vector<float> damping_columns;    // apply_spring_damping's columns and scratch
   std::vector<double> damping_impulses;  // and its impulses

@@ -394,7 +394,7 @@ void apply_spring_damping(const Model& m, State& s, Workspace& w, double h) {
   static_assert(kGroups == 2);
   const double share = 1.0 / damped;
   const int di0 = horizontal[0], di1 = horizontal[1];
-  for_each_row_block(m, [&](int j0, int j1, int) {
+  for_each_particle_block(m, [&](int first, int end) {
     for (int k = 0; k < 3; ++k) {
       const double* __restrict jv0 = impulse(k);
       const double* __restrict jv1 = impulse(3 + k);
@@ -403,7 +403,7 @@ void apply_spring_damping(const Model& m, State& s, Workspace& w, double h) {
       const double* __restrict inv_mass = m.inv_mass.data();
       double* __restrict out = s.v.column(k);
 #pragma GCC ivdep
-      for (int a = j0 * nu; a < j1 * nu; ++a) {
+      for (int a = first; a < end; ++a) {
         double sum = 0;
         sum += jv0[a] + (double(lu0[a]) - double(lu0[a - di0]));
         sum += jv1[a] + (double(lu1[a]) - double(lu1[a - di1]));

@@ -480,10 +480,18 @@ std::string params_markdown() {
 }
 
 Params at_resolution(Params p, long long grid) {
-  const double scale = static_cast<double>(grid - 1) / static_cast<double>(p.cloth.resolution[0] - 1);
+  const auto [nu, nv] = p.cloth.resolution;
+  const double scale = static_cast<double>(grid - 1) / static_cast<double>(nu - 1);
+  const long long height = std::llround(static_cast<double>(nv - 1) * scale) + 1;
+  const ParamDef& d = *find_def("cloth.resolution");
+  for (const long long size : {grid, height})
+    if (size < 3 || static_cast<double>(size) > d.max)
+      throw SceneError(std::to_string(grid) + " gives a " + std::to_string(grid) + " x " +
+                       std::to_string(height) + " cloth; each side must be 3 to " +
+                       std::to_string(std::llround(d.max)) + " particles");
   for (auto& [name, h] : p.handles) h.patch = std::llround(static_cast<double>(h.patch) * scale);
   if (p.integrator.type != "implicit-euler" && scale > 1) p.integrator.dt /= scale;
-  p.cloth.resolution = {grid, grid};
+  p.cloth.resolution = {grid, height};
   return p;
 }
 

@@ -58,6 +58,18 @@ grep -q '"realtime_factor"' "$T/a/summary.json" && grep -q '"final"' "$T/a/summa
   [ ! -e "$T/d/frames/frame_00003.obj" ] && ok "a run covers its whole duration" ||
   bad "duration 0.05 at 30 fps ended at $(tail -1 "$T/d/metrics.csv" | cut -d, -f1)"
 
+# --grid: the same cloth on a finer grid (handle patch in metres, explicit step
+# shrunk with the spacing), or at a time step the command line sets; a grid out
+# of range is bad input.
+"$W" run pull-straight --grid 101 --duration 5e-5 --quiet --out "$T/g"
+grep -q '^resolution = \[101, 101\]' "$T/g/scene.toml" && grep -q '^dt = 2.5e-05' "$T/g/scene.toml" &&
+  grep -q '^patch = 2' "$T/g/scene.toml" && ok "--grid 101: resolution, dt, patch" ||
+  bad "--grid 101: $(grep -E '^(resolution|dt|patch) ' "$T/g/scene.toml" | tr '\n' ' ')"
+"$W" run pull-straight --grid 101 --set integrator.dt=4e-5 --duration 4e-5 --quiet --out "$T/g2"
+grep -q '^dt = 4e-05' "$T/g2/scene.toml" && ok "--grid keeps a --set integrator.dt" ||
+  bad "--grid with --set integrator.dt: $(grep '^dt ' "$T/g2/scene.toml")"
+expect_bad grid "--grid: 2 gives a 2 x 2 cloth" pull-straight --grid 2
+
 # A blow-up: exit 3, a message naming the time step, the outputs so far intact.
 "$W" run hang --out "$T/boom" --set integrator.dt=2e-3 --duration 1 --quiet 2>"$T/err"; code=$?
 [ $code -eq 3 ] && ok "blow-up exits 3" || bad "blow-up exit code $code"

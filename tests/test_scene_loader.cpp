@@ -109,3 +109,25 @@ TEST(SceneLoader, EveryParameterIsDocumented) {
     }
   }
 }
+
+// The same cloth on another grid: its height in particles scales with its
+// width, a handle's patch keeps its size in metres, an explicit step shrinks
+// with the spacing (an implicit one is left alone), and a side outside
+// cloth.resolution's range is refused.
+TEST(SceneLoader, AtResolutionKeepsTheClothInMetres) {
+  const std::string text =
+      "[cloth]\nresolution = [21, 11]\n[handle.pull]\ntype = \"force\"\npatch = 2\n";
+  const Params p = parse_scene(text, "s.toml");
+  const Params fine = at_resolution(p, 41);
+  EXPECT_EQ(fine.cloth.resolution, (Vec2i{41, 21}));
+  EXPECT_EQ(fine.handles.at("pull").patch, 4);
+  EXPECT_DOUBLE_EQ(fine.integrator.dt, p.integrator.dt / 2);
+  const Params coarse = at_resolution(p, 11);
+  EXPECT_EQ(coarse.cloth.resolution, (Vec2i{11, 6}));
+  EXPECT_EQ(coarse.handles.at("pull").patch, 1);
+  EXPECT_EQ(coarse.integrator.dt, p.integrator.dt);  // a coarser grid is stable at the same step
+  const Params implicit = parse_scene(text + "[integrator]\ntype = \"implicit-euler\"\n", "s.toml");
+  EXPECT_EQ(at_resolution(implicit, 41).integrator.dt, implicit.integrator.dt);
+  EXPECT_THROW(at_resolution(p, 3), SceneError);  // 3 x 2
+  EXPECT_THROW(at_resolution(p, 2002), SceneError);
+}

@@ -151,21 +151,12 @@ int run_bench(const Options& o) {
     throw SceneError("--out " + o.out + ": no such folder");
   std::vector<Grid> grids;
   for (long long size : o.grids) {
-    if (size < 3)
-      throw SceneError("--grids: " + std::to_string(size) +
-                       " is too small; a grid needs at least 3 particles a side");
     std::vector<std::string> sets;
     sets.push_back("integrator.threads=" + std::to_string(o.threads.value_or(0)));
     if (!o.integrator.empty()) sets.push_back("integrator.type=\"" + o.integrator + "\"");
     sets.insert(sets.end(), o.sets.begin(), o.sets.end());
-    // The same cloth at each grid (wetcloth::at_resolution), unless the user
-    // chose the time step.
-    Params p = load_scene(o.scene, sets);
-    const bool dt_set = overrides_key(o.sets, "integrator.dt");
-    const double dt = p.integrator.dt;
-    p = at_resolution(p, size);
-    if (dt_set) p.integrator.dt = dt;
-    Grid grid{size, 0, p};
+    // The same cloth at each grid, unless the user chose the time step.
+    Grid grid{size, 0, load_on_grid(o.scene, sets, size, "--grids")};
     grid.steps = std::llround(o.duration / grid.params.integrator.dt);
     if (grid.steps < 1)
       throw SceneError("--duration " + format_number(o.duration) +

@@ -49,6 +49,7 @@ std::function<int()> add_converge_command(CLI::App& app) {
       ->allow_extra_args(false);
   cmd->add_option("--humidity", o->scene.humidity, "cloth humidity ω in [0, 1]");
   cmd->add_option("--duration", o->scene.duration, "simulated time per run, s");
+  o->scene.add_grid_to(cmd);
   cmd->add_option("--out", o->out, "output folder (default out/<scene>-converge)");
   cmd->add_option("--jobs", o->jobs, "runs at once (default: all cores)")
       ->check(CLI::PositiveNumber);
@@ -76,7 +77,7 @@ std::function<int()> add_converge_command(CLI::App& app) {
       std::vector<std::string> sets = o->scene.overrides();
       share_cores(sets, o->jobs);
       sets.push_back("integrator.dt=" + format_number(dt));
-      c.params = load_scene(o->scene.scene, sets);
+      c.params = load_on_grid(o->scene.scene, sets, o->scene.grid);
       cases.push_back(std::move(c));
     }
     const fs::path out = o->out.empty()

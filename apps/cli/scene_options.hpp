@@ -1,5 +1,5 @@
 // The options every scene-running command takes: SCENE, --set, --humidity,
-// --duration, --threads.
+// --duration, --threads, --grid.
 #pragma once
 
 #include <CLI/CLI.hpp>
@@ -19,11 +19,29 @@ inline bool overrides_key(const std::vector<std::string>& sets, const std::strin
   return false;
 }
 
+// SCENE with the overrides; with a grid, the same cloth that many particles
+// wide (wetcloth::at_resolution), keeping a time step the overrides set.
+// `option` names the grid in an error.
+inline Params load_on_grid(const std::string& scene, const std::vector<std::string>& sets,
+                           std::optional<long long> grid, const std::string& option = "--grid") {
+  Params p = load_scene(scene, sets);
+  if (!grid) return p;
+  const double dt = p.integrator.dt;
+  try {
+    p = at_resolution(p, *grid);
+  } catch (const SceneError& e) {
+    throw SceneError(option + ": " + e.what());
+  }
+  if (overrides_key(sets, "integrator.dt")) p.integrator.dt = dt;
+  return p;
+}
+
 struct SceneOptions {
   std::string scene;
   std::vector<std::string> sets;
   std::optional<double> humidity, duration;
   std::optional<unsigned> threads;
+  std::optional<long long> grid;
   bool all_cores = false;  // with add_to: no --threads means all cores
 
   void add_to(CLI::App* app, bool scene_required = true) {
@@ -38,7 +56,15 @@ struct SceneOptions {
     app->add_option("--threads", threads,
                     "threads of the step (default: all cores; = --set integrator.threads=N, "
                     "which comes after it)");
+    add_grid_to(app);
     all_cores = true;
+  }
+
+  void add_grid_to(CLI::App* app) {
+    app->add_option("--grid", grid,
+                    "the same scene on a cloth G particles wide: handle patches keep their size "
+                    "in metres, and an explicit time step shrinks with the spacing unless --set "
+                    "integrator.dt is given");
   }
 
   std::vector<std::string> overrides() const {
@@ -50,7 +76,12 @@ struct SceneOptions {
     return all;
   }
 
-  Params load() const { return load_scene(scene, overrides()); }
+  // The scene with the overrides and `extra` after them, on --grid.
+  Params load(const std::vector<std::string>& extra = {}) const {
+    std::vector<std::string> all = overrides();
+    all.insert(all.end(), extra.begin(), extra.end());
+    return load_on_grid(scene, all, grid);
+  }
 };
 
 }  // namespace wetcloth::cli

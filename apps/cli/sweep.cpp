@@ -81,6 +81,7 @@ std::function<int()> add_sweep_command(CLI::App& app) {
   cmd->add_option("--set", o->scene.sets, "override a parameter, KEY=VALUE (repeatable)")
       ->allow_extra_args(false);
   cmd->add_option("--duration", o->scene.duration, "simulated time per case, s");
+  o->scene.add_grid_to(cmd);
   cmd->add_option("--out", o->out, "output folder (default out/<scene>-sweep)");
   cmd->add_option("--jobs", o->jobs, "cases run at once (default: all cores)")->check(CLI::PositiveNumber);
   cmd->add_flag("--render", o->render, "also render a contact sheet of the last frames (contact_sheet.png)");
@@ -110,7 +111,7 @@ std::function<int()> add_sweep_command(CLI::App& app) {
         share_cores(sets, o->jobs);
         sets.push_back("cloth.humidity=" + format_number(w));
         sets.push_back("air.model=\"" + air + "\"");
-        c.params = load_scene(o->scene.scene, sets);
+        c.params = load_on_grid(o->scene.scene, sets, o->scene.grid);
         cases.push_back(std::move(c));
       }
     const fs::path out = o->out.empty() ? fs::path("out") / (base.name + "-sweep") : fs::path(o->out);

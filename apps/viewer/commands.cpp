@@ -48,6 +48,7 @@ struct Commands {
     o.scene = view_scene.scene;
     o.params = view_scene.load();
     o.overrides = view_scene.overrides();
+    o.grid = view_scene.grid;
     parse_size(view_size, o.width, o.height);
     o.color = color_by(view_color);
     if (view->count("--screenshot-after")) {

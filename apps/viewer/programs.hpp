@@ -33,6 +33,7 @@ struct ViewOptions {
   std::string scene;  // as given: a built-in name or a file
   Params params;
   std::vector<std::string> overrides;  // --set etc., applied again to scenes picked in the panel
+  std::optional<long long> grid;       // --grid, likewise
   int width = 1280, height = 720;
   ColorBy color = ColorBy::Fabric;
   std::optional<double> screenshot_after;  // simulated seconds

@@ -16,6 +16,7 @@
 #include <memory>
 #include <numbers>
 
+#include "cli/scene_options.hpp"
 #include "draw.hpp"
 #include "programs.hpp"
 #include "wetcloth/scene.hpp"
@@ -191,7 +192,7 @@ class Viewer {
       params_ = opts_.params;
     } else {
       try {
-        params_ = load_scene(name, opts_.overrides);
+        params_ = cli::load_on_grid(name, opts_.overrides, opts_.grid);
       } catch (const SceneError& e) {  // the command line's --set may not fit this scene
         params_ = load_scene(name);
         status_ = "--set not applied to " + name + ": " + e.what();

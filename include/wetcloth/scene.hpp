@@ -48,10 +48,12 @@ Params load_scene(const std::string& scene, const std::vector<std::string>& over
 Params parse_scene(const std::string& toml_text, const std::string& source_name,
                    const std::vector<std::string>& overrides = {});
 
-// The same physical scene on a grid x grid cloth: handle patches keep their
-// size in metres, and an explicit step shrinks as its stability limit does (the
-// same springs on particles 1/grid² as heavy: Δt ∝ 1/grid). For benchmarks and
-// convergence studies; `--set cloth.resolution` alone changes only the grid.
+// The same physical scene on a cloth `grid` particles wide, its height in
+// particles scaled alike: handle patches keep their size in metres, and an
+// explicit step shrinks as its stability limit does (the same springs on
+// particles 1/grid² as heavy: Δt ∝ 1/grid). `--grid` and the benchmarks use
+// it; `--set cloth.resolution` alone changes only the grid. Throws SceneError
+// when a side would be under 3 or over cloth.resolution's range.
 Params at_resolution(Params p, long long grid);
 
 // Every parameter, resolved, as TOML that load_scene reads back to the same Params.

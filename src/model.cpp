@@ -118,8 +118,10 @@ Model build_model(const Params& p) {
   const int wanted = p.integrator.threads > 0 ? static_cast<int>(p.integrator.threads)
                                               : std::max(1, omp_get_num_procs());
   m.threads = std::clamp(m.n / kParticlesPerThread, 1, wanted);
+  m.chequer.resize(m.n);
   for (int j = 0; j < m.nv; ++j) {
     for (int i = 0; i < m.nu; ++i) {
+      m.chequer[m.index(i, j)] = (i + j) % 2 == 0 ? 1.0 : 0.0;
       add_spring(m.structural, m, i, j, i + 1, j);
       add_spring(m.structural, m, i, j, i, j + 1);
       add_spring(m.shear, m, i, j, i + 1, j + 1);

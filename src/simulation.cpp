@@ -13,88 +13,82 @@ namespace wetcloth {
 using namespace detail;
 
 // Area-weighted particle normals on the chequerboard triangulation of
-// model.cpp. First each quad's two triangle normals, by rows of quads in
-// columns (field f of quad row q at quad_normals[(6 (q + 1) + f) (nu + 1) + 1 ..]),
-// with zero quads around the grid. Then each particle sums the triangles of its
-// four quads in the order of Model::triangles: quads (i-1, j-1), (i, j-1),
-// (i-1, j), (i, j), each first triangle then second. A particle with i + j
-// even is in all eight; an odd one in four, so it adds zero for the others
-// (exact). Both passes are loops over a row that vectorise; rows are
-// independent.
+// model.cpp. First each quad's two triangle normals, into six columns (x y z
+// of each triangle), quad (i, j) at slot j nu + i of its corner (i, j): slot
+// nu - 1 of a row, where no quad starts, holds zeros, and so do the slots
+// of row nv - 1 and the nu + 1 before the column. Then each particle sums
+// the triangles of its four quads, slots a - nu - 1, a - nu, a - 1 and a, in
+// the order of Model::triangles: quads (i-1, j-1), (i, j-1), (i-1, j),
+// (i, j), each first triangle then second. A particle with i + j even is in
+// all eight; an odd one in four, so it adds zero for the others (exact).
+// Both passes are loops over each thread's block of rows that vectorise (a
+// loop per row of 51 ended in a scalar tail of 3 that cost as much as the
+// rest).
 void detail::compute_normals(const Model& m, const double* X, Vec3Array& normal,
                              std::vector<double>& quad_normals) {
-  const int nu = m.nu, stride = nu + 1;
-  const std::size_t per_row = 6 * std::size_t(stride);
-  quad_normals.resize((m.nv + 1) * per_row);
-  std::fill_n(quad_normals.begin(), per_row, 0.0);                          // quad row -1
-  std::fill_n(quad_normals.end() - std::ptrdiff_t(per_row), per_row, 0.0);  // quad row nv - 1
-  const std::size_t n = m.n;
-  parallel_for(m, m.nv - 1, [&](int q) {
-    double* row = quad_normals.data() + (q + 1) * per_row;
-    double* t[6];
-    for (int f = 0; f < 6; ++f) {
-      t[f] = row + f * stride + 1;
-      t[f][-1] = t[f][nu - 1] = 0.0;  // quads -1 and nu - 1
-    }
-    const double* lo = X + std::size_t(q) * nu;  // corners a = lo[i], b = lo[i + 1] (x; y at n on)
-    const double* hi = lo + nu;                  // d = hi[i], cc = hi[i + 1]
+  const int nu = m.nu, nv = m.nv, n = m.n;
+  const std::size_t before = std::size_t(nu) + 1, stride = before + n;
+  quad_normals.resize(6 * stride);
+  double* t[6];
+  for (int f = 0; f < 6; ++f) {
+    t[f] = quad_normals.data() + f * stride + before;
+    std::fill(t[f] - before, t[f], 0.0);
+    std::fill(t[f] + (nv - 1) * nu, t[f] + n, 0.0);
+  }
+  const double *x = X, *y = X + n, *z = X + 2 * std::size_t(n);
+  const double* even_at = m.chequer.data();
+  for_each_row_block(m, [&](int j0, int j1, int) {
+    const int q1 = std::min(j1, nv - 1);  // quad rows j0 .. q1 - 1
+    if (j0 >= q1) return;
+    // Up to the last row's slot nu - 1, whose corners run past the grid.
 #pragma GCC ivdep
-    for (int i = 0; i + 1 < nu; ++i) {
-      // Even quads (i + q even) split along a-cc: {a, b, cc}, {a, cc, d};
-      // odd ones along b-d: {a, b, d}, {b, cc, d}. Eigen's cross, in scalars.
-      const bool even = ((i + q) & 1) == 0;
-      double a[3], b[3], c[3], d[3], u[3], v[3], o[3];
-      for (int k = 0; k < 3; ++k) {
-        a[k] = lo[k * n + i];
-        b[k] = lo[k * n + i + 1];
-        c[k] = hi[k * n + i + 1];
-        d[k] = hi[k * n + i];
-      }
-      for (int k = 0; k < 3; ++k) {
-        u[k] = b[k] - a[k];
-        v[k] = (even ? c[k] : d[k]) - a[k];
-      }
-      t[0][i] = u[1] * v[2] - u[2] * v[1];
-      t[1][i] = u[2] * v[0] - u[0] * v[2];
-      t[2][i] = u[0] * v[1] - u[1] * v[0];
-      for (int k = 0; k < 3; ++k) {
-        o[k] = even ? a[k] : b[k];
-        u[k] = c[k] - o[k];
-        v[k] = d[k] - o[k];
-      }
-      t[3][i] = u[1] * v[2] - u[2] * v[1];
-      t[4][i] = u[2] * v[0] - u[0] * v[2];
-      t[5][i] = u[0] * v[1] - u[1] * v[0];
+    for (int a = j0 * nu; a < q1 * nu - 1; ++a) {
+      // Corners a, b = a + 1, cc = a + nu + 1, d = a + nu. Even quads split
+      // along a-cc: {a, b, cc}, {a, cc, d}; odd ones along b-d: {a, b, d},
+      // {b, cc, d}. Eigen's cross, in scalars.
+      const bool even = even_at[a] != 0;
+      const int b = a + 1, cc = a + nu + 1, d = a + nu;
+      const double ux = x[b] - x[a], uy = y[b] - y[a], uz = z[b] - z[a];
+      const double vx = (even ? x[cc] : x[d]) - x[a], vy = (even ? y[cc] : y[d]) - y[a],
+                   vz = (even ? z[cc] : z[d]) - z[a];
+      t[0][a] = uy * vz - uz * vy;
+      t[1][a] = uz * vx - ux * vz;
+      t[2][a] = ux * vy - uy * vx;
+      const int o = even ? a : b;
+      const double px = x[cc] - x[o], py = y[cc] - y[o], pz = z[cc] - z[o];
+      const double qx = x[d] - x[o], qy = y[d] - y[o], qz = z[d] - z[o];
+      t[3][a] = py * qz - pz * qy;
+      t[4][a] = pz * qx - px * qz;
+      t[5][a] = px * qy - py * qx;
     }
+    for (int q = j0; q < q1; ++q)
+      for (int f = 0; f < 6; ++f) t[f][q * nu + nu - 1] = 0.0;
   });
-  parallel_for(m, m.nv, [&](int j) {
-    // Quad (i - 1, r) of quad row r at [i], quad (i, r) at [i + 1].
-    const double* below = quad_normals.data() + j * per_row;
-    const double* here = below + per_row;
-    double* __restrict out_x = normal.column(0) + std::size_t(j) * nu;
-    double* __restrict out_y = normal.column(1) + std::size_t(j) * nu;
-    double* __restrict out_z = normal.column(2) + std::size_t(j) * nu;
+  for_each_particle_block(m, [&](int first, int end) {
+    double* __restrict out_x = normal.column(0);
+    double* __restrict out_y = normal.column(1);
+    double* __restrict out_z = normal.column(2);
 #pragma GCC ivdep
-    for (int i = 0; i < nu; ++i) {
-      const bool even = ((i + j) & 1) == 0;
-      double n[3];
+    for (int a = first; a < end; ++a) {
+      const bool even = even_at[a] != 0;
+      double sum[3];
       for (int k = 0; k < 3; ++k) {
-        const int t0 = k * stride + i, t1 = (3 + k) * stride + i;
-        double sum = 0;
-        sum += even ? below[t0] : 0.0;
-        sum += below[t1];
-        sum += even ? below[t0 + 1] : 0.0;
-        sum += below[t1 + 1];
-        sum += here[t0];
-        sum += even ? here[t1] : 0.0;
-        sum += here[t0 + 1];
-        sum += even ? here[t1 + 1] : 0.0;
-        n[k] = sum;
+        const double *t0 = t[k], *t1 = t[3 + k];
+        double s = 0;
+        s += even ? t0[a - nu - 1] : 0.0;
+        s += t1[a - nu - 1];
+        s += even ? t0[a - nu] : 0.0;
+        s += t1[a - nu];
+        s += t0[a - 1];
+        s += even ? t1[a - 1] : 0.0;
+        s += t0[a];
+        s += even ? t1[a] : 0.0;
+        sum[k] = s;
       }
-      const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-      out_x[i] = len > 0 ? n[0] / len : 0.0;
-      out_y[i] = len > 0 ? n[1] / len : 0.0;
-      out_z[i] = len > 0 ? n[2] / len : 1.0;
+      const double len = std::sqrt(sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]);
+      out_x[a] = len > 0 ? sum[0] / len : 0.0;
+      out_y[a] = len > 0 ? sum[1] / len : 0.0;
+      out_z[a] = len > 0 ? sum[2] / len : 1.0;
     }
   });
 }

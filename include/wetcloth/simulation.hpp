@@ -120,6 +120,9 @@ struct Model {
   int threads = 1;                     // threads of the step (integrator.threads resolved)
   std::vector<std::array<int, 3>> triangles;
   std::vector<std::array<int, 2>> triangle_pairs;  // triangles sharing an edge
+  // 1 where i + j is even (its quad splits along a-cc; see triangles), else
+  // 0: a column, so that compute_normals runs over whole blocks of rows.
+  std::vector<double> chequer;
   std::vector<Handle> handles;
   SurfaceKind contact_surface = SurfaceKind::None;
   int index(int i, int j) const { return j * nu + i; }

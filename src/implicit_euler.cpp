@@ -33,6 +33,7 @@ Vec3 times(const Sym& s, const Vec3& x) {
 
 bool fixed(const Model& m, const State& s, int i) { return m.inv_mass[i] == 0 || s.held[i]; }
 
+
 // The matrix and the solver's vectors are held in columns, each with zeros
 // for two rows and two particles before and after it. Column k of a store:
 std::size_t padding(const Model& m) { return 2 * std::size_t(m.nu) + 2; }
@@ -328,7 +329,10 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
   // Free, the solve would carry it into the surface for the whole substep,
   // and drag its lifted neighbours down with it through the springs, before
   // collide stopped it: the peel front lagged, and the step control halved
-  // substeps for a motion the surface takes away.
+  // substeps for a motion the surface takes away. On the surface means where
+  // collide put it (within kOnSurface), not anywhere within the liquid
+  // bridge's h_th: held there, a cloth falling onto the ball stopped wherever
+  // it entered that band, up to 1 mm off, and covered half the area.
   const Columns x = columns(m, w, kX), r = columns(m, w, kR), z = columns(m, w, kZ),
                 p = columns(m, w, kP), q = columns(m, w, kQ);
   float* P[6];
@@ -370,7 +374,7 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
       if (guess) start += h * w.acceleration[a];
     }
     Vec3 held = Vec3::Zero();
-    if (!fixed(m, s, a) && s.contact[a] && w.force[a].dot(w.surface_normal[a]) < 0)
+    if (!fixed(m, s, a) && w.distance[a] <= kOnSurface && w.force[a].dot(w.surface_normal[a]) < 0)
       held = w.surface_normal[a];
     for (int k = 0; k < 3; ++k) {
       r.c[k][a] = b[k];

@@ -226,9 +226,8 @@ TEST(ImplicitEuler, HoldsParticlesPressedIntoTheSurfaceOnIt) {
 }
 
 // The pulled cloth at 1/240 s with every effect on (air, adhesion, friction,
-// self-collision, a handle) stays stable and strain-limited. (At 51 x 51 it
-// agrees with the explicit step to within 6 % on the pulls' handles and 3 % on
-// their contact areas: see docs/model.md, section 12.)
+// self-collision, a handle) stays stable and strain-limited. (How near it
+// comes to the explicit step at 51 x 51: docs/model.md, section 12.)
 TEST(ImplicitEuler, RunsThePullWithEveryEffectOn) {
   Simulation sim(test::coarse("pull-straight", {kImplicit, kLargeStep, "cloth.humidity=1"}));
   ASSERT_TRUE(sim.advance_to(1.0)) << sim.blow_up_reason();

@@ -33,7 +33,6 @@ Vec3 times(const Sym& s, const Vec3& x) {
 
 bool fixed(const Model& m, const State& s, int i) { return m.inv_mass[i] == 0 || s.held[i]; }
 
-
 // The matrix and the solver's vectors are held in columns, each with zeros
 // for two rows and two particles before and after it. Column k of a store:
 std::size_t padding(const Model& m) { return 2 * std::size_t(m.nu) + 2; }

@@ -52,6 +52,10 @@ ONE="$T/runs/pull-straight"; TWO="$T/runs/air-models"
 new_sweep "$ONE"
 add_case "$ONE" omega_0.30 0.3 exchange ok 400
 add_case "$ONE" omega_1.00 1 exchange "blew up" 900
+add_case "$ONE" omega_0.70 0.7 exchange ok 500
+IMP="$T/runs/implicit-pull-straight"  # the same numbers: agreement 0.0 %
+new_sweep "$IMP"
+add_case "$IMP" omega_0.70 0.7 exchange ok 500
 new_sweep "$TWO"
 add_case "$TWO" exchange_omega_1.00 1 exchange ok 600
 add_case "$TWO" sealed_omega_1.00 1 sealed ok 5000
@@ -87,15 +91,17 @@ if "$PY" "$REPORT" "$T/runs" "$T/val/report.md" >"$T/out" 2>&1; then ok "report 
 R="$T/val/report.md"
 if grep -q '^| experiment | the paper reports | we test | we measured | result |' "$R"; then ok "report has the claims table"
 else bad "report lacks the claims table"; fi
-if [ "$(grep -c '^| [a-z-]* | .* | \(\*\*PASS\|\*\*FAIL\|not run\|info\)' "$R")" -eq 12 ]; then ok "12 claims, each with a result"
+if [ "$(grep -c '^| [a-z-]* | .* | \(\*\*PASS\|\*\*FAIL\|not run\|info\)' "$R")" -eq 16 ]; then ok "16 claims, each with a result"
 else bad "claims without a result"; fi
 if grep -q '^| air-models | Fig. 8: the sealed .*sealed 5000, exchange 600 Pa | \*\*PASS\*\* |' "$R"; then ok "air-models claim computed: PASS"
 else bad "air-models claim not computed as PASS"; fi
 if grep -q '^| pull-oblique | .* | not run | not run |' "$R"; then ok "missing sweep reads 'not run'"; else bad "missing sweep not 'not run'"; fi
+if grep -q '^| implicit-pull-straight | .* | handle 4.7 against 4.7 cm (+0.0%); contact .* | \*\*PASS\*\* |' "$R"
+then ok "implicit agreement computed: PASS"; else bad "implicit agreement: $(grep '^| implicit-pull-straight' "$R")"; fi
 if [ -s "$T/val/figures/pull-straight_fig7.png" ] && grep -q '](figures/pull-straight_fig7.png)' "$R" \
    && [ -s "$T/val/figures/air-models_fig8.png" ]; then ok "figures copied and linked"; else bad "figures not copied or linked"; fi
 if grep -q '^| 1.00 | blew up |' "$R"; then ok "sweep table shows the blown-up case"; else bad "sweep table lacks the blown-up case"; fi
-if "$PY" "$REPORT" "$T/nowhere" "$T/val2/report.md" >/dev/null 2>&1 && [ "$(grep -c '| not run |$' "$T/val2/report.md")" -eq 12 ]
+if "$PY" "$REPORT" "$T/nowhere" "$T/val2/report.md" >/dev/null 2>&1 && [ "$(grep -c '| not run |$' "$T/val2/report.md")" -eq 16 ]
 then ok "report on no runs: every claim not run"; else bad "report on no runs"; fi
 
 echo "$passes passed, $fails failed"

@@ -76,12 +76,7 @@ struct SceneOptions {
     return all;
   }
 
-  // The scene with the overrides and `extra` after them, on --grid.
-  Params load(const std::vector<std::string>& extra = {}) const {
-    std::vector<std::string> all = overrides();
-    all.insert(all.end(), extra.begin(), extra.end());
-    return load_on_grid(scene, all, grid);
-  }
+  Params load() const { return load_on_grid(scene, overrides(), grid); }
 };
 
 }  // namespace wetcloth::cli

@@ -117,6 +117,18 @@ expect_bad_bench grid2   2 --grids 2
 expect_bad_bench scene   2 --scene no-such-scene --grids 9
 expect_bad_bench blow-up 3 --scene hang --set integrator.dt=2e-3 --duration 1 --repetitions 1
 
+# sweep: a case per humidity, named with as many decimals as tells them apart
+# (an ensemble 1e-7 apart); a humidity given twice is bad input.
+"$W" sweep hang --humidity 0.3,0.6999999,0.7,0.7000001 --duration 1e-3 --no-plots --quiet \
+  --out "$T/sw"; code=$?
+[ $code -eq 0 ] && [ "$(cut -d, -f1 "$T/sw/sweep.csv" | tail -n +2 | sort | tr '\n' ' ')" = \
+  "omega_0.3000000 omega_0.6999999 omega_0.7000000 omega_0.7000001 " ] &&
+  [ -s "$T/sw/omega_0.6999999/metrics.csv" ] && ok "sweep: close humidities get their own cases" ||
+  bad "sweep: exit $code, cases $(cut -d, -f1 "$T/sw/sweep.csv" 2>&1 | tr '\n' ' ')"
+"$W" sweep hang --humidity 0.5,0.5 --duration 1e-3 --no-plots --quiet --out "$T/sw2" 2>"$T/err"; code=$?
+[ $code -eq 2 ] && [ ! -e "$T/sw2" ] && grep -q -- "--humidity: 0.5 is given twice" "$T/err" &&
+  ok "sweep: a humidity given twice exits 2" || bad "sweep twice: exit $code, $(cat "$T/err")"
+
 # converge: three steps of a small cloth, a row each; the table gives an order.
 "$W" converge pull-straight --set 'cloth.resolution=[9,9]' --duration 0.02 --dt 4e-5,2e-5,1e-5 \
   --out "$T/conv" >"$T/conv.txt" 2>&1; code=$?

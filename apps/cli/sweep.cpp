@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <sstream>
 #include <thread>
@@ -27,9 +28,29 @@ struct Case {
   RunResult result;
 };
 
-std::string case_name(double omega, const std::string& air, bool several_air_models) {
+// Decimals that tell the humidities apart in case names: two, or as many as
+// close ones need (an ensemble moves ω by 1e-7: 0.6999999, 0.7000000, ...).
+int humidity_decimals(std::vector<double> omegas) {
+  std::sort(omegas.begin(), omegas.end());
+  if (const auto twice = std::adjacent_find(omegas.begin(), omegas.end()); twice != omegas.end())
+    throw SceneError("--humidity: " + format_number(*twice) + " is given twice");
+  const auto distinct = [&](int decimals) {
+    char a[32], b[32];
+    for (std::size_t k = 1; k < omegas.size(); ++k) {
+      std::snprintf(a, sizeof a, "%.*f", decimals, omegas[k - 1]);
+      std::snprintf(b, sizeof b, "%.*f", decimals, omegas[k]);
+      if (std::strcmp(a, b) == 0) return false;
+    }
+    return true;
+  };
+  int decimals = 2;
+  while (!distinct(decimals)) ++decimals;  // ends by 17: the doubles differ
+  return decimals;
+}
+
+std::string case_name(double omega, int decimals, const std::string& air, bool several_air_models) {
   char buf[64];
-  std::snprintf(buf, sizeof buf, "omega_%.2f", omega);
+  std::snprintf(buf, sizeof buf, "omega_%.*f", decimals, omega);
   return several_air_models ? air + "_" + buf : buf;
 }
 
@@ -101,10 +122,11 @@ std::function<int()> add_sweep_command(CLI::App& app) {
     std::vector<std::string> airs = o->air_models;
     const Params base = o->scene.load();
     if (airs.empty()) airs.push_back(base.air.model);
+    const int decimals = humidity_decimals(o->humidities);
     for (const auto& air : airs)
       for (double w : o->humidities) {
         Case c;
-        c.name = case_name(w, air, several);
+        c.name = case_name(w, decimals, air, several);
         c.air_model = air;
         c.humidity = w;
         std::vector<std::string> sets = o->scene.overrides();
@@ -148,7 +170,8 @@ std::function<int()> add_sweep_command(CLI::App& app) {
       std::vector<std::pair<std::string, fs::path>> tiles;
       for (const auto& c : cases) {
         char label[64];
-        std::snprintf(label, sizeof label, "%s w = %.2f", several ? c.air_model.c_str() : "", c.humidity);
+        std::snprintf(label, sizeof label, "%s w = %.*f", several ? c.air_model.c_str() : "", decimals,
+                      c.humidity);
         tiles.emplace_back(label, out / c.name);
       }
       std::string error;
@@ -161,7 +184,9 @@ std::function<int()> add_sweep_command(CLI::App& app) {
       if (code == kOk) code = kError;
 #endif
     }
-    if (!o->quiet) std::printf("results: %s (sweep.csv, fig7.png, pressure.png, ...)\n", out.c_str());
+    if (!o->quiet)
+      std::printf("results: %s (sweep.csv%s)\n", out.c_str(),
+                  o->no_plots ? "" : ", fig7.png, pressure.png, ...");
     return code;
   };
 }

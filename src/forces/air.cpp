@@ -81,43 +81,52 @@ double stiffness(const PocketAir& a, double dt) {
 }
 
 // `vented`: each connected lifted region is its own pocket; one that reaches the
-// cloth's border is open to the room.
+// cloth's border is open to the room. Around the ball a region runs on
+// through its particles beyond the band, which hold no air of their own: a
+// cloth falling onto the ball is one region, open at its hem, until its
+// contact closes a ring (flooding only within the band had sealed the
+// falling cloth's middle into a cushion from the first step).
 void update_vented(const Model& m, State& s, Workspace& w, double dt) {
   const Params& p = m.params;
-  std::fill(w.pocket.begin(), w.pocket.end(), -1);
+  constexpr int kNone = -1, kBeyondBand = -2;  // no pocket: in contact; lifted, holding no air
+  std::fill(w.pocket.begin(), w.pocket.end(), kNone);
   w.pocket_air.clear();
   double total_atm = 0, total_sum = 0;
   int pockets = 0;
+  const auto mark = [&](int k, int id) {
+    w.pocket[k] = holds_air(m, w.distance[k]) ? id : kBeyondBand;
+    w.queue.push_back(k);
+  };
   for (int seed = 0; seed < m.n; ++seed) {
-    if (w.pocket[seed] >= 0 || s.contact[seed] || !holds_air(m, w.distance[seed])) continue;
+    if (w.pocket[seed] != kNone || s.contact[seed]) continue;
     // Breadth-first flood over structural neighbours.
     const int id = pockets++;
     w.queue.clear();
-    w.queue.push_back(seed);
-    w.pocket[seed] = id;
+    mark(seed, id);
     bool open = false;
     double v_atm = 0, v_old = 0, v_sum = 0, a_sum = 0;
     for (std::size_t q = 0; q < w.queue.size(); ++q) {
       const int k = w.queue[q];
       open = open || m.on_border[k];
-      v_atm += s.air_share[k];
-      v_old += s.air_gap[k];
-      v_sum += m.area[k] * air_gap(m, w.distance[k]);
-      a_sum += m.area[k];
+      if (w.pocket[k] == id) {
+        v_atm += s.air_share[k];
+        v_old += s.air_gap[k];
+        v_sum += m.area[k] * air_gap(m, w.distance[k]);
+        a_sum += m.area[k];
+      }
       const int i = k % m.nu, j = k / m.nu;
       const int nb[4][2] = {{i - 1, j}, {i + 1, j}, {i, j - 1}, {i, j + 1}};
       for (const auto& c : nb) {
         if (c[0] < 0 || c[1] < 0 || c[0] >= m.nu || c[1] >= m.nv) continue;
         const int kk = m.index(c[0], c[1]);
-        if (w.pocket[kk] >= 0 || s.contact[kk] || !holds_air(m, w.distance[kk])) continue;
-        w.pocket[kk] = id;
-        w.queue.push_back(kk);
+        if (w.pocket[kk] == kNone && !s.contact[kk]) mark(kk, id);
       }
     }
     v_atm = open ? v_sum : exchange(p, v_atm, v_old, v_sum, a_sum, dt, true);
     w.pocket_air.push_back(open ? PocketAir{} : pocket_air(p, v_atm, v_sum, a_sum, true));
     const double pin = pressure(p, v_atm, v_sum);
     for (int k : w.queue) {
+      if (w.pocket[k] != id) continue;
       s.air_share[k] = v_sum > 0 ? v_atm * m.area[k] * air_gap(m, w.distance[k]) / v_sum : 0;
       s.pocket_pressure[k] = pin;
     }
@@ -126,6 +135,7 @@ void update_vented(const Model& m, State& s, Workspace& w, double dt) {
   }
   for (int k = 0; k < m.n; ++k) {
     if (w.pocket[k] >= 0) continue;
+    w.pocket[k] = kNone;
     s.air_share[k] = 0;  // the liquid film holds no air
     s.pocket_pressure[k] = p.air.p_atm;
   }

@@ -88,7 +88,9 @@ double stiffness(const PocketAir& a, double dt) {
 // falling cloth's middle into a cushion from the first step).
 void update_vented(const Model& m, State& s, Workspace& w, double dt) {
   const Params& p = m.params;
-  constexpr int kNone = -1, kBeyondBand = -2;  // no pocket: in contact; lifted, holding no air
+  // Not in a pocket: in contact (or not reached yet), or lifted beyond the band
+  // (in a region, but holding no air).
+  constexpr int kNone = -1, kBeyondBand = -2;
   std::fill(w.pocket.begin(), w.pocket.end(), kNone);
   w.pocket_air.clear();
   double total_atm = 0, total_sum = 0;

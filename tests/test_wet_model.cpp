@@ -373,7 +373,6 @@ TEST(Air, VentedPatchRingedByContactOnTheBallIsSealed) {
   };
   wrap(0.005);
   detail::update_contact(m, s, w);
-  detail::update_air(m, s, w, 0.0);
   detail::start_air(m, s, w);  // atmospheric in the new pocket
   EXPECT_EQ(w.pocket[mid], -1);  // beyond the band: no air of its own
   const int pocket = w.pocket[mid + 1];

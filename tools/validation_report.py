@@ -279,17 +279,19 @@ def agreement(sweeps, scene, keys, w=0.7, tolerance=0.05):
     for key, label, scale, unit, digits in keys:
         a = [c.get(key) for c in imp]
         b = [c.get(key) for c in exp]
-        if not all(isinstance(v, float) for v in a + b) or spread(b)[0] == 0:
+        if not all(isinstance(v, float) for v in a + b):
             return f"not run (no {label} at ω = {w:g})", "not run"
         (ma, sa, lo_a, hi_a), (mb, sb, lo_b, hi_b) = spread(a), spread(b)
+        if mb == 0:
+            return f"not run (no {label} at ω = {w:g})", "not run"
         diff = ma / mb - 1
         side = lambda m, lo, hi, n: fmt(m, scale, digits) + (
             f" ({fmt(lo, scale, digits)}–{fmt(hi, scale, digits)}, {n} runs)" if n > 1 else "")
         text = f"{label} {side(ma, lo_a, hi_a, len(a))} against {side(mb, lo_b, hi_b, len(b))} {unit}: {diff:+.1%}"
         if abs(diff) > tolerance:
             ok = False
-            se = math.sqrt(sa * sa / len(a) + sb * sb / len(b))
             if len(a) > 1 and len(b) > 1:
+                se = math.sqrt(sa * sa / len(a) + sb * sb / len(b))
                 t = (ma - mb) / se if se > 0 else math.copysign(math.inf, ma - mb)
                 text += f", {abs(t):.1f} standard errors" if abs(t) < 1000 else ", over 1000 standard errors"
                 clear &= abs(t) > 2

@@ -3,6 +3,7 @@
 #include "wetcloth/scene.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <fstream>
@@ -264,7 +265,10 @@ const ParamDef* find_def(const std::string& key) {
   return nullptr;
 }
 
-void apply_table(const toml::table& t, const std::string& prefix, Params& p) {
+// new_handles: whether the table may add handles (a scene file may; an
+// override may only change the scene's own, so that a misspelt name is an
+// error, not a second handle).
+void apply_table(const toml::table& t, const std::string& prefix, Params& p, bool new_handles) {
   for (const auto& [k, node] : t) {
     const std::string key = prefix.empty() ? std::string(k.str()) : prefix + "." + std::string(k.str());
     if (prefix.empty() && k.str() == "handle") {
@@ -274,6 +278,13 @@ void apply_table(const toml::table& t, const std::string& prefix, Params& p) {
         const std::string hkey = "handle." + std::string(name.str());
         const auto* ht = h.as_table();
         if (!ht) fail(h, hkey, "expected a table");
+        if (!new_handles && !p.handles.count(std::string(name.str()))) {
+          std::string names;
+          for (const auto& [n, unused] : p.handles) names += (names.empty() ? "" : ", ") + n;
+          fail(h, hkey,
+               "the scene has no such handle (" + (names.empty() ? "it has none" : "its handles: " + names) +
+                   "); add a handle in a scene file");
+        }
         p.handles[std::string(name.str())];  // a handle with every key at its default
         for (const auto& [hk, hv] : *ht) {
           const std::string full = hkey + "." + std::string(hk.str());
@@ -286,12 +297,16 @@ void apply_table(const toml::table& t, const std::string& prefix, Params& p) {
     }
     if (const auto* sub = node.as_table()) {
       if (!find_def(key)) {
-        apply_table(*sub, key, p);
+        apply_table(*sub, key, p, new_handles);
         continue;
       }
     }
     const ParamDef* d = find_def(key);
-    if (!d) fail(node, key, "unknown key (wetcloth params lists the keys)");
+    if (!d) {
+      for (const auto& def : param_defs())
+        if (def.key.rfind(key + ".", 0) == 0) fail(node, key, "expected a table, [" + key + "]");
+      fail(node, key, "unknown key (wetcloth params lists the keys)");
+    }
     d->set(p, "", convert(node, *d, key));
   }
 }
@@ -302,15 +317,20 @@ toml::table parse_override(const std::string& text) {
     throw SceneError("--set '" + text + "': expected KEY=VALUE, e.g. cloth.humidity=0.5");
   const std::string key = text.substr(0, eq), value = text.substr(eq + 1);
   const std::string source = "--set '" + text + "'";
+  // Let a bare word stand for a string: --set air.model=sealed.
+  const bool bare_word =
+      !value.empty() && std::all_of(value.begin(), value.end(), [](unsigned char c) {
+        return std::isalpha(c) || c == '_' || c == '-';
+      });
   try {
     return toml::parse(key + " = " + value, source);
-  } catch (const toml::parse_error&) {
-    // Let bare words stand for strings: --set air.model=sealed
-    try {
-      return toml::parse(key + " = \"" + value + "\"", source);
-    } catch (const toml::parse_error& e) {
-      throw SceneError(source + ": " + key + ": " + std::string(e.description()));
-    }
+  } catch (const toml::parse_error& e) {
+    if (!bare_word) throw SceneError(source + ": " + key + ": " + std::string(e.description()));
+  }
+  try {
+    return toml::parse(key + " = \"" + value + "\"", source);
+  } catch (const toml::parse_error& e) {
+    throw SceneError(source + ": " + key + ": " + std::string(e.description()));
   }
 }
 
@@ -425,9 +445,9 @@ Params parse_scene(const std::string& text, const std::string& source,
                      std::string(e.description()));
   }
   Params p;
-  apply_table(root, "", p);
+  apply_table(root, "", p, true);
   // Overrides are applied on top, each keeping its own source for messages.
-  for (const auto& o : overrides) apply_table(parse_override(o), "", p);
+  for (const auto& o : overrides) apply_table(parse_override(o), "", p, false);
   check_consistency(p, source);
   return p;
 }
@@ -469,13 +489,17 @@ std::string to_toml(const Params& p) {
 }
 
 std::string params_markdown() {
+  // A "|" inside a cell ("table | ball") would end it: GitHub's tables take "\|".
+  const auto cell = [](const std::string& text) {
+    std::string out;
+    for (const char c : text) out += c == '|' ? std::string("\\|") : std::string(1, c);
+    return out;
+  };
   std::ostringstream o;
   o << "| key | unit | default | range | meaning |\n|---|---|---|---|---|\n";
-  for (const auto& d : param_defs()) {
-    std::string def = format_value(d.default_value);
-    o << "| `" << d.key << "` | " << d.unit << " | `" << def << "` | " << d.range_text() << " | "
-      << d.meaning << " |\n";
-  }
+  for (const auto& d : param_defs())
+    o << "| `" << cell(d.key) << "` | " << cell(d.unit) << " | `" << cell(format_value(d.default_value))
+      << "` | " << cell(d.range_text()) << " | " << cell(d.meaning) << " |\n";
   return o.str();
 }
 
@@ -485,9 +509,10 @@ Params at_resolution(Params p, long long grid) {
   const long long height = std::llround(static_cast<double>(nv - 1) * scale) + 1;
   const ParamDef& d = *find_def("cloth.resolution");
   for (const long long size : {grid, height})
-    if (size < 3 || static_cast<double>(size) > d.max)
+    if (static_cast<double>(size) < d.min || static_cast<double>(size) > d.max)
       throw SceneError(std::to_string(grid) + " gives a " + std::to_string(grid) + " x " +
-                       std::to_string(height) + " cloth; each side must be 3 to " +
+                       std::to_string(height) + " cloth; each side must be " +
+                       std::to_string(std::llround(d.min)) + " to " +
                        std::to_string(std::llround(d.max)) + " particles");
   for (auto& [name, h] : p.handles) h.patch = std::llround(static_cast<double>(h.patch) * scale);
   if (p.integrator.type != "implicit-euler" && scale > 1) p.integrator.dt /= scale;

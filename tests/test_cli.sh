@@ -34,8 +34,24 @@ expect_bad resolution "res.toml:2: cloth.resolution"    "$T/res.toml"
 expect_bad dt         "dt.toml:2: integrator.dt"        "$T/dt.toml"
 expect_bad missing    "nowhere.toml: no such file"      "$T/nowhere.toml"
 expect_bad name       "no-such-scene"                   no-such-scene
-expect_bad set        "cloth.humidity"                  hang --humidity 2
+expect_bad set        "--humidity: value 2 is out of range [0, 1]" hang --humidity 2
+expect_bad duration   "--duration: value -1 is out of range" hang --duration -1
 expect_bad setkey     "cloth.colour"                    hang --set cloth.colour=1
+expect_bad handlename "handle.pul: the scene has no such handle (its handles: pull)" \
+  pull-straight --set 'handle.pul.force=[0,0,3]'
+expect_bad bracket    "cloth.resolution: Error while parsing array" \
+  hang --set 'cloth.resolution=[101,101'
+printf 'cloth = 5\n' > "$T/section.toml"
+expect_bad section    "section.toml:1: cloth: expected a table, [cloth]" "$T/section.toml"
+# Options CLI11 rejects are bad input too (its own codes are 100 and up).
+expect_bad notanumber "--humidity: not a number: abc" hang --humidity abc
+expect_bad option     "--frobnicate"                    hang --frobnicate
+# An --out that is a file: bad input, named, the file untouched.
+echo keep > "$T/afile"
+"$W" run hang --out "$T/afile" --quiet 2>"$T/err"; code=$?
+[ $code -eq 2 ] && grep -qF -- "--out $T/afile: exists and is not a folder" "$T/err" &&
+  [ "$(cat "$T/afile")" = keep ] && ok "--out a file: exit 2, named, untouched" ||
+  bad "--out a file: exit $code, $(cat "$T/err")"
 
 # A run writes every output; its scene.toml reproduces it bit for bit.
 args=(--set cloth.resolution=[15,15] --duration 0.1 --quiet)
@@ -68,7 +84,7 @@ grep -q '^resolution = \[101, 101\]' "$T/g/scene.toml" && grep -q '^dt = 2.5e-05
 "$W" run pull-straight --grid 101 --set integrator.dt=4e-5 --duration 4e-5 --quiet --out "$T/g2"
 grep -q '^dt = 4e-05' "$T/g2/scene.toml" && ok "--grid keeps a --set integrator.dt" ||
   bad "--grid with --set integrator.dt: $(grep '^dt ' "$T/g2/scene.toml")"
-expect_bad grid "--grid: 2 gives a 2 x 2 cloth" pull-straight --grid 2
+expect_bad grid "--grid: 1 gives a 1 x 1 cloth; each side must be 2 to 2001" pull-straight --grid 1
 
 # A blow-up: exit 3, a message naming the time step, the outputs so far intact.
 "$W" run hang --out "$T/boom" --set integrator.dt=2e-3 --duration 1 --quiet 2>"$T/err"; code=$?
@@ -82,6 +98,9 @@ grep -q "integrator.dt" "$T/err" && ok "blow-up message names integrator.dt" || 
 "$W" run --help | grep -q -- "--humidity" && ok "run --help" || bad "run --help"
 # The README's parameter table is the one `wetcloth params --markdown` prints.
 "$W" params --markdown > "$T/params.md"
+# Five cells a row: a "|" inside a cell ("table | ball") is escaped.
+[ -z "$(awk -F'(^|[^\\\\])[|]' 'NF != 7' "$T/params.md")" ] && ok "params table: five cells a row" ||
+  bad "params table rows with a stray |: $(awk -F'(^|[^\\\\])[|]' 'NF != 7' "$T/params.md" | head -2)"
 if awk '/<!-- params:begin -->/{f=1;next}/<!-- params:end -->/{f=0}f' "$SRC/README.md" | cmp -s - "$T/params.md"; then
   ok "README parameter table is current"
 else
@@ -113,7 +132,7 @@ expect_bad_bench() {
   [ $code -eq "$want" ] && [ ! -e "$T/bench_$name.json" ] && ok "bench $name: exit $want, nothing written" ||
     bad "bench $name: exit code $code (want $want), $(cat "$T/err")"
 }
-expect_bad_bench grid2   2 --grids 2
+expect_bad_bench grid1   2 --grids 1
 expect_bad_bench scene   2 --scene no-such-scene --grids 9
 expect_bad_bench blow-up 3 --scene hang --set integrator.dt=2e-3 --duration 1 --repetitions 1
 
@@ -137,6 +156,25 @@ expect_bad_bench blow-up 3 --scene hang --set integrator.dt=2e-3 --duration 1 --
   ok "converge.csv: a row per step, largest first" || bad "converge.csv: $(cat "$T/conv/converge.csv")"
 grep -q "^order p" "$T/conv.txt" && grep -q "^limit dt->0" "$T/conv.txt" && ok "converge: order and limit" ||
   bad "converge table: $(cat "$T/conv.txt")"
+# converge on a corner dragged along the table (it slides, and stays flat): what
+# is the same at every step says so, not nan; the slide is measured; times print short.
+"$W" converge drag-corner --humidity 1 --set 'cloth.resolution=[9,9]' --duration 0.03 \
+  --dt 4e-5,2e-5,1e-5 --out "$T/conv3" >"$T/conv3.txt" 2>&1; code=$?
+grep -q "^order p *\(same at every dt  *\)\{4\}" "$T/conv3.txt" &&
+  grep -q "^limit dt->0  *0  *0.09  *0  *0  " "$T/conv3.txt" &&
+  ok "converge: a measurement the same at every step says so" ||
+  bad "converge same: exit $code, $(cat "$T/conv3.txt")"
+slide=$(awk -F, 'NR == 1 { for (i = 1; i <= NF; i++) c[$i] = i; next }
+  NR == 2 { x0 = $c["centroid_x_m"]; y0 = $c["centroid_y_m"] }
+  { x = $c["centroid_x_m"]; y = $c["centroid_y_m"] }
+  END { printf "%.9f", sqrt((x - x0)^2 + (y - y0)^2) }' "$T/conv3/dt_1e-05/metrics.csv")
+awk -F, -v want="$slide" 'NR == 1 { for (i = 1; i <= NF; i++) c[$i] = i; next }
+  $1 == "1e-05" { got = $c["slide_m"] }
+  END { exit !(want > 1e-4 && got != "" && (got - want)^2 < 1e-18) }' "$T/conv3/converge.csv" &&
+  grep -q "^dt s .* slide_m" "$T/conv3.txt" && ok "converge: the slide, $slide m" ||
+  bad "converge slide: want $slide m, $(cat "$T/conv3/converge.csv")"
+grep -q "^final values at t = 0.03 s;" "$T/conv3.txt" && ok "converge: the time prints short" ||
+  bad "converge time: $(grep "^final" "$T/conv3.txt")"
 "$W" converge pull-straight --dt 5e-5,5e-5 --out "$T/conv2" >/dev/null 2>"$T/err"; code=$?
 [ $code -eq 2 ] && [ ! -e "$T/conv2" ] && grep -q -- "--dt" "$T/err" && ok "converge: a step given twice exits 2" ||
   bad "converge twice: exit $code, $(cat "$T/err")"

@@ -35,7 +35,7 @@ struct Options {
   std::string integrator;
   int repetitions = 5;
   std::vector<std::string> sets;
-  std::string out = "bench.json";
+  std::string out = "out/bench.json";
 };
 
 struct Grid {
@@ -147,8 +147,8 @@ int run_bench(const Options& o) {
   if (o.repetitions < 1) throw SceneError("--repetitions: must be at least 1");
   if (!(o.duration > 0)) throw SceneError("--duration: must be positive");
   const fs::path out(o.out);
-  if (const fs::path dir = out.parent_path(); !dir.empty() && !fs::is_directory(dir))
-    throw SceneError("--out " + o.out + ": no such folder");
+  if (fs::is_directory(out)) throw SceneError("--out " + o.out + ": is a folder; give a file name");
+  check_output_folder(out.parent_path(), "--out");
   std::vector<Grid> grids;
   for (long long size : o.grids) {
     std::vector<std::string> sets;
@@ -235,6 +235,7 @@ int run_bench(const Options& o) {
                             {"peak_memory_mb", peak_mb},
                             {"bytes_per_particle", per_particle}});
   }
+  if (out.has_parent_path()) fs::create_directories(out.parent_path());
   write_file_atomic(out, doc.dump(2) + "\n");
   std::printf("\nmedians over %d repetitions; results in %s\n", o.repetitions, o.out.c_str());
   return kOk;

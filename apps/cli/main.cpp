@@ -58,7 +58,14 @@ int main(int argc, char** argv) {
   auto viewer_command = viewer::add_commands(app);  // view, render
 #endif
 
-  CLI11_PARSE(app, argc, argv);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    // --help and --version end here with 0; a bad option or value is bad
+    // input like any other (CLI11's own codes are 100 and up).
+    const int code = app.exit(e);
+    return code == 0 ? 0 : cli::kBadInput;
+  }
 
   try {
 #ifdef WETCLOTH_VIEWER
@@ -89,6 +96,7 @@ int main(int argc, char** argv) {
     if (*run) {
       const Params p = run_opts.load();
       const fs::path out = out_dir.empty() ? fs::path("out") / p.name : fs::path(out_dir);
+      cli::check_output_folder(out);
       const bool progress = !quiet && isatty(STDERR_FILENO);
       const auto r = cli::run_scene(p, out, progress);
       if (r.code != cli::kOk) {

@@ -3,7 +3,9 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <filesystem>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -36,6 +38,38 @@ inline Params load_on_grid(const std::string& scene, const std::vector<std::stri
   return p;
 }
 
+// A command-line value checked against the range of the scene parameter it
+// sets, so that the error names the option the user typed:
+// "--humidity: value 1.5 is out of range [0, 1] (cloth.humidity)".
+inline CLI::Validator in_range_of(const std::string& key) {
+  const ParamDef* def = nullptr;
+  for (const ParamDef& d : param_defs())
+    if (d.key == key) def = &d;
+  if (def == nullptr || def->min > def->max) throw std::logic_error("no numeric parameter " + key);
+  return CLI::Validator(
+      [def](std::string& text) -> std::string {
+        double v = 0;
+        if (!CLI::detail::lexical_cast(text, v)) return "not a number: " + text;
+        if (v >= def->min && v <= def->max) return {};
+        return "value " + text + " is out of range " + def->range_text() + " (" + def->key + ")";
+      },
+      def->range_text());
+}
+
+// Throws SceneError (bad input) when `out`, or the nearest part of it that
+// exists, is not a folder: checked before anything runs or is written.
+inline void check_output_folder(const std::filesystem::path& out, const std::string& option = "--out") {
+  namespace fs = std::filesystem;
+  for (fs::path at = out; !at.empty() && at != at.parent_path(); at = at.parent_path()) {
+    std::error_code ec;
+    const auto st = fs::status(at, ec);
+    if (!fs::exists(st)) continue;
+    if (fs::is_directory(st)) return;
+    throw SceneError(option + " " + out.string() + ": " +
+                     (at == out ? "exists and is not a folder" : at.string() + " is not a folder"));
+  }
+}
+
 struct SceneOptions {
   std::string scene;
   std::vector<std::string> sets;
@@ -51,11 +85,14 @@ struct SceneOptions {
                     "override a parameter, KEY=VALUE in TOML syntax, e.g. "
                     "--set cloth.resolution=[101,101] (repeatable; wetcloth params lists the keys)")
         ->allow_extra_args(false);
-    app->add_option("--humidity", humidity, "cloth humidity ω in [0, 1] (= --set cloth.humidity=W)");
-    app->add_option("--duration", duration, "simulated time, s (= --set run.duration=S)");
+    app->add_option("--humidity", humidity, "cloth humidity ω in [0, 1] (= --set cloth.humidity=W)")
+        ->check(in_range_of("cloth.humidity"));
+    app->add_option("--duration", duration, "simulated time, s (= --set run.duration=S)")
+        ->check(in_range_of("run.duration"));
     app->add_option("--threads", threads,
                     "threads of the step (default: all cores; = --set integrator.threads=N, "
-                    "which comes after it)");
+                    "which comes after it)")
+        ->check(in_range_of("integrator.threads"));
     add_grid_to(app);
     all_cores = true;
   }

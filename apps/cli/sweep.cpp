@@ -95,13 +95,14 @@ std::function<int()> add_sweep_command(CLI::App& app) {
   cmd->add_option("--humidity", o->humidities, "humidities ω to run, e.g. 0,0.3,0.5,0.7,1")
       ->delimiter(',')
       ->required()
-      ->check(CLI::Range(0.0, 1.0));
+      ->check(in_range_of("cloth.humidity"));
   cmd->add_option("--air-models", o->air_models, "air models to compare, e.g. exchange,sealed (paper Fig. 8)")
       ->delimiter(',')
       ->check(CLI::IsMember({"exchange", "sealed", "vented", "off"}));
   cmd->add_option("--set", o->scene.sets, "override a parameter, KEY=VALUE (repeatable)")
       ->allow_extra_args(false);
-  cmd->add_option("--duration", o->scene.duration, "simulated time per case, s");
+  cmd->add_option("--duration", o->scene.duration, "simulated time per case, s")
+      ->check(in_range_of("run.duration"));
   o->scene.add_grid_to(cmd);
   cmd->add_option("--out", o->out, "output folder (default out/<scene>-sweep)");
   cmd->add_option("--jobs", o->jobs, "cases run at once (default: all cores)")->check(CLI::PositiveNumber);
@@ -137,6 +138,7 @@ std::function<int()> add_sweep_command(CLI::App& app) {
         cases.push_back(std::move(c));
       }
     const fs::path out = o->out.empty() ? fs::path("out") / (base.name + "-sweep") : fs::path(o->out);
+    check_output_folder(out);
     fs::create_directories(out);
 
     std::vector<std::pair<Params, fs::path>> runs;

@@ -64,6 +64,7 @@ struct Commands {
     RenderOptions o;
     o.params = render_scene.load();
     o.out = out;
+    cli::check_output_folder(o.out);
     parse_size(render_size, o.width, o.height);
     o.fps = fps;
     o.video = video;

@@ -18,19 +18,30 @@ METRICS=time_s,handle_height_m,handle_force_n,max_height_m,contact_area_m2,lifte
 # new_sweep DIR: an empty sweep folder with the sweep.csv header.
 new_sweep() { mkdir -p "$1"; echo "case,air_model,humidity,status,peak_deficit_pa,time_to_5cm_s,$METRICS" >"$1/sweep.csv"; }
 
-# add_case DIR CASE HUMIDITY AIR_MODEL STATUS PEAK_DEFICIT [METRICS_HUMIDITY]: the
-# case's folder (5 frames of metrics, made up from METRICS_HUMIDITY, default
-# HUMIDITY; scene.toml, summary.json) and its row of sweep.csv.
+# add_case DIR CASE HUMIDITY AIR_MODEL STATUS PEAK_DEFICIT [METRICS_HUMIDITY [HANDLE [SURFACE]]]:
+# the case's folder (5 frames of metrics, made up from METRICS_HUMIDITY, default
+# HUMIDITY; scene.toml, summary.json) and its row of sweep.csv. HANDLE: force
+# (default: pulled up, its height depends on ω), move (driven up at 2 cm/s, the
+# same height for every ω, its force depends on ω), pin or none (height and
+# force 0); SURFACE: the scene's contact.surface (default table; ball enables the ball).
 add_case() {
-  local dir=$1 name=$2 w=$3 model=$4 status=$5 peak=$6 mw=${7:-$3}
+  local dir=$1 name=$2 w=$3 model=$4 status=$5 peak=$6 mw=${7:-$3} handle=${8:-force} surface=${9:-table}
   mkdir -p "$dir/$name"
   echo "$METRICS" >"$dir/$name/metrics.csv"
-  awk -v w="$mw" -v p="$peak" 'BEGIN { for (i = 0; i <= 4; i++) { t = 0.25 * i; h = 0.08 * t / (1 + w)
-    printf "%g,%g,%g,%g,%g,%g,%g,0.42,%g,1e-05,1e-05,0.001,0.01,%g,%g,0\n", t, h, 1 + w, h,
+  awk -v w="$mw" -v p="$peak" -v handle="$handle" 'BEGIN { for (i = 0; i <= 4; i++) { t = 0.25 * i
+    h = handle == "force" ? 0.08 * t / (1 + w) : handle == "move" ? 0.02 * t : 0
+    f = handle == "force" ? 1 + w : handle == "move" ? 0.5 + 2 * w * t : 0
+    printf "%g,%g,%g,%g,%g,%g,%g,0.42,%g,1e-05,1e-05,0.001,0.01,%g,%g,0\n", t, h, f, h,
       0.09 - 0.03 * t / (1 + w), 0.03 * t / (1 + w), 0.3 * t / (1 + w), 101325 - p * t, 0.1 + 0.1 * w * t,
       0.1 * t * (1 - w) } }' >>"$dir/$name/metrics.csv"
-  printf '[cloth]\nresolution = [5, 5]\nsize = [0.3, 0.3]\n\n[run]\nduration = 1.0\n\n[air]\nmodel = "%s"\np_atm = 101325.0 # Pa\n' \
-    "$model" >"$dir/$name/scene.toml"
+  printf '[cloth]\nresolution = [5, 5]\nsize = [0.3, 0.3]\n\n[run]\nduration = 1.0\n\n[contact]\nsurface = "%s"\n\n[air]\nmodel = "%s"\np_atm = 101325.0 # Pa\n' \
+    "$surface" "$model" >"$dir/$name/scene.toml"
+  case $handle in
+    force) printf '\n[handle.pull]\ntype = "force"\nforce = [0.0, 0.0, 1.0]\n' ;;
+    move) printf '\n[handle.a_pin]\ntype = "pin"\n\n[handle.rig]\ntype = "move"\nvelocity = [0.0, 0.0, 0.02]\n' ;;
+    pin) printf '\n[handle.left]\ntype = "pin"\n\n[handle.right]\ntype = "pin"\n' ;;
+  esac >>"$dir/$name/scene.toml"
+  [ "$surface" = ball ] && printf '\n[ball]\nenabled = true\n' >>"$dir/$name/scene.toml"
   printf '{"scene": "pull-straight", "status": "%s", "wall_seconds": 0.5, "version": "test"}\n' "$status" \
     >"$dir/$name/summary.json"
   echo "$name,$model,$w,$status,$peak,-1,$(tail -1 "$dir/$name/metrics.csv")" >>"$dir/sweep.csv"
@@ -96,6 +107,53 @@ if [ -z "$(find "$ONE" -name '*.tmp')" ]; then ok "no temporaries left"; else ba
 # plot_sweep.py: two air models give fig8 too.
 if "$PY" "$PLOT" "$TWO" >"$T/out" 2>&1 && [ -s "$TWO/fig8.png" ] && [ -s "$TWO/fig8.svg" ]; then ok "fig8 with two air models"
 else bad "fig8 with two air models: $(cat "$T/out")"; fi
+
+# plot_sweep.py: only the plots that mean something for the scene, decided
+# from scene.toml (the metrics without it). A driven handle (peel-rig): its
+# force over time, in fig8 too, and no fig7 (its height is set).
+PEEL="$T/plots/peel"; new_sweep "$PEEL"
+for m in exchange sealed; do for w in 0.5 1; do add_case "$PEEL" "${m}_omega_$w" $w $m ok 800 "" move; done; done
+sed -i 's/^\(exchange_omega_1,exchange,1,ok,800\),-1,/\1,0.75,/' "$PEEL/sweep.csv"
+if "$PY" "$PLOT" "$PEEL" >"$T/out" 2>&1; then ok "plot a driven handle"; else bad "plot a driven handle: $(cat "$T/out")"; fi
+if [ -s "$PEEL/handle_force.png" ] && [ -s "$PEEL/handle_force.svg" ] && [ ! -e "$PEEL/handle_height.png" ] \
+   && grep -q '<!-- handle force (N) -->' "$PEEL/handle_force.svg"; then ok "driven handle: handle_force, no handle_height"
+else bad "driven handle: handle_force missing or handle_height made: $(ls "$PEEL" | tr "\n" " ")"; fi
+if grep -q '<!-- ω = 1.00: handle force -->' "$PEEL/fig8.svg" && ! grep -q 'handle height' "$PEEL/fig8.svg"
+then ok "driven handle: fig8 shows the force"; else bad "driven handle: fig8 does not show the force"; fi
+if [ ! -e "$PEEL/fig7.png" ]; then ok "driven handle: no fig7"; else bad "driven handle: fig7 made"; fi
+if grep -qx "plot_sweep.py: wrote pressure, contact_area, handle_force, fig8 (.png, .svg) into $PEEL" "$T/out" \
+   && grep -qx 'plot_sweep.py: not made: fig7 (the handle is driven, its height fixed)' "$T/out"
+then ok "driven handle: says what it wrote"; else bad "driven handle: says $(cat "$T/out")"; fi
+# time_to_5cm_s = -1: never reached, read as None; a time stays a time.
+if "$PY" -c 'import sys; sys.path.insert(0, sys.argv[1]); import plot_sweep
+t = {c["case"]: c["time_to_5cm_s"] for c in plot_sweep.load(sys.argv[2])[0]}
+sys.exit(not (t["exchange_omega_1"] == 0.75 and t["sealed_omega_1"] is None))' "$SRC/tools" "$PEEL" 2>"$T/err"
+then ok "time_to_5cm_s -1 read as never (None)"; else bad "time_to_5cm_s -1 not read as never: $(cat "$T/err")"; fi
+
+# No handle (drape-ball): no fig7, no handle plot, and an older sweep's copies removed.
+DRAPE="$T/plots/drape"; new_sweep "$DRAPE"
+for w in 0.5 1; do add_case "$DRAPE" "omega_$w" $w vented ok 1 "" none ball; done
+touch "$DRAPE/fig7.png" "$DRAPE/fig7.svg" "$DRAPE/handle_height.png"
+if "$PY" "$PLOT" "$DRAPE" >"$T/out" 2>&1 && [ -s "$DRAPE/pressure.png" ] && [ -s "$DRAPE/contact_area.png" ] \
+   && [ "$(figures "$DRAPE")" -eq 4 ]; then ok "no handle: only pressure and contact_area"
+else bad "no handle: $(ls "$DRAPE" | tr "\n" " ") $(cat "$T/out")"; fi
+if grep -qx "plot_sweep.py: wrote pressure, contact_area (.png, .svg) into $DRAPE" "$T/out" && grep -qx \
+   'plot_sweep.py: not made: fig7 (no handle), handle_height (no handle), fig8 (one air model); removed the older fig7, handle_height' "$T/out"
+then ok "no handle: says what it wrote, left out and removed"; else bad "no handle: says $(cat "$T/out")"; fi
+# ... the same without scene.toml: the metrics decide.
+NOTOML="$T/plots/notoml"; cp -r "$DRAPE" "$NOTOML"; rm -f "$NOTOML"/*/scene.toml "$NOTOML"/*.png "$NOTOML"/*.svg
+if "$PY" "$PLOT" "$NOTOML" >"$T/out" 2>&1 && [ -s "$NOTOML/pressure.png" ] && [ -s "$NOTOML/contact_area.png" ] \
+   && [ "$(figures "$NOTOML")" -eq 4 ]; then ok "no scene.toml, no handle in the metrics: no handle plots"
+else bad "no scene.toml: $(ls "$NOTOML" | tr "\n" " ") $(cat "$T/out")"; fi
+# No contact surface, air off, only pins (hang): nothing to plot, exit 0.
+HANG="$T/plots/hang"; new_sweep "$HANG"
+for w in 0.5 1; do add_case "$HANG" "omega_$w" $w off ok 0 "" pin none; done
+if "$PY" "$PLOT" "$HANG" >"$T/out" 2>&1 && [ "$(figures "$HANG")" -eq 0 ] \
+   && grep -qx "plot_sweep.py: wrote no plots into $HANG" "$T/out"; then ok "no handle, no surface: no plots, exit 0"
+else bad "no handle, no surface: $(ls "$HANG" | tr "\n" " ") $(cat "$T/out")"; fi
+# A force-driven handle keeps its height (the one-air-model and two-air-model sweeps above).
+if grep -q '<!-- handle height (cm) -->' "$ONE/handle_height.svg" && grep -q '<!-- ω = 1.00: handle height -->' "$TWO/fig8.svg" \
+   && [ ! -e "$ONE/handle_force.png" ]; then ok "force-driven handle: height plotted"; else bad "force-driven handle: no height plot"; fi
 
 # plot_sweep.py: bad input.
 expect_bad "not a number" "$T/badnum" "sweep.csv: line 2: humidity = 'wet' is not a number"

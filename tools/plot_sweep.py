@@ -4,22 +4,40 @@
 Usage: plot_sweep.py DIR [--title TEXT]
 
 Reads DIR/sweep.csv (written by `wetcloth sweep`) and every case's
-DIR/<case>/metrics.csv (and the [air] p_atm of DIR/<case>/scene.toml, if
-present; 101325 Pa otherwise), and writes into DIR, each as PNG and SVG:
+DIR/<case>/metrics.csv and DIR/<case>/scene.toml (the resolved scene: its
+[air] model and p_atm, [contact] surface, [table]/[ball] enabled and
+[handle.NAME] types), and writes into DIR, each as PNG and SVG, the plots
+whose quantities mean something for the scene:
 
   fig7           paper Fig. 7: (a) final pulled height and (b) base diagonal
-                 against humidity, one line per air model
-  pressure       inner pressure deficit p_atm - p against time, one curve per case
-  contact_area   contact area against time, one curve per case
-  handle_height  handle height against time, one curve per case
-  fig8           only with several air models: paper Fig. 8, handle height and
-                 pressure deficit against time, the air models compared at
-                 each humidity
+                 against humidity, one line per air model; only for a handle
+                 pulled by a force (type = "force") over a contact surface
+  pressure       inner pressure deficit p_atm - p against time, one curve per
+                 case; only with a contact surface and an air model not "off"
+  contact_area   contact area against time, one curve per case; only with a
+                 contact surface
+  handle_height  handle height against time, one curve per case; only for a
+                 handle pulled by a force
+  handle_force   instead of handle_height for a driven handle (type = "move",
+                 e.g. peel-rig): the force it takes, handle_force_n
+  fig8           only with several air models and the pressure plot: paper
+                 Fig. 8, the handle's height (or force, for a driven handle;
+                 no column without a handle) and the pressure deficit against
+                 time, the air models compared at each humidity
+
+The handle is the one the metrics follow: the first, by name, that is not a
+pin. Without scene.toml the metrics decide: a handle if handle_height_m is
+ever nonzero (taken as force-driven), a contact surface if contact_area_m2 or
+base_diagonal_m is, air if the pressure deficit is, and p_atm = 101325 Pa.
+It prints the plots it wrote and those it did not make, with why, and removes
+older copies of the latter from DIR. time_to_5cm_s = -1 in sweep.csv means
+"never reached"; it is read as None.
 
 Cases whose status is not "ok" are drawn dashed, "(blew up)" in the legend.
-Exit codes: 0 ok; 1 matplotlib missing; 2 a missing or malformed input file,
-reported as "plot_sweep.py: error: FILE: WHAT", and no figure written (every
-figure is rendered to a temporary name first, then renamed).
+Exit codes: 0 ok (also when no plot applies); 1 matplotlib missing; 2 a
+missing or malformed input file, reported as "plot_sweep.py: error: FILE:
+WHAT", and no figure written or removed (every figure is rendered to a
+temporary name first, then renamed).
 Needs matplotlib (Debian: python3-matplotlib, i.e. run it with /usr/bin/python3).
 """
 import argparse
@@ -31,7 +49,8 @@ import sys
 P_ATM = 101325.0
 SWEEP_TEXT = ("case", "air_model", "status")
 SWEEP_NUMBERS = ("humidity", "handle_height_m", "base_diagonal_m")
-METRICS_NUMBERS = ("time_s", "handle_height_m", "contact_area_m2", "inner_pressure_pa")
+METRICS_NUMBERS = ("time_s", "handle_height_m", "handle_force_n", "contact_area_m2", "inner_pressure_pa")
+FIGURES = ("fig7", "pressure", "contact_area", "handle_height", "handle_force", "fig8")
 MODEL_STYLES = ["-", ":", "-.", (0, (3, 1, 1, 1, 1, 1))]  # "--" is kept for blown-up cases
 MARKERS = ["o", "s", "^", "D"]
 
@@ -75,31 +94,78 @@ def read_csv(path, numbers, texts=()):
     return rows
 
 
-def read_p_atm(case_dir):
-    """[air] p_atm from the case's scene.toml, 101325 Pa when there is no file."""
+def read_scene(case_dir):
+    """The case's scene.toml as {section: {key: value}} (quoted strings as
+    text, numbers as floats, anything else as its text), None when there is
+    no file. Resolved scene files are flat: one key = value a line."""
     path = os.path.join(case_dir, "scene.toml")
     if not os.path.exists(path):
-        return P_ATM
-    section = ""
+        return None
+    scene, section = {"": {}}, ""
     try:
         with open(path, encoding="utf-8") as f:
-            for n, line in enumerate(f, start=1):
-                line = line.split("#", 1)[0].strip()
-                if line.startswith("["):
-                    section = line.strip("[] ")
-                elif section == "air" and line.split("=", 1)[0].strip() == "p_atm":
-                    try:
-                        return float(line.split("=", 1)[1])
-                    except (IndexError, ValueError):
-                        raise InputError(f"{path}: line {n}: [air] p_atm is not a number")
+            lines = list(f)
     except (OSError, UnicodeDecodeError) as e:
         raise InputError(f"{path}: unreadable ({e})")
-    return P_ATM
+    for n, line in enumerate(lines, start=1):
+        line = line.strip()
+        if line.startswith("["):
+            section = line.split("#", 1)[0].strip("[] ")
+            scene.setdefault(section, {})
+        elif "=" in line and not line.startswith("#"):
+            key, value = (part.strip() for part in line.split("=", 1))
+            if value.startswith('"'):
+                value = value[1:].split('"', 1)[0]
+            else:
+                value = value.split("#", 1)[0].strip()
+                try:
+                    value = float(value)
+                except ValueError:
+                    pass
+            scene[section][key] = (n, value)
+    return scene
+
+
+def scene_value(scene, path, section, key, default, kind):
+    """scene[section][key], checked to be a `kind` (str or float)."""
+    n, value = scene.get(section, {}).get(key, (0, default))
+    if not isinstance(value, kind):
+        what = "a number" if kind is float else "a quoted string"
+        raise InputError(f"{path}: line {n}: [{section}] {key} is not {what}")
+    return value
+
+
+def describe(case_dir, metrics):
+    """What the case's plots can show: {'p_atm', 'handle' ("force", "move" or
+    None), 'surface' (bool), 'air' (bool)}, from scene.toml (the defaults of
+    `wetcloth params` for missing keys), from the metrics without it."""
+    scene = read_scene(case_dir)
+    if scene is None:
+        nonzero = lambda name: any(r[name] != 0 for r in metrics if isinstance(r.get(name), float))
+        return {"p_atm": P_ATM, "handle": "force" if nonzero("handle_height_m") else None,
+                "surface": nonzero("contact_area_m2") or nonzero("base_diagonal_m"),
+                "air": any(r["inner_pressure_pa"] != P_ATM for r in metrics)}
+    path = os.path.join(case_dir, "scene.toml")
+    get = lambda section, key, default, kind=str: scene_value(scene, path, section, key, default, kind)
+    surface = get("contact", "surface", "table")
+    surface = ((surface == "table" and get("table", "enabled", "true") == "true") or
+               (surface == "ball" and get("ball", "enabled", "false") == "true"))
+    handle = None
+    for section in sorted(s for s in scene if s.startswith("handle.")):  # the metrics' order
+        kind = get(section, "type", "force")
+        if kind not in ("force", "move", "pin"):
+            raise InputError(f"{path}: [{section}] type = '{kind}' is not force, move or pin")
+        if kind != "pin":
+            handle = kind
+            break
+    return {"p_atm": get("air", "p_atm", P_ATM, float), "handle": handle, "surface": surface,
+            "air": surface and get("air", "model", "exchange") != "off"}
 
 
 def load(sweep_dir):
-    """The sweep's cases, each a dict: the sweep.csv row, plus 'metrics' (the
-    metrics.csv rows), 'p_atm', 'ok' and 'label'."""
+    """The sweep's cases, each a dict: the sweep.csv row (time_to_5cm_s None
+    for -1, "never reached"), plus 'metrics' (the metrics.csv rows), the keys
+    of describe(), 'ok' and 'label'."""
     cases = read_csv(os.path.join(sweep_dir, "sweep.csv"), SWEEP_NUMBERS, SWEEP_TEXT)
     if not cases:
         raise InputError(f"{os.path.join(sweep_dir, 'sweep.csv')}: no cases")
@@ -109,7 +175,9 @@ def load(sweep_dir):
             raise InputError(f"{os.path.join(sweep_dir, 'sweep.csv')}: bad case name '{c['case']}'")
         case_dir = os.path.join(sweep_dir, c["case"])
         c["metrics"] = read_csv(os.path.join(case_dir, "metrics.csv"), METRICS_NUMBERS)
-        c["p_atm"] = read_p_atm(case_dir)
+        c.update(describe(case_dir, c["metrics"]))
+        if isinstance(c.get("time_to_5cm_s"), float) and c["time_to_5cm_s"] < 0:
+            c["time_to_5cm_s"] = None  # -1: the handle never reached 5 cm
         c["ok"] = c["status"] == "ok"
         c["label"] = f"ω={c['humidity']:.2f}" + (f", {c['air_model']}" if len(models) > 1 else "")
         c["label"] += "" if c["ok"] else " (blew up)"
@@ -136,8 +204,36 @@ def deficit(case):
     return [case["p_atm"] - r["inner_pressure_pa"] for r in case["metrics"]]
 
 
-def make_figures(cases, models, title):
-    """name -> matplotlib figure."""
+def plan(cases, models):
+    """The figures that mean something for the sweep, in FIGURES' order, and
+    {name: why not} for the others (handle_height and handle_force stand for
+    each other: only one of them is ever listed). The handle is the first
+    case's (a sweep's cases are one scene)."""
+    handle = cases[0]["handle"]
+    surface = any(c["surface"] for c in cases)
+    air = any(c["air"] for c in cases)
+    why = {}
+    if handle != "force":
+        why["fig7"] = "the handle is driven, its height fixed" if handle == "move" else "no handle"
+        if handle is None:
+            why["handle_height"] = "no handle"
+    elif not surface:
+        why["fig7"] = "no contact surface"
+    if not air:
+        why["pressure"] = "no contact surface" if not surface else "air model off"
+    if not surface:
+        why["contact_area"] = "no contact surface"
+    if len(models) < 2:
+        why["fig8"] = "one air model"
+    elif not air:
+        why["fig8"] = why["pressure"]
+    handle_plot = {"force": "handle_height", "move": "handle_force"}.get(handle)
+    made = [f for f in FIGURES if f not in why and (f not in ("handle_height", "handle_force") or f == handle_plot)]
+    return made, why
+
+
+def make_figures(cases, models, title, made):
+    """name -> matplotlib figure, for the names in `made`."""
     import matplotlib.pyplot as plt
 
     cmap = plt.get_cmap("viridis")
@@ -146,31 +242,35 @@ def make_figures(cases, models, title):
     figs = {}
 
     # Fig. 7: final values against humidity, one line per air model.
-    fig, axes = plt.subplots(1, 2, figsize=(10, 4), constrained_layout=True)
-    for key, ax, what, ylabel in (
-            ("handle_height_m", axes[0], "(a) pulled height", "final pulled height (cm)"),
-            ("base_diagonal_m", axes[1], "(b) base diagonal", "final base diagonal (cm)")):
-        for i, model in enumerate(models):
-            mine = [c for c in cases if c["air_model"] == model]
-            ax.plot([c["humidity"] for c in mine], [c[key] * 100 for c in mine],
-                    marker=MARKERS[i % len(MARKERS)], label=model if len(models) > 1 else None)
-        bad = [c for c in cases if not c["ok"]]
-        if bad:
-            ax.scatter([c["humidity"] for c in bad], [c[key] * 100 for c in bad], s=110,
-                       facecolors="none", edgecolors="red", zorder=3, label="(blew up): last value")
-        ax.set(title=what, xlabel="humidity ω", ylabel=ylabel, xlim=(-0.03, 1.03))
-        ax.set_xticks([0, 0.2, 0.4, 0.6, 0.8, 1.0])
-        ax.grid(alpha=0.3)
-        if ax.get_legend_handles_labels()[0]:
-            ax.legend(fontsize=8)
-    fig.suptitle(f"{title}: Fig. 7")
-    figs["fig7"] = fig
+    if "fig7" in made:
+        fig, axes = plt.subplots(1, 2, figsize=(10, 4), constrained_layout=True)
+        for key, ax, what, ylabel in (
+                ("handle_height_m", axes[0], "(a) pulled height", "final pulled height (cm)"),
+                ("base_diagonal_m", axes[1], "(b) base diagonal", "final base diagonal (cm)")):
+            for i, model in enumerate(models):
+                mine = [c for c in cases if c["air_model"] == model]
+                ax.plot([c["humidity"] for c in mine], [c[key] * 100 for c in mine],
+                        marker=MARKERS[i % len(MARKERS)], label=model if len(models) > 1 else None)
+            bad = [c for c in cases if not c["ok"]]
+            if bad:
+                ax.scatter([c["humidity"] for c in bad], [c[key] * 100 for c in bad], s=110,
+                           facecolors="none", edgecolors="red", zorder=3, label="(blew up): last value")
+            ax.set(title=what, xlabel="humidity ω", ylabel=ylabel, xlim=(-0.03, 1.03))
+            ax.set_xticks([0, 0.2, 0.4, 0.6, 0.8, 1.0])
+            ax.grid(alpha=0.3)
+            if ax.get_legend_handles_labels()[0]:
+                ax.legend(fontsize=8)
+        fig.suptitle(f"{title}: Fig. 7")
+        figs["fig7"] = fig
 
     # Time series, one curve per case.
-    series = (("pressure", "inner pressure deficit p_atm − p (Pa)", deficit),
-              ("contact_area", "contact area (cm²)", lambda c: column(c, "contact_area_m2", 1e4)),
-              ("handle_height", "handle height (cm)", lambda c: column(c, "handle_height_m", 100)))
-    for name, ylabel, values in series:
+    handle = {"handle_height": ("handle height (cm)", lambda c: column(c, "handle_height_m", 100)),
+              "handle_force": ("handle force (N)", lambda c: column(c, "handle_force_n"))}
+    series = {"pressure": ("inner pressure deficit p_atm − p (Pa)", deficit),
+              "contact_area": ("contact area (cm²)", lambda c: column(c, "contact_area_m2", 1e4)),
+              **handle}
+    for name in (f for f in made if f in series):
+        ylabel, values = series[name]
         fig, ax = plt.subplots(figsize=(7.5, 4.5), constrained_layout=True)
         for c in cases:
             ax.plot(column(c, "time_s"), values(c), color=hue(c), linestyle=style(c), label=c["label"])
@@ -179,20 +279,23 @@ def make_figures(cases, models, title):
         ax.legend(fontsize=8, ncol=2 if len(cases) > 6 else 1)
         figs[name] = fig
 
-    # Fig. 8: the air models side by side, one row per humidity.
-    if len(models) > 1:
+    # Fig. 8: the air models side by side, one row per humidity: the handle's
+    # height or force (when there is a handle) and the pressure deficit.
+    if "fig8" in made:
         hums = sorted({round(c["humidity"], 6) for c in cases})
-        fig, axes = plt.subplots(len(hums), 2, figsize=(10, 1.2 + 2.6 * len(hums)), squeeze=False,
-                                 sharex=True, constrained_layout=True)
+        panels = [handle[f] for f in made if f in handle]
+        panels.append(("p_atm − p (Pa)", deficit))
+        fig, axes = plt.subplots(len(hums), len(panels), figsize=(5 * len(panels), 1.2 + 2.6 * len(hums)),
+                                 squeeze=False, sharex=True, constrained_layout=True)
         for i, h in enumerate(hums):
             for c in (c for c in cases if round(c["humidity"], 6) == h):
                 kw = dict(color=f"C{models.index(c['air_model'])}", linestyle="-" if c["ok"] else "--",
                           label=c["air_model"] + ("" if c["ok"] else " (blew up)"))
-                axes[i][0].plot(column(c, "time_s"), column(c, "handle_height_m", 100), **kw)
-                axes[i][1].plot(column(c, "time_s"), deficit(c), **kw)
-            axes[i][0].set(title=f"ω = {h:.2f}: handle height", ylabel="handle height (cm)")
-            axes[i][1].set(title=f"ω = {h:.2f}: pressure deficit", ylabel="p_atm − p (Pa)")
-            for ax in axes[i]:
+                for ax, (_, values) in zip(axes[i], panels):
+                    ax.plot(column(c, "time_s"), values(c), **kw)
+            for ax, (ylabel, _) in zip(axes[i], panels):
+                what = "pressure deficit" if ylabel.startswith("p_atm") else ylabel.split(" (")[0]
+                ax.set(title=f"ω = {h:.2f}: {what}", ylabel=ylabel)
                 ax.grid(alpha=0.3)
                 ax.legend(fontsize=8)
         for ax in axes[-1]:
@@ -236,9 +339,21 @@ def main():
     except InputError as e:
         print(f"plot_sweep.py: error: {e}", file=sys.stderr)
         return 2
-    figs = make_figures(cases, models, args.title or default_title(args.dir, cases))
+    made, why = plan(cases, models)
+    figs = make_figures(cases, models, args.title or default_title(args.dir, cases), made)
     save_all(figs, args.dir)
-    print(f"plot_sweep.py: wrote {', '.join(figs)} (.png, .svg) into {args.dir}")
+    stale = []  # an older sweep's plots that no longer apply
+    for name in (f for f in FIGURES if f not in figs):
+        paths = [os.path.join(args.dir, f"{name}.{ext}") for ext in ("png", "svg")]
+        if any(os.path.exists(p) for p in paths):
+            stale.append(name)
+        for p in (p for p in paths if os.path.exists(p)):
+            os.remove(p)
+    print(f"plot_sweep.py: wrote {', '.join(figs) + ' (.png, .svg)' if figs else 'no plots'} into {args.dir}")
+    notes = ([", ".join(f"{f} ({why[f]})" for f in FIGURES if f in why)] if why else []) + \
+        ([f"removed the older {', '.join(stale)}"] if stale else [])
+    if notes:
+        print(f"plot_sweep.py: {'not made: ' if why else ''}{'; '.join(notes)}")
     return 0
 
 

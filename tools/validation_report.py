@@ -35,7 +35,7 @@ import sys
 AGREEMENT = ["pull-straight", "pull-oblique", "pull-corner", "drape-ball"]  # implicit-<scene> sweeps
 EXPERIMENTS = ["pull-straight", "pull-oblique", "pull-corner", "drag-corner", "drape-ball",
                "peel-rig", "air-models"] + [f"{i}-{s}" for s in AGREEMENT for i in ("explicit", "implicit")]
-FIGURES = ["fig7", "fig8", "handle_height", "pressure", "contact_area"]
+FIGURES = ["fig7", "fig8", "handle_height", "handle_force", "pressure", "contact_area"]
 TREND = [0.3, 0.5, 0.7, 1.0]  # the humidities the trend claims are tested over
 P_ATM = 101325.0
 HERE = os.path.dirname(os.path.abspath(__file__))

@@ -112,8 +112,9 @@ std::function<int()> add_sweep_command(CLI::App& app) {
   cmd->footer(
       "Writes DIR/<case>/ (the outputs of `run`) for every case, DIR/sweep.csv (one row per case:\n"
       "humidity, final metrics, peak pressure deficit, time until the handle first reaches 5 cm)\n"
-      "and plots: fig7 (pulled height and base diagonal against humidity), pressure,\n"
-      "contact_area, handle_height over time, and fig8 with several air models (PNG and SVG).");
+      "and the plots that mean something for the scene: fig7 (pulled height and base diagonal\n"
+      "against humidity), pressure, contact_area, handle_height (handle_force for a driven\n"
+      "handle) over time, and fig8 with several air models (PNG and SVG).");
 
   return [cmd, o]() -> int {
     if (!*cmd) return -1;
@@ -188,7 +189,7 @@ std::function<int()> add_sweep_command(CLI::App& app) {
     }
     if (!o->quiet)
       std::printf("results: %s (sweep.csv%s)\n", out.c_str(),
-                  o->no_plots ? "" : ", fig7.png, pressure.png, ...");
+                  o->no_plots ? "" : " and the plots listed above");
     return code;
   };
 }

@@ -178,6 +178,9 @@ grep -q "^final values at t = 0.03 s;" "$T/conv3.txt" && ok "converge: the time 
 "$W" converge pull-straight --dt 5e-5,5e-5 --out "$T/conv2" >/dev/null 2>"$T/err"; code=$?
 [ $code -eq 2 ] && [ ! -e "$T/conv2" ] && grep -q -- "--dt" "$T/err" && ok "converge: a step given twice exits 2" ||
   bad "converge twice: exit $code, $(cat "$T/err")"
+"$W" converge pull-straight --dt 5e-5,-1 --out "$T/conv4" >/dev/null 2>"$T/err"; code=$?
+[ $code -eq 2 ] && [ ! -e "$T/conv4" ] && grep -qF -- "--dt: value -1 is out of range [1e-09, 1]" "$T/err" &&
+  ok "converge: a negative step exits 2, named" || bad "converge negative: exit $code, $(cat "$T/err")"
 
 echo "$passes passed, $fails failed"
 [ $fails -eq 0 ]

@@ -289,3 +289,16 @@ TEST(Convergence, RichardsonRecoversTheOrderAndTheLimit) {
   EXPECT_TRUE(std::isnan(richardson(1.0, 1.1, 1.05, 2.0).limit));
   EXPECT_TRUE(std::isnan(richardson(1.0, 1.0, 1.0, 2.0).order));
 }
+
+TEST(Convergence, SameToItsDigitsAtEveryStep) {
+  // The same, exactly or to the digits printed: converged, no order to observe.
+  EXPECT_TRUE(same_to_digits({0.0, 0.0, -0.0}, 5));
+  EXPECT_TRUE(same_to_digits({0.08999999999999991, 0.09, 0.09000000000000002}, 5));
+  EXPECT_TRUE(same_to_digits({0.12345, 0.123451, 0.1234549}, 5));
+  // A difference that shows, a NaN, or fewer than two steps is not.
+  EXPECT_FALSE(same_to_digits({0.12345, 0.12346, 0.12346}, 5));
+  EXPECT_FALSE(same_to_digits({0.0, 1e-20}, 5));
+  EXPECT_FALSE(same_to_digits({std::nan(""), std::nan("")}, 5));
+  EXPECT_FALSE(same_to_digits({0.07}, 5));
+  EXPECT_FALSE(same_to_digits({}, 5));
+}

@@ -24,9 +24,19 @@ struct Case {
   RunResult result;
 };
 
-// The measurements the table shows (all of them go to converge.csv).
+// The measurements the table shows (all of them go to converge.csv). The
+// slide is how far the cloth's centroid moved in the plane from the first
+// frame to the last.
 constexpr const char* kShown[] = {"handle_height_m", "contact_area_m2", "base_diagonal_m",
-                                  "max_height_m"};
+                                  "max_height_m", "slide_m"};
+constexpr int kDigits = 5;  // significant digits of the table's values
+
+// A time as people write it: 1.5, not 1.5000000000000002.
+std::string format_time(double t) {
+  char s[32];
+  std::snprintf(s, sizeof s, "%.6g", t);
+  return s;
+}
 
 }  // namespace
 
@@ -44,11 +54,13 @@ std::function<int()> add_converge_command(CLI::App& app) {
   cmd->add_option("scene", o->scene.scene, "scene: a TOML file, or a built-in name")->required();
   cmd->add_option("--dt", o->dts, "time steps, s (default 5e-5,2.5e-5,1.25e-5)")
       ->delimiter(',')
-      ->check(CLI::PositiveNumber);
+      ->check(in_range_of("integrator.dt"));
   cmd->add_option("--set", o->scene.sets, "override a parameter, KEY=VALUE (repeatable)")
       ->allow_extra_args(false);
-  cmd->add_option("--humidity", o->scene.humidity, "cloth humidity ω in [0, 1]");
-  cmd->add_option("--duration", o->scene.duration, "simulated time per run, s");
+  cmd->add_option("--humidity", o->scene.humidity, "cloth humidity ω in [0, 1]")
+      ->check(in_range_of("cloth.humidity"));
+  cmd->add_option("--duration", o->scene.duration, "simulated time per run, s")
+      ->check(in_range_of("run.duration"));
   o->scene.add_grid_to(cmd);
   cmd->add_option("--out", o->out, "output folder (default out/<scene>-converge)");
   cmd->add_option("--jobs", o->jobs, "runs at once (default: all cores)")
@@ -56,9 +68,11 @@ std::function<int()> add_converge_command(CLI::App& app) {
   cmd->add_flag("--quiet", o->quiet, "print nothing but errors");
   cmd->footer(
       "Writes DIR/dt_<dt>/ (the outputs of `run`) for every step and DIR/converge.csv (one row\n"
-      "per step: its final measurements). With three steps or more, each a constant ratio\n"
-      "apart, the three smallest give each measurement's observed order p and its limit as\n"
-      "the step goes to 0 (Richardson), and the table shows every run's error against it.");
+      "per step: its final measurements, and slide_m, how far the cloth's centroid moved from\n"
+      "the first frame). With three steps or more, each a constant ratio apart, the three\n"
+      "smallest give each measurement's observed order p and its limit as the step goes to 0\n"
+      "(Richardson), and the table shows every run's error against it. A measurement that\n"
+      "prints the same at every step is converged to its digits: \"same at every dt\".");
 
   return [cmd, o]() -> int {
     if (!*cmd) return -1;
@@ -83,6 +97,7 @@ std::function<int()> add_converge_command(CLI::App& app) {
     const fs::path out = o->out.empty()
                              ? fs::path("out") / (cases.front().params.name + "-converge")
                              : fs::path(o->out);
+    check_output_folder(out);
     fs::create_directories(out);
 
     std::vector<std::pair<Params, fs::path>> runs;
@@ -95,13 +110,26 @@ std::function<int()> add_converge_command(CLI::App& app) {
       std::fflush(stdout);
     });
 
-    std::string csv = "dt_s,status,wall_s";
-    for (const auto& c : metrics_columns()) csv += "," + c;
-    csv += "\n";
+    // Every run's final measurements, and its slide to the nanometre (a
+    // cloth that stays put moves its centroid by rounding errors, 1e-16 m).
+    std::vector<std::string> columns = metrics_columns();
+    columns.push_back("slide_m");
+    std::vector<std::vector<double>> values;
     for (const auto& c : cases) {
+      values.push_back(metrics_values(c.result.final));
+      const Metrics &a = c.result.first, &b = c.result.final;
+      const double slide = std::hypot(b.centroid_x_m - a.centroid_x_m, b.centroid_y_m - a.centroid_y_m);
+      values.back().push_back(std::round(slide * 1e9) / 1e9);
+    }
+
+    std::string csv = "dt_s,status,wall_s";
+    for (const auto& c : columns) csv += "," + c;
+    csv += "\n";
+    for (std::size_t i = 0; i < cases.size(); ++i) {
+      const auto& c = cases[i];
       csv += format_number(c.dt) + "," + (c.result.code == kOk ? "ok" : "blew_up") + "," +
              format_number(c.result.wall_seconds);
-      for (double v : metrics_values(c.result.final)) csv += "," + format_number(v);
+      for (double v : values[i]) csv += "," + format_number(v);
       csv += "\n";
     }
     write_file_atomic(out / "converge.csv", csv);
@@ -121,13 +149,16 @@ std::function<int()> add_converge_command(CLI::App& app) {
       const double r1 = cases[k - 3].dt / cases[k - 2].dt, r2 = cases[k - 2].dt / cases[k - 1].dt;
       if (std::abs(r1 - r2) <= 1e-9 * r2) ratio = r2;
     }
-    // Where each shown measurement sits among metrics_values' columns.
-    const auto columns = metrics_columns();
+    // Where each shown measurement sits among the columns; which print the
+    // same at every step (converged to the digits shown: no order to find).
     std::vector<std::size_t> at;
-    for (const char* name : kShown)
+    std::vector<bool> same;
+    for (const char* name : kShown) {
       at.push_back(std::find(columns.begin(), columns.end(), name) - columns.begin());
-    std::vector<std::vector<double>> values;
-    for (const auto& c : cases) values.push_back(metrics_values(c.result.final));
+      std::vector<double> column;
+      for (const auto& v : values) column.push_back(v[at.back()]);
+      same.push_back(same_to_digits(column, kDigits));
+    }
     std::vector<Extrapolation> fits;
     for (const std::size_t q : at)
       fits.push_back(ratio > 0
@@ -135,7 +166,7 @@ std::function<int()> add_converge_command(CLI::App& app) {
                          : Extrapolation{});
 
     std::printf("\nfinal values at t = %s s",
-                format_number(cases.front().result.final.time_s).c_str());
+                format_time(cases.front().result.final.time_s).c_str());
     if (ratio > 0) std::printf("; in brackets, the error against the limit as dt -> 0");
     std::printf("\n%-14s", "dt s");
     for (const char* name : kShown) std::printf("  %-24s", name);
@@ -145,25 +176,52 @@ std::function<int()> add_converge_command(CLI::App& app) {
       for (std::size_t q = 0; q < at.size(); ++q) {
         const double v = values[i][at[q]], limit = fits[q].limit;
         char cell[64];
-        if (std::isfinite(limit) && limit != 0)
-          std::snprintf(cell, sizeof cell, "%.5g (%+.1f %%)", v, 100 * (v / limit - 1));
+        if (!same[q] && std::isfinite(limit) && limit != 0)
+          std::snprintf(cell, sizeof cell, "%.*g (%+.1f %%)", kDigits, v, 100 * (v / limit - 1));
         else
-          std::snprintf(cell, sizeof cell, "%.5g", v);
+          std::snprintf(cell, sizeof cell, "%.*g", kDigits, v == 0 ? 0.0 : v);
         std::printf("  %-24s", cell);
       }
       std::printf("\n");
     }
+    const bool any_same = std::find(same.begin(), same.end(), true) != same.end();
+    bool any_nan = false;
     if (ratio > 0) {
       std::printf("%-14s", "order p");
-      for (const auto& f : fits) std::printf("  %-24.2f", f.order);
+      for (std::size_t q = 0; q < at.size(); ++q) {
+        if (same[q]) {
+          std::printf("  %-24s", "same at every dt");
+        } else {
+          any_nan = any_nan || std::isnan(fits[q].order);
+          std::printf("  %-24.2f", fits[q].order);
+        }
+      }
       std::printf("\n%-14s", "limit dt->0");
-      for (const auto& f : fits) std::printf("  %-24.5g", f.limit);
-      std::printf("\n(nan: the differences do not shrink with the step, so no order shows)\n");
+      for (std::size_t q = 0; q < at.size(); ++q) {
+        const double v = values[k - 1][at[q]];
+        std::printf("  %-24.*g", kDigits, same[q] ? (v == 0 ? 0.0 : v) : fits[q].limit);
+      }
+      std::printf("\n");
+      if (any_same)
+        std::printf(
+            "(same at every dt: the value is the same, to the digits shown, at every step: "
+            "converged)\n");
+      if (any_nan)
+        std::printf("(nan: the differences do not shrink with the step, so no order shows)\n");
     } else {
+      if (any_same) {
+        std::printf("(the same, to the digits shown, at every step: converged:");
+        for (std::size_t q = 0; q < std::size(kShown); ++q)
+          if (same[q]) std::printf(" %s", kShown[q]);
+        std::printf(")\n");
+      }
       std::printf(
           "(an order and a limit need three steps or more, the smallest three a constant ratio "
           "apart)\n");
     }
+    std::printf(
+        "(slide_m: how far the cloth's centroid moved from the first frame, m, to the "
+        "nanometre)\n");
     std::printf("results: %s (converge.csv)\n", out.c_str());
     return code;
   };

@@ -85,6 +85,7 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress) {
     }
   }
   if (progress) std::fprintf(stderr, "\n");
+  r.first = table.rows().front();
   r.final = table.rows().back();
   r.peak_deficit_pa = sim.state().peak_deficit;
   r.steps = sim.state().steps;

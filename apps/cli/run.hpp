@@ -16,7 +16,7 @@ enum ExitCode { kOk = 0, kError = 1, kBadInput = 2, kBlowUp = 3 };
 struct RunResult {
   int code = kOk;
   std::string message;  // why it stopped, when it failed
-  Metrics final;
+  Metrics first, final;  // the first and last frames
   double peak_deficit_pa = 0;
   double time_to_5cm_s = -1;  // first time the handle is 5 cm up; -1: never
   long long steps = 0;

@@ -91,6 +91,11 @@ expect_bad grid "--grid: 1 gives a 1 x 1 cloth; each side must be 2 to 2001" pul
 [ $code -eq 3 ] && ok "blow-up exits 3" || bad "blow-up exit code $code"
 grep -q "integrator.dt" "$T/err" && ok "blow-up message names integrator.dt" || bad "blow-up message: $(cat "$T/err")"
 [ -s "$T/boom/metrics.csv" ] && [ -s "$T/boom/summary.json" ] && ok "outputs kept" || bad "blow-up outputs missing"
+# 3 N on a single particle runs past integrator.max_speed: the message names the handle first.
+"$W" run pull-straight --set 'handle.pull.force=[0,0,3]' --set handle.pull.patch=0 --duration 0.01 \
+  --set 'cloth.resolution=[15,15]' --out "$T/boom2" --quiet 2>"$T/err"; code=$?
+[ $code -eq 3 ] && grep -q "Likely cause: handle.pull.force = 3 N on its 1 particle" "$T/err" &&
+  ok "blow-up by a handle's force names it" || bad "handle blow-up: exit $code, $(cat "$T/err")"
 
 # The other commands.
 "$W" scenes | grep -q "^pull-straight" && ok "scenes" || bad "scenes"

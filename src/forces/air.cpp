@@ -183,6 +183,15 @@ void update_air(const Model& m, State& s, Workspace& w, double dt) {
           exchange(p, s.air_atm_volume, s.air_volume, v_sum, update ? a_sum : 0, dt, true);
     }
     // `sealed` (Yamada et al. 2013): the amount of air never changes.
+    // With no lifted cloth over the surface there is no pocket to hold air
+    // above the room's pressure: a cloth that lands flat, its last lifted
+    // particles reaching h_th in one step, would keep the air of the step
+    // before squeezed into the film of its weave (11 atm), with no lifted
+    // area left for it to seep through, and blow up the first particle a
+    // pull lifts. The excess escapes; a deficit (a flat cloth just starting
+    // to peel) stays.
+    if (model != "off" && s_now > 0 && a_sum == 0)
+      s.air_atm_volume = std::min(s.air_atm_volume, v_sum);
     const bool trapped = model != "off" && s_now > 0;
     w.pocket_air.push_back(
         trapped ? pocket_air(p, s.air_atm_volume, v_sum, a_sum, model == "exchange") : PocketAir{});

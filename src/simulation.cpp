@@ -364,10 +364,20 @@ std::string Simulation::blow_up_reason() const {
          "integrator.cg_max_iterations.";
     return o.str();
   }
-  o << lead << "integrator.dt = " << p.integrator.dt
-    << " s is too large for the stiffness springs.structural_k = " << p.springs.structural_k
-    << " N/m and the lightest particle (" << m_min << " kg): the explicit limit is about " << limit
-    << " s. Lower integrator.dt, or the stiffness (springs.*_k, self_collision.k).";
+  if (p.integrator.dt > limit) {
+    o << lead << "integrator.dt = " << p.integrator.dt
+      << " s is too large for the stiffness springs.structural_k = " << p.springs.structural_k
+      << " N/m and the lightest particle (" << m_min << " kg): the explicit limit is about "
+      << limit << " s. Lower integrator.dt, or the stiffness (springs.*_k, self_collision.k).";
+    return o.str();
+  }
+  // Within the springs' limit: a force far beyond what they carry.
+  o << lead << "a force the springs cannot carry: integrator.dt = " << p.integrator.dt
+    << " s is within their explicit limit of about " << limit
+    << " s. Look at the trapped air (air.model; its pressure is now " << state_.inner_pressure
+    << " Pa against air.p_atm = " << p.air.p_atm
+    << "), the handles' forces (handle.*.force, handle.*.patch) and self_collision.k; a smaller "
+       "integrator.dt may still help.";
   return o.str();
 }
 

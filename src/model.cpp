@@ -180,7 +180,10 @@ Model build_model(const Params& p) {
     h.start = hp.start;
     for (int k : h.particles) {
       h.anchor.push_back(m.rest_position[k]);
-      if (h.type != HandleType::Force) m.driven[k] = 1;
+      // A pin that starts late is free until then (apply_handle_constraints
+      // then holds it where it is).
+      if (h.type == HandleType::Move || (h.type == HandleType::Pin && h.start == 0))
+        m.driven[k] = 1;
     }
     m.handles.push_back(std::move(h));
   }

@@ -171,8 +171,12 @@ std::vector<ParamDef> make_defs() {
       handle_field("max_height", "m", 0, 1e3, "force: stop pulling up above this height (0: never)",
                    H(max_height)),
       handle_field("max_travel", "m", 0, 1e3,
-                   "force: stop and hold once the patch has moved this far (0: never)", H(max_travel)),
-      handle_field("start", "s", 0, 1e6, "time the handle starts acting", H(start)),
+                   "force, move: stop and hold once the patch has moved this far (0: never)",
+                   H(max_travel)),
+      handle_field("start", "s", 0, 1e6,
+                   "time the handle starts acting (a move handle holds its patch still until "
+                   "then; a pin holds its particles where they are then)",
+                   H(start)),
   };
 }
 
@@ -345,6 +349,20 @@ void check_consistency(const Params& p, const std::string& source) {
   for (int i = 0; i < 2; ++i)
     if (p.wind.region_min[i] > p.wind.region_max[i])
       bad("wind.region_min", "must not exceed wind.region_max");
+  // A key that does nothing for a handle's type is a mistake, not a default.
+  const auto nonzero = [](const Vec3d& v) { return v[0] != 0 || v[1] != 0 || v[2] != 0; };
+  for (const auto& [name, h] : p.handles) {
+    const std::string key = "handle." + name + ".";
+    const std::string is = " (this one is " + h.type + ")";
+    if (h.type != "force" && nonzero(h.force))
+      bad(key + "force", "applies to force handles only" + is);
+    if (h.type != "force" && h.max_height > 0)
+      bad(key + "max_height", "applies to force handles only" + is);
+    if (h.type == "pin" && h.max_travel > 0)
+      bad(key + "max_travel", "applies to force and move handles only" + is);
+    if (h.type != "move" && nonzero(h.velocity))
+      bad(key + "velocity", "applies to move handles only" + is);
+  }
 }
 
 std::string read_file(const std::string& path) {

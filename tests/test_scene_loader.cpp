@@ -65,6 +65,26 @@ TEST(SceneLoader, HandleKeysAreChecked) {
   EXPECT_NE(e.find("handle.pull.forse"), std::string::npos) << e;
 }
 
+// A key that does nothing for its handle's type is an error, not ignored.
+TEST(SceneLoader, HandleKeysMustFitTheType) {
+  const auto expect = [](const std::string& text, const std::string& what) {
+    const auto e = error_of(text);
+    EXPECT_NE(e.find(what), std::string::npos) << text << " -> " << e;
+  };
+  expect("[handle.p]\ntype = \"pin\"\nforce = [0, 0, 1]\n",
+         "handle.p.force: applies to force handles only (this one is pin)");
+  expect("[handle.m]\ntype = \"move\"\nmax_height = 0.1\n",
+         "handle.m.max_height: applies to force handles only");
+  expect("[handle.p]\ntype = \"pin\"\nmax_travel = 0.1\n",
+         "handle.p.max_travel: applies to force and move handles only");
+  expect("[handle.f]\nvelocity = [1, 0, 0]\n",
+         "handle.f.velocity: applies to move handles only (this one is force)");
+  // What does fit: a late pin, a move that stops.
+  EXPECT_NO_THROW(parse_scene("[handle.p]\ntype = \"pin\"\nstart = 0.1\n", "s.toml"));
+  EXPECT_NO_THROW(parse_scene(
+      "[handle.m]\ntype = \"move\"\nvelocity = [1, 0, 0]\nmax_travel = 0.1\n", "s.toml"));
+}
+
 TEST(SceneLoader, OverridesUseDottedKeysAndNameThemselves) {
   const Params p = parse_scene("", "s.toml", {"cloth.resolution=[5,7]", "air.model=sealed"});
   EXPECT_EQ(p.cloth.resolution[1], 7);

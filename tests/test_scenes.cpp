@@ -1,6 +1,8 @@
 // Built-in scenes, run at a coarser grid with the physics unchanged.
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "common.hpp"
 #include "detail.hpp"
 #include "wetcloth/output.hpp"
@@ -94,4 +96,52 @@ TEST(Scenes, DryClothAtThePapersGridIsStable) {
   Simulation sim(p);
   EXPECT_TRUE(sim.advance_to(0.1)) << sim.blow_up_reason();
   EXPECT_GT(sim.metrics().handle_height_m, 0.005);
+}
+
+// With several handles the metrics measure one, the first by name that is not
+// a pin, its height and its force alike. (The force column had followed the
+// first handle already acting: here, for 0.5 s, the other one's.)
+TEST(Scenes, HandleColumnsMeasureOneHandle) {
+  Params p = test::coarse("pull-corner");
+  HandleParams later = p.handles.begin()->second;  // the corner pull, to start late
+  later.at = {1.0, 1.0};
+  later.start = 0.5;
+  p.handles["a_later"] = later;  // first by name
+  Simulation sim(p);
+  ASSERT_EQ(sim.model().handles.front().name, "a_later");
+  ASSERT_TRUE(sim.advance_to(0.3)) << sim.blow_up_reason();
+  EXPECT_EQ(sim.metrics().handle_force_n, 0.0);   // not acting yet
+  EXPECT_LT(sim.metrics().handle_height_m, 1e-3);  // its corner still on the table
+  ASSERT_TRUE(sim.advance_to(0.6)) << sim.blow_up_reason();
+  const double pull = std::hypot(later.force[0], later.force[1], later.force[2]);
+  EXPECT_NEAR(sim.metrics().handle_force_n, pull, 1e-12);
+}
+
+// A pin that starts late leaves its particles free until then and holds them
+// where they are then; a move handle with max_travel stops there and holds.
+TEST(Scenes, LatePinAndMoveThatStops) {
+  Params hang = test::coarse("hang");
+  for (auto& [name, h] : hang.handles) h.start = 0.1;
+  Simulation fall(hang);
+  const int corner = fall.model().handles.front().particles.front();
+  const double z0 = fall.state().x[corner].z();
+  ASSERT_TRUE(fall.advance_to(0.1)) << fall.blow_up_reason();
+  const double caught = fall.state().x[corner].z();
+  EXPECT_LT(caught, z0 - 0.02);  // fell freely: about g t^2 / 2 = 4.9 cm, less the air's drag
+  ASSERT_TRUE(fall.advance_to(0.4)) << fall.blow_up_reason();
+  EXPECT_EQ(fall.state().x[corner].z(), caught);
+
+  Params drag = test::coarse("pull-corner");
+  HandleParams& rig = drag.handles.begin()->second;
+  rig.type = "move";
+  rig.force = {0, 0, 0};
+  rig.max_height = 0;
+  rig.velocity = {-0.1, 0, 0};
+  rig.max_travel = 0.02;
+  Simulation sim(drag);
+  const int k = sim.model().handles.front().particles.front();
+  const double x0 = sim.state().x[k].x();
+  ASSERT_TRUE(sim.advance_to(0.5)) << sim.blow_up_reason();
+  EXPECT_NEAR(sim.state().x[k].x(), x0 - 0.02, 1e-12);
+  EXPECT_EQ(sim.state().v[k].norm(), 0.0);
 }

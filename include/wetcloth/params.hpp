@@ -20,8 +20,8 @@ struct HandleParams {
   Vec3d force{0, 0, 0};         // force: total force on the patch, N
   Vec3d velocity{0, 0, 0};      // move: driving velocity, m/s
   double max_height = 0;        // force: height cap above the table, m (0: none)
-  double max_travel = 0;        // force: distance the hand travels before it stops, m (0: none)
-  double start = 0;             // time the handle starts acting, s
+  double max_travel = 0;        // force, move: distance the hand travels before it stops, m (0: none)
+  double start = 0;             // time the handle starts acting, s (a late pin holds where it is then)
 };
 
 struct Params {

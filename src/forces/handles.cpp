@@ -29,8 +29,15 @@ void add_handle_forces(const Model& m, const State& s, Workspace& w) {
 // their path; the force the rig exerts is minus the sum of the other forces on
 // the particles it drives (they do not accelerate).
 void apply_handle_constraints(const Model& m, State& s, Workspace& w) {
+  // The force recorded is the measured handle's, the one whose height the
+  // metrics give: the first that is not a pin (zero before it starts).
   w.handle_force = Vec3::Zero();
-  bool recorded = false;
+  const Handle* measured = nullptr;
+  for (const Handle& h : m.handles)
+    if (h.type != HandleType::Pin) {
+      measured = &h;
+      break;
+    }
   for (const Handle& h : m.handles) {
     if (h.type == HandleType::Force) {
       if ((h.max_height > 0 || h.max_travel > 0) && !s.held[h.particles[0]]) {
@@ -49,18 +56,31 @@ void apply_handle_constraints(const Model& m, State& s, Workspace& w) {
             s.held_at[k] = s.x[k];
           }
       }
-      if (!recorded && active(h, s)) {
+      if (&h == measured && active(h, s)) {
         Vec3 rig = h.force;
         if (s.held[h.particles[0]]) {  // holding: minus the other forces on the patch
           rig.setZero();
           for (int k : h.particles) rig -= w.force[k];
         }
         w.handle_force = rig;
-        recorded = true;
       }
       continue;
     }
-    const double t = std::max(0.0, s.time - h.start);
+    if (h.type == HandleType::Pin && h.start > 0) {
+      // A pin that starts late holds its particles where they are then.
+      if (active(h, s))
+        for (int k : h.particles)
+          if (!s.held[k]) {
+            s.held[k] = 1;
+            s.held_at[k] = s.x[k];
+          }
+      continue;
+    }
+    // A move handle's time on its path, which ends after max_travel.
+    double t = std::max(0.0, s.time - h.start);
+    const double speed = h.velocity.norm();
+    const bool moving = active(h, s) && !(h.max_travel > 0 && speed * t >= h.max_travel);
+    if (h.max_travel > 0 && speed > 0) t = std::min(t, h.max_travel / speed);
     Vec3 rig = Vec3::Zero();
     for (std::size_t e = 0; e < h.particles.size(); ++e) {
       const int k = h.particles[e];
@@ -70,14 +90,11 @@ void apply_handle_constraints(const Model& m, State& s, Workspace& w) {
         s.v[k].setZero();
       } else {
         // Driven particles: where they were at t = 0 plus the path so far.
-        s.x[k] = h.anchor[e] + h.velocity * (s.time >= h.start ? t : 0.0);
-        s.v[k] = s.time >= h.start ? h.velocity : Vec3::Zero();
+        s.x[k] = h.anchor[e] + h.velocity * t;
+        s.v[k] = moving ? h.velocity : Vec3::Zero();
       }
     }
-    if (!recorded && h.type == HandleType::Move) {
-      w.handle_force = rig;
-      recorded = true;
-    }
+    if (&h == measured) w.handle_force = rig;
   }
 }
 

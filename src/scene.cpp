@@ -147,7 +147,9 @@ std::vector<ParamDef> make_defs() {
       field("integrator.type", "", 1, 0, "time integrator", P(integrator.type),
             {"explicit-euler", "symplectic-euler", "implicit-euler"}),
       field("integrator.dt", "s", 1e-9, 1, "time step", P(integrator.dt)),
-      field("integrator.threads", "", 0, 1024, "threads of the step (0: all cores; the CLI's --threads, default all cores, sets it)",
+      field("integrator.threads", "", 0, 1024,
+            "threads of the step (0: all cores, or one where that is faster, timed as it runs; "
+            "the CLI's --threads, default 0, sets it)",
             P(integrator.threads)),
       field("integrator.cg_tolerance", "m/s", 1e-12, 1,
             "implicit-euler: conjugate gradients stop when no velocity is off by more",

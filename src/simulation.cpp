@@ -2,6 +2,7 @@
 #include "wetcloth/simulation.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <numbers>
 #include <sstream>
@@ -99,7 +100,17 @@ void compute_normals(const Model& m, const Vec3Array& x, Vec3Array& normal) {
   detail::compute_normals(m, x.column(0), normal, quad_normals);
 }
 
-Simulation::Simulation(const Params& p) : model_(build_model(p)) { reset(); }
+Simulation::Simulation(const Params& p) : model_(build_model(p)) {
+  start_thread_choice();
+  reset();
+}
+
+void Simulation::start_thread_choice() {
+  threads_ = ThreadChoice{};
+  threads_.most = model_.threads;
+  threads_.automatic = model_.params.integrator.threads == 0 && model_.threads > 1;
+  if (threads_.automatic) model_.threads = 1;  // the first trial
+}
 
 void Simulation::reset() {
   const int n = model_.n;
@@ -139,6 +150,7 @@ void Simulation::set_humidity(double omega) { wetcloth::set_humidity(model_, ome
 void Simulation::set_params(const Params& p) {
   const bool same_grid = p.cloth.resolution == model_.params.cloth.resolution;
   model_ = build_model(p);
+  start_thread_choice();
   if (!same_grid) reset();
   ws_.strain_springs.clear();  // their lengths may have changed: ordered again next step
 }
@@ -170,6 +182,29 @@ void Simulation::accumulate_forces(bool implicit) {
 }
 
 void Simulation::step() {
+  ThreadChoice& c = threads_;
+  if (!c.automatic) {
+    take_step();
+    return;
+  }
+  (model_.threads == 1 ? c.steps_on_one : c.steps_on_most)++;
+  const auto start = std::chrono::steady_clock::now();
+  const long long substeps = ws_.substeps;
+  take_step();
+  c.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  c.substeps += ws_.substeps - substeps;
+  // A trial times each count for 2 ms (two substeps at least); the faster is
+  // kept for 0.25 s of stepping, a trial's cost under 2 %.
+  constexpr double kTrialSeconds = 2e-3, kKeepSeconds = 0.25;
+  if (c.phase < 2 ? c.seconds < kTrialSeconds || c.substeps < 2 : c.seconds < kKeepSeconds) return;
+  if (c.phase < 2) c.per_substep[c.phase] = c.seconds / static_cast<double>(c.substeps);
+  c.phase = (c.phase + 1) % 3;
+  c.seconds = 0;
+  c.substeps = 0;
+  model_.threads = c.phase == 0 || (c.phase == 2 && c.per_substep[0] <= c.per_substep[1]) ? 1 : c.most;
+}
+
+void Simulation::take_step() {
   const Model& m = model_;
   State& s = state_;
   Workspace& w = ws_;

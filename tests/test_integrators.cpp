@@ -276,6 +276,24 @@ TEST(Threads, TwoThreadsGiveTheSameBitsAsOne) {
   }
 }
 
+// integrator.threads = 0 switches between one thread and two as it times
+// them; the result is the one thread's, bit for bit.
+TEST(Threads, ChosenAsItRunsGivesTheSameBitsAsOne) {
+  Simulation one(load_scene("pull-straight", {"integrator.threads=1"}));
+  Simulation chosen(load_scene("pull-straight", {"integrator.threads=0"}));
+  if (chosen.thread_choice().most < 2) GTEST_SKIP() << "one core: nothing to choose";
+  ASSERT_TRUE(chosen.thread_choice().automatic);
+  const double t = 0.3;  // about a second of wall time: trials every 0.25 s
+  ASSERT_TRUE(one.advance_to(t));
+  ASSERT_TRUE(chosen.advance_to(t));
+  EXPECT_GT(chosen.thread_choice().steps_on_one, 0);
+  EXPECT_GT(chosen.thread_choice().steps_on_most, 0);
+  for (int i = 0; i < one.model().n; ++i) {
+    ASSERT_EQ(one.state().x[i], chosen.state().x[i]) << "particle " << i;
+    ASSERT_EQ(one.state().v[i], chosen.state().v[i]) << "particle " << i;
+  }
+}
+
 TEST(Convergence, RichardsonRecoversTheOrderAndTheLimit) {
   // f(Δt) = f* + C Δt^p at Δt = 4e-5, 2e-5, 1e-5.
   for (const double p : {1.0, 2.0}) {

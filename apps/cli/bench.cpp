@@ -149,10 +149,15 @@ int run_bench(const Options& o) {
   const fs::path out(o.out);
   if (fs::is_directory(out)) throw SceneError("--out " + o.out + ": is a folder; give a file name");
   check_output_folder(out.parent_path(), "--out");
+  // All the cores by default, as a fixed count: a bench times a number of
+  // threads, not the choice integrator.threads = 0 makes as it runs (which
+  // --threads 0 times).
+  const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
+  const unsigned threads = o.threads.value_or(cores);
   std::vector<Grid> grids;
   for (long long size : o.grids) {
     std::vector<std::string> sets;
-    sets.push_back("integrator.threads=" + std::to_string(o.threads.value_or(0)));
+    sets.push_back("integrator.threads=" + std::to_string(threads));
     if (!o.integrator.empty()) sets.push_back("integrator.type=\"" + o.integrator + "\"");
     sets.insert(sets.end(), o.sets.begin(), o.sets.end());
     // The same cloth at each grid, unless the user chose the time step.
@@ -167,8 +172,6 @@ int run_bench(const Options& o) {
 
   const Params& p0 = grids.front().params;
   const double dt = p0.integrator.dt;
-  const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
-  const unsigned threads = o.threads.value_or(cores);
   const std::string cpu = cpu_model();
   std::printf(
       "wetcloth %s bench: scene %s, integrator %s, dt %g s (first grid), %g s simulated per run, "

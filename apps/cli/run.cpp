@@ -99,6 +99,13 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress) {
   s["steps"] = r.steps;
   s["substeps"] = sim.workspace().substeps;  // more than steps where implicit Euler halved some
   s["particles"] = sim.model().n;
+  if (const auto& c = sim.thread_choice(); c.automatic)  // integrator.threads = 0
+    s["threads"] = {{"chosen_as_it_ran", true},
+                    {"most", c.most},
+                    {"steps_on_1", c.steps_on_one},
+                    {"steps_on_most", c.steps_on_most}};
+  else
+    s["threads"] = sim.model().threads;
   s["simulated_seconds"] = sim.state().time;
   s["wall_seconds"] = r.wall_seconds;
   s["realtime_factor"] = r.wall_seconds > 0 ? sim.state().time / r.wall_seconds : 0.0;
@@ -111,7 +118,9 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress) {
 void share_cores(std::vector<std::string>& sets, unsigned jobs) {
   if (overrides_key(sets, "integrator.threads")) return;
   const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
-  sets.insert(sets.begin(), "integrator.threads=" + std::to_string(std::max(1u, cores / jobs)));
+  // One run at a time takes all the cores as the step finds them free (0).
+  const unsigned each = jobs <= 1 ? 0 : std::max(1u, cores / jobs);
+  sets.insert(sets.begin(), "integrator.threads=" + std::to_string(each));
 }
 
 std::vector<RunResult> run_all(const std::vector<std::pair<Params, fs::path>>& runs, unsigned jobs,

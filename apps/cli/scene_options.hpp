@@ -76,7 +76,7 @@ struct SceneOptions {
   std::optional<double> humidity, duration;
   std::optional<unsigned> threads;
   std::optional<long long> grid;
-  bool all_cores = false;  // with add_to: no --threads means all cores
+  bool all_cores = false;  // with add_to: no --threads means 0, chosen as the step runs
 
   void add_to(CLI::App* app, bool scene_required = true) {
     auto* s = app->add_option("scene", scene, "scene: a TOML file, or a built-in name (wetcloth scenes)");
@@ -90,8 +90,8 @@ struct SceneOptions {
     app->add_option("--duration", duration, "simulated time, s (= --set run.duration=S)")
         ->check(in_range_of("run.duration"));
     app->add_option("--threads", threads,
-                    "threads of the step (default: all cores; = --set integrator.threads=N, "
-                    "which comes after it)")
+                    "threads of the step (default 0: all cores, or one where that is faster, "
+                    "timed as it runs; = --set integrator.threads=N, which comes after it)")
         ->check(in_range_of("integrator.threads"));
     add_grid_to(app);
     all_cores = true;

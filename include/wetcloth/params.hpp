@@ -115,7 +115,7 @@ struct Params {
     std::string type = "symplectic-euler";  // explicit-euler | symplectic-euler | implicit-euler
     double dt = 5e-5;         // s
     double max_speed = 50;    // m/s; faster means the run has blown up
-    long long threads = 1;    // threads of the step; 0 means all cores (the CLI's default)
+    long long threads = 1;    // threads of the step; 0: chosen as it runs (the CLI's default)
     double cg_tolerance = 1e-4;          // implicit-euler: largest velocity error, m/s
     long long cg_max_iterations = 300;   // implicit-euler
     double max_step_strain = 0.025;      // implicit-euler: a step is halved past this (Baraff & Witkin)

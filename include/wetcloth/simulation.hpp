@@ -288,12 +288,33 @@ class Simulation {
   State& state() { return state_; }
   const Workspace& workspace() const { return ws_; }
 
+  // integrator.threads = 0: the step's threads are chosen as it runs. Now
+  // and then a few milliseconds of steps are timed on one thread and on all
+  // the grid takes, and the faster is kept until the next trial: another busy
+  // process makes every barrier wait for a descheduled thread, and two
+  // threads then took 3 × as long as one (51 × 51). The count never changes
+  // the result, so neither does the choice.
+  struct ThreadChoice {
+    bool automatic = false;
+    int most = 1;  // the threads the grid takes (Model::threads as built)
+    long long steps_on_one = 0, steps_on_most = 0;
+    // The trial: 0, 1 timing one thread, then `most`; 2 keeping the faster.
+    int phase = 0;
+    double seconds = 0;
+    long long substeps = 0;
+    double per_substep[2] = {};
+  };
+  const ThreadChoice& thread_choice() const { return threads_; }
+
  private:
   Model model_;
   State state_;
   Workspace ws_;
   std::vector<std::uint8_t> touched_;  // obstacle each particle was pushed out of this step
+  ThreadChoice threads_;
 
+  void take_step();
+  void start_thread_choice();
   void accumulate_forces(bool implicit);
   double implicit_substep(double dt, int& halvings, double& strain);
   void move_at_new_velocities(double h);

@@ -165,10 +165,15 @@ Model build_model(const Params& p) {
     h.type = hp.type == "pin"    ? HandleType::Pin
              : hp.type == "move" ? HandleType::Move
                                  : HandleType::Force;
-    const int ci = nearest(hp.at[0], m.nu), cj = nearest(hp.at[1], m.nv);
+    // The grid rectangle from `at` to `at + span`, widened by the patch.
     const int r = static_cast<int>(hp.patch);
-    for (int j = std::max(0, cj - r); j <= std::min(m.nv - 1, cj + r); ++j)
-      for (int i = std::max(0, ci - r); i <= std::min(m.nu - 1, ci + r); ++i)
+    // (minmax of a list returns values: of two temporaries, references to them)
+    const auto [i0, i1] =
+        std::minmax({nearest(hp.at[0], m.nu), nearest(hp.at[0] + hp.span[0], m.nu)});
+    const auto [j0, j1] =
+        std::minmax({nearest(hp.at[1], m.nv), nearest(hp.at[1] + hp.span[1], m.nv)});
+    for (int j = std::max(0, j0 - r); j <= std::min(m.nv - 1, j1 + r); ++j)
+      for (int i = std::max(0, i0 - r); i <= std::min(m.nu - 1, i1 + r); ++i)
         h.particles.push_back(m.index(i, j));
     h.force = to_vec(hp.force);
     double area = 0;

@@ -166,7 +166,12 @@ std::vector<ParamDef> make_defs() {
       field("run.meshes", "", 0, 0, "write frames/frame_NNNNN.obj", P(run.meshes)),
       handle_field("type", "", 1, 0, "force: constant force; move: driven at a velocity; pin: held",
                    H(type), {"force", "move", "pin"}),
-      handle_field("at", "1", 0, 1, "(u, v) of the handle's centre on the cloth", H(at)),
+      handle_field("at", "1", 0, 1, "(u, v) of the handle on the cloth: its centre, or with span one end",
+                   H(at)),
+      handle_field("span", "1", -1, 1,
+                   "the handle takes every particle from at to at + span, e.g. [1, 0] from a "
+                   "corner along an edge (each widened by patch)",
+                   H(span)),
       handle_field("patch", "grid steps", 0, 1000, "half-width of the handle's patch", H(patch)),
       handle_field("force", "N", -1e6, 1e6, "force: total force on the patch", H(force)),
       handle_field("velocity", "m/s", -1e3, 1e3, "move: velocity of the patch", H(velocity)),
@@ -360,6 +365,9 @@ void check_consistency(const Params& p, const std::string& source) {
       bad(key + "force", "applies to force handles only" + is);
     if (h.type != "force" && h.max_height > 0)
       bad(key + "max_height", "applies to force handles only" + is);
+    for (int i = 0; i < 2; ++i)
+      if (h.at[i] + h.span[i] < 0 || h.at[i] + h.span[i] > 1)
+        bad(key + "span", "at + span must stay on the cloth, in [0, 1]");
     if (h.type == "pin" && h.max_travel > 0)
       bad(key + "max_travel", "applies to force and move handles only" + is);
     if (h.type != "move" && nonzero(h.velocity))

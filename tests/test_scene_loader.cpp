@@ -79,6 +79,7 @@ TEST(SceneLoader, HandleKeysMustFitTheType) {
          "handle.p.max_travel: applies to force and move handles only");
   expect("[handle.f]\nvelocity = [1, 0, 0]\n",
          "handle.f.velocity: applies to move handles only (this one is force)");
+  expect("[handle.e]\nat = [0.5, 0]\nspan = [0.6, 0]\n", "handle.e.span: at + span must stay");
   // What does fit: a late pin, a move that stops.
   EXPECT_NO_THROW(parse_scene("[handle.p]\ntype = \"pin\"\nstart = 0.1\n", "s.toml"));
   EXPECT_NO_THROW(parse_scene(

@@ -145,3 +145,21 @@ TEST(Scenes, LatePinAndMoveThatStops) {
   EXPECT_NEAR(sim.state().x[k].x(), x0 - 0.02, 1e-12);
   EXPECT_EQ(sim.state().v[k].norm(), 0.0);
 }
+
+// A handle with a span takes a whole edge: a curtain pinned along its top.
+TEST(Scenes, PinAlongAnEdge) {
+  Params p = test::coarse("hang");
+  p.handles.clear();
+  HandleParams top;
+  top.type = "pin";
+  top.at = {0.0, 0.0};
+  top.span = {1.0, 0.0};
+  p.handles["top"] = top;
+  Simulation sim(p);
+  const Model& m = sim.model();
+  ASSERT_EQ(m.handles.front().particles.size(), std::size_t(m.nu));
+  const State start = sim.state();
+  ASSERT_TRUE(sim.advance_to(0.5)) << sim.blow_up_reason();
+  for (int i = 0; i < m.nu; ++i) EXPECT_EQ(sim.state().x[i], start.x[i]) << "particle " << i;
+  EXPECT_LT(sim.state().x[m.n - 1].z(), start.x[m.n - 1].z());  // the rest hangs from it
+}

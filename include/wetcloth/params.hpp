@@ -16,6 +16,7 @@ using Vec2i = std::array<long long, 2>;
 struct HandleParams {
   std::string type = "force";   // force | move | pin
   Vec2d at{0.5, 0.5};           // position on the cloth, (u, v) in [0, 1]
+  Vec2d span{0, 0};             // the handle runs from `at` to `at + span`: an edge, a band
   long long patch = 0;          // half-width of the patch, in grid steps
   Vec3d force{0, 0, 0};         // force: total force on the patch, N
   Vec3d velocity{0, 0, 0};      // move: driving velocity, m/s

@@ -68,6 +68,7 @@ Model build_model(const Params& p) {
   const double du = p.cloth.size[0] / (m.nu - 1), dv = p.cloth.size[1] / (m.nv - 1);
   const Vec3 c = to_vec(p.cloth.center);
   const bool vertical = p.cloth.orientation == "vertical";
+  const Eigen::AngleAxisd tilt(p.cloth.tilt * std::numbers::pi / 180, Vec3::UnitX());
 
   m.rest_position.resize(m.n);
   m.area.resize(m.n);
@@ -80,7 +81,8 @@ Model build_model(const Params& p) {
       const double u = i * du - 0.5 * p.cloth.size[0];
       const double v = j * dv - 0.5 * p.cloth.size[1];
       // Vertical cloths hang with v = 0 at the top.
-      m.rest_position[k] = vertical ? c + Vec3(u, 0, -v) : c + Vec3(u, v, 0);
+      const Vec3 flat = vertical ? Vec3(u, 0, -v) : Vec3(u, v, 0);
+      m.rest_position[k] = c + (p.cloth.tilt != 0 ? Vec3(tilt * flat) : flat);
       const bool edge_u = i == 0 || i == m.nu - 1, edge_v = j == 0 || j == m.nv - 1;
       // Voronoi area: l² inside, half on an edge, a quarter at a corner.
       m.area[k] = du * dv * (edge_u ? 0.5 : 1.0) * (edge_v ? 0.5 : 1.0);

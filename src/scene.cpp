@@ -73,6 +73,11 @@ std::vector<ParamDef> make_defs() {
       field("cloth.center", "m", -inf, inf, "centre of the cloth at t = 0", P(cloth.center)),
       field("cloth.orientation", "", 1, 0, "horizontal: in the xy plane; vertical: in the xz plane, v down",
             P(cloth.orientation), {"horizontal", "vertical"}),
+      field("cloth.tilt", "°", -90, 90,
+            "then turned about the x axis through its centre: tilted by 20, a falling cloth "
+            "lands edge first (with air.model = \"exchange\" the wedge of air under it leaks "
+            "only through the cloth and holds it up; \"vented\" lets it out at the sides)",
+            P(cloth.tilt)),
       field("cloth.humidity", "1", 0, 1, "water saturation by weight ω = (w − w0)/(w100 − w0)",
             P(cloth.humidity)),
       field("cloth.areal_density", "kg/m²", 1e-6, 100, "dry areal density ρ_A", P(cloth.areal_density)),

@@ -369,8 +369,11 @@ Camera frame_scene(const Params& p, float aspect) {
   const Vec3f center =
       Eigen::Vector3d(p.cloth.center[0], p.cloth.center[1], p.cloth.center[2]).cast<float>();
   const float su = static_cast<float>(p.cloth.size[0]), sv = static_cast<float>(p.cloth.size[1]);
-  Vec3f half =
-      p.cloth.orientation == "vertical" ? Vec3f(su / 2, 0.02f, sv / 2) : Vec3f(su / 2, sv / 2, 0);
+  // The cloth's box: v along y (horizontal) or z (vertical), turned by the tilt.
+  const float t = static_cast<float>(p.cloth.tilt * std::numbers::pi / 180);
+  const float along = sv / 2 * std::abs(std::cos(t)), across = sv / 2 * std::abs(std::sin(t));
+  Vec3f half = p.cloth.orientation == "vertical" ? Vec3f(su / 2, std::max(0.02f, across), along)
+                                                 : Vec3f(su / 2, along, across);
   Vec3f lo = center - half, hi = center + half;
   // Room above a flat cloth for the tent a pulling handle raises.
   const float lift = std::max(su, sv) * 0.4f;

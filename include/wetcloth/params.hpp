@@ -34,6 +34,7 @@ struct Params {
     Vec2d size{0.3, 0.3};       // width (u) and height (v), m
     Vec3d center{0, 0, 0};      // centre of the cloth at t = 0, m
     std::string orientation = "horizontal";  // horizontal (xy plane) | vertical (xz plane)
+    double tilt = 0;                         // then turned about the x axis, degrees
     double humidity = 0.0;      // water saturation by weight ω, 0..1
     double areal_density = 0.12;  // dry ρ_A, kg/m²
     double water_ratio = 1.0;   // water held at ω = 1 per unit dry mass r_w

@@ -169,7 +169,8 @@ Model build_model(const Params& p) {
                                  : HandleType::Force;
     // The grid rectangle from `at` to `at + span`, widened by the patch.
     const int r = static_cast<int>(hp.patch);
-    // (minmax of a list returns values: of two temporaries, references to them)
+    // (std::minmax of two temporaries would return dangling references; of a
+    // list it returns values)
     const auto [i0, i1] =
         std::minmax({nearest(hp.at[0], m.nu), nearest(hp.at[0] + hp.span[0], m.nu)});
     const auto [j0, j1] =

@@ -196,12 +196,14 @@ void Simulation::step() {
   // A trial times each count for 2 ms (two substeps at least); the faster is
   // kept for 0.25 s of stepping, a trial's cost under 2 %.
   constexpr double kTrialSeconds = 2e-3, kKeepSeconds = 0.25;
-  if (c.phase < 2 ? c.seconds < kTrialSeconds || c.substeps < 2 : c.seconds < kKeepSeconds) return;
+  if (c.phase < 2 ? c.seconds < kTrialSeconds || c.substeps < 2 : c.seconds < kKeepSeconds)
+    return;
   if (c.phase < 2) c.per_substep[c.phase] = c.seconds / static_cast<double>(c.substeps);
   c.phase = (c.phase + 1) % 3;
   c.seconds = 0;
   c.substeps = 0;
-  model_.threads = c.phase == 0 || (c.phase == 2 && c.per_substep[0] <= c.per_substep[1]) ? 1 : c.most;
+  const bool one = c.phase == 0 || (c.phase == 2 && c.per_substep[0] <= c.per_substep[1]);
+  model_.threads = one ? 1 : c.most;
 }
 
 void Simulation::take_step() {

@@ -163,7 +163,10 @@ expect_bad "short row" "$T/badrow" "metrics.csv: line 7: 2 fields"
 expect_bad "no sweep.csv" "$T/empty" "sweep.csv: no such file"
 
 # validation_report.py over the fabricated runs.
+# A figure an earlier report copied that this sweep no longer makes is removed.
+mkdir -p "$T/val/figures" && echo stale > "$T/val/figures/pull-straight_handle_force.png"
 if "$PY" "$REPORT" "$T/runs" "$T/val/report.md" >"$T/out" 2>&1; then ok "report written"; else bad "report: $(cat "$T/out")"; fi
+if [ ! -e "$T/val/figures/pull-straight_handle_force.png" ]; then ok "stale figure removed"; else bad "stale figure kept"; fi
 R="$T/val/report.md"
 if grep -q '^| experiment | the paper reports | we test | we measured | result |' "$R"; then ok "report has the claims table"
 else bad "report lacks the claims table"; fi

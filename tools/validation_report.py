@@ -410,11 +410,13 @@ def figures(name, folder, report_dir):
     links = []
     for f in FIGURES:
         src = os.path.join(folder, f + ".png")
+        dst = os.path.join(fig_dir, f"{name}_{f}.png")
         if os.path.exists(src):
             os.makedirs(fig_dir, exist_ok=True)
-            dst = os.path.join(fig_dir, f"{name}_{f}.png")
             shutil.copyfile(src, dst)
             links.append(f"![{name} {f}]({os.path.relpath(dst, report_dir)})")
+        elif os.path.exists(dst):  # a plot the sweep no longer makes: no stale copy
+            os.remove(dst)
     return "\n".join(links) if links else "_No figures (tools/plot_sweep.py could not draw them)._"
 
 

@@ -97,6 +97,12 @@ grep -q "integrator.dt" "$T/err" && ok "blow-up message names integrator.dt" || 
 [ $code -eq 3 ] && grep -q "Likely cause: handle.pull.force = 3 N on its 1 particle" "$T/err" &&
   ok "blow-up by a handle's force names it" || bad "handle blow-up: exit $code, $(cat "$T/err")"
 
+# The README's example scenes stay valid and run.
+for f in "$SRC"/examples/scenes/*.toml; do
+  "$W" run "$f" --duration 0.02 --out "$T/example" --quiet 2>"$T/err" && ok "example $(basename "$f") runs" ||
+    bad "example $(basename "$f"): $(cat "$T/err")"
+done
+
 # The other commands.
 "$W" scenes | grep -q "^pull-straight" && ok "scenes" || bad "scenes"
 "$W" check drop-ball --humidity 0.3 | grep -q "humidity = 0.3" && ok "check" || bad "check"

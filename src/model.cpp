@@ -59,6 +59,16 @@ int nearest(double t, int n) {
 
 }  // namespace
 
+Vec3 cloth_start_position(const Params& p, int i, int j) {
+  const auto [nu, nv] = p.cloth.resolution;
+  const double u = i * (p.cloth.size[0] / (nu - 1)) - 0.5 * p.cloth.size[0];
+  const double v = j * (p.cloth.size[1] / (nv - 1)) - 0.5 * p.cloth.size[1];
+  // Vertical cloths hang with v = 0 at the top.
+  const Vec3 flat = p.cloth.orientation == "vertical" ? Vec3(u, 0, -v) : Vec3(u, v, 0);
+  const Eigen::AngleAxisd tilt(p.cloth.tilt * std::numbers::pi / 180, Vec3::UnitX());
+  return to_vec(p.cloth.center) + (p.cloth.tilt != 0 ? Vec3(tilt * flat) : flat);
+}
+
 Model build_model(const Params& p) {
   Model m;
   m.params = p;
@@ -66,9 +76,6 @@ Model build_model(const Params& p) {
   m.nv = static_cast<int>(p.cloth.resolution[1]);
   m.n = m.nu * m.nv;
   const double du = p.cloth.size[0] / (m.nu - 1), dv = p.cloth.size[1] / (m.nv - 1);
-  const Vec3 c = to_vec(p.cloth.center);
-  const bool vertical = p.cloth.orientation == "vertical";
-  const Eigen::AngleAxisd tilt(p.cloth.tilt * std::numbers::pi / 180, Vec3::UnitX());
 
   m.rest_position.resize(m.n);
   m.area.resize(m.n);
@@ -78,11 +85,7 @@ Model build_model(const Params& p) {
   for (int j = 0; j < m.nv; ++j) {
     for (int i = 0; i < m.nu; ++i) {
       const int k = m.index(i, j);
-      const double u = i * du - 0.5 * p.cloth.size[0];
-      const double v = j * dv - 0.5 * p.cloth.size[1];
-      // Vertical cloths hang with v = 0 at the top.
-      const Vec3 flat = vertical ? Vec3(u, 0, -v) : Vec3(u, v, 0);
-      m.rest_position[k] = c + (p.cloth.tilt != 0 ? Vec3(tilt * flat) : flat);
+      m.rest_position[k] = cloth_start_position(p, i, j);
       const bool edge_u = i == 0 || i == m.nu - 1, edge_v = j == 0 || j == m.nv - 1;
       // Voronoi area: l² inside, half on an edge, a quarter at a corner.
       m.area[k] = du * dv * (edge_u ? 0.5 : 1.0) * (edge_v ? 0.5 : 1.0);

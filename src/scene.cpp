@@ -6,11 +6,15 @@
 #include <cctype>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <sstream>
 #define TOML_HEADER_ONLY 1
 #include <toml++/toml.h>
+#include <tuple>
 #include <type_traits>
+
+#include "detail.hpp"
 
 namespace wetcloth {
 
@@ -361,6 +365,26 @@ void check_consistency(const Params& p, const std::string& source) {
   for (int i = 0; i < 2; ++i)
     if (p.wind.region_min[i] > p.wind.region_max[i])
       bad("wind.region_min", "must not exceed wind.region_max");
+  // A cloth that starts inside the table or the ball would be flung out of it
+  // at the first step (a tilted or lowered cloth makes that easy to do).
+  for (const auto& [kind, name, on] :
+       {std::tuple{SurfaceKind::Table, "table", p.table.enabled},
+        std::tuple{SurfaceKind::Ball, "ball", p.ball.enabled}}) {
+    if (!on) continue;
+    double deepest = 0;
+    for (int j = 0; j < p.cloth.resolution[1]; ++j)
+      for (int i = 0; i < p.cloth.resolution[0]; ++i) {
+        const Vec3 x = cloth_start_position(p, i, j);
+        deepest = std::min(deepest, detail::query_surface(p, kind, x).distance);
+      }
+    if (deepest < -1e-9) {
+      char mm[32];
+      std::snprintf(mm, sizeof mm, "%.3g", -deepest * 1000);
+      const char* keys = kind == SurfaceKind::Table ? "table.height" : "ball.center, ball.radius";
+      bad("cloth.center", std::string("the cloth starts ") + mm + " mm inside the " + name +
+                              " (cloth.center, cloth.tilt, " + keys + ")");
+    }
+  }
   // A key that does nothing for a handle's type is a mistake, not a default.
   const auto nonzero = [](const Vec3d& v) { return v[0] != 0 || v[1] != 0 || v[2] != 0; };
   for (const auto& [name, h] : p.handles) {
@@ -481,7 +505,9 @@ Params parse_scene(const std::string& text, const std::string& source,
   apply_table(root, "", p, true);
   // Overrides are applied on top, each keeping its own source for messages.
   for (const auto& o : overrides) apply_table(parse_override(o), "", p, false);
-  check_consistency(p, source);
+  // A check that combines keys names the scene, and its overrides when any
+  // may have set one of them.
+  check_consistency(p, overrides.empty() ? source : source + " with its --set overrides");
   return p;
 }
 

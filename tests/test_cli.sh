@@ -46,7 +46,14 @@ expect_bad section    "section.toml:1: cloth: expected a table, [cloth]" "$T/sec
 # Options CLI11 rejects are bad input too (its own codes are 100 and up).
 expect_bad notanumber "--humidity: not a number: abc" hang --humidity abc
 expect_bad option     "--frobnicate"                    hang --frobnicate
-# An --out that is a file: bad input, named, the file untouched.
+expect_bad inside     "with its --set overrides: cloth.center: the cloth starts 1.3 mm inside the table" \
+  drop-table --set cloth.tilt=20
+expect_bad handletype "with its --set overrides: handle.pull.force: applies to force handles only" \
+  pull-corner --set 'handle.pull.type="move"'
+# An --out that cannot be made, or that is a file: bad input, named, the file untouched.
+"$W" run hang --out /proc/wetcloth-out --quiet 2>"$T/err"; code=$?
+[ $code -eq 2 ] && grep -qF -- "--out /proc/wetcloth-out: cannot make it" "$T/err" &&
+  ok "--out that cannot be made: exit 2, named" || bad "--out /proc: exit $code, $(cat "$T/err")"
 echo keep > "$T/afile"
 "$W" run hang --out "$T/afile" --quiet 2>"$T/err"; code=$?
 [ $code -eq 2 ] && grep -qF -- "--out $T/afile: exists and is not a folder" "$T/err" &&

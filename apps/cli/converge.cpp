@@ -97,8 +97,7 @@ std::function<int()> add_converge_command(CLI::App& app) {
     const fs::path out = o->out.empty()
                              ? fs::path("out") / (cases.front().params.name + "-converge")
                              : fs::path(o->out);
-    check_output_folder(out);
-    fs::create_directories(out);
+    make_output_folder(out);
 
     std::vector<std::pair<Params, fs::path>> runs;
     for (const auto& c : cases) runs.emplace_back(c.params, out / c.name);

@@ -96,7 +96,7 @@ int main(int argc, char** argv) {
     if (*run) {
       const Params p = run_opts.load();
       const fs::path out = out_dir.empty() ? fs::path("out") / p.name : fs::path(out_dir);
-      cli::check_output_folder(out);
+      cli::make_output_folder(out);
       const bool progress = !quiet && isatty(STDERR_FILENO);
       const auto r = cli::run_scene(p, out, progress);
       if (r.code != cli::kOk) {

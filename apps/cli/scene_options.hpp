@@ -70,6 +70,15 @@ inline void check_output_folder(const std::filesystem::path& out, const std::str
   }
 }
 
+// check_output_folder, then makes the folder: one that cannot be made (no
+// permission, a read-only place) is bad input too.
+inline void make_output_folder(const std::filesystem::path& out, const std::string& option = "--out") {
+  check_output_folder(out, option);
+  std::error_code ec;
+  std::filesystem::create_directories(out, ec);
+  if (ec) throw SceneError(option + " " + out.string() + ": cannot make it (" + ec.message() + ")");
+}
+
 struct SceneOptions {
   std::string scene;
   std::vector<std::string> sets;

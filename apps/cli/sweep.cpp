@@ -139,8 +139,7 @@ std::function<int()> add_sweep_command(CLI::App& app) {
         cases.push_back(std::move(c));
       }
     const fs::path out = o->out.empty() ? fs::path("out") / (base.name + "-sweep") : fs::path(o->out);
-    check_output_folder(out);
-    fs::create_directories(out);
+    make_output_folder(out);
 
     std::vector<std::pair<Params, fs::path>> runs;
     for (const auto& c : cases) runs.emplace_back(c.params, out / c.name);

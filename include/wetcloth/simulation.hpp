@@ -129,6 +129,8 @@ struct Model {
 };
 
 Model build_model(const Params& p);
+// Where grid particle (i, j) starts: cloth.center, orientation and tilt.
+Vec3 cloth_start_position(const Params& p, int i, int j);
 // Humidity drives mass (section 1), permeability (eq. 5) and adhesion (eq. 13).
 void set_humidity(Model& m, double omega);
 

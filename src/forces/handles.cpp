@@ -30,7 +30,9 @@ void add_handle_forces(const Model& m, const State& s, Workspace& w) {
 // the particles it drives (they do not accelerate).
 void apply_handle_constraints(const Model& m, State& s, Workspace& w) {
   // The force recorded is the measured handle's, the one whose height the
-  // metrics give: the first that is not a pin (zero before it starts).
+  // metrics give: the first that is not a pin (a force handle's is zero
+  // before it starts; a move handle holds its patch, and takes a force, from
+  // t = 0).
   w.handle_force = Vec3::Zero();
   const Handle* measured = nullptr;
   for (const Handle& h : m.handles)

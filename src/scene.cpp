@@ -354,9 +354,17 @@ toml::table parse_override(const std::string& text) {
   }
 }
 
-void check_consistency(const Params& p, const std::string& source) {
+// Checks that combine keys. An error names the scene, and the overrides of
+// the same section (cloth, handle, ...) as the key it reports: one of them
+// may have set it.
+void check_consistency(const Params& p, const std::string& source,
+                       const std::vector<std::string>& overrides) {
   auto bad = [&](const std::string& key, const std::string& msg) {
-    throw SceneError(source + ": " + key + ": " + msg);
+    const std::string section = key.substr(0, key.find('.'));
+    std::string sets;
+    for (const auto& o : overrides)
+      if (o.substr(0, o.find('.')) == section) sets += (sets.empty() ? " with --set '" : "', '") + o;
+    throw SceneError(source + (sets.empty() ? "" : sets + "'") + ": " + key + ": " + msg);
   };
   if (p.contact.surface == "ball" && !p.ball.enabled)
     bad("contact.surface", "is 'ball' but ball.enabled is false");
@@ -505,9 +513,7 @@ Params parse_scene(const std::string& text, const std::string& source,
   apply_table(root, "", p, true);
   // Overrides are applied on top, each keeping its own source for messages.
   for (const auto& o : overrides) apply_table(parse_override(o), "", p, false);
-  // A check that combines keys names the scene, and its overrides when any
-  // may have set one of them.
-  check_consistency(p, overrides.empty() ? source : source + " with its --set overrides");
+  check_consistency(p, source, overrides);
   return p;
 }
 

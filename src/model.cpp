@@ -196,6 +196,8 @@ Model build_model(const Params& p) {
       if (h.type == HandleType::Move || (h.type == HandleType::Pin && h.start == 0))
         m.driven[k] = 1;
     }
+    if (m.measured_handle < 0 && h.type != HandleType::Pin)
+      m.measured_handle = static_cast<int>(m.handles.size());
     m.handles.push_back(std::move(h));
   }
   set_humidity(m, p.cloth.humidity);

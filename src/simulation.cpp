@@ -448,14 +448,13 @@ Metrics Simulation::metrics() const {
   Metrics r;
   r.time_s = s.time;
   const double base = p.table.enabled ? p.table.height : 0.0;
-  for (const Handle& h : m.handles) {
-    if (h.type == HandleType::Pin) continue;
+  if (m.measured_handle >= 0) {
+    const Handle& h = m.handles[m.measured_handle];
     double z = 0;
     for (int k : h.particles) z += s.x[k].z();
     r.handle_height_m = z / h.particles.size() - base;
     const Vec3 dir = h.type == HandleType::Move ? h.velocity : h.force;
     r.handle_force_n = dir.norm() > 0 ? ws_.handle_force.dot(dir.normalized()) : 0.0;
-    break;
   }
   double zmax = -kInf, cx = 0, cy = 0, mass = 0;
   for (int i = 0; i < m.n; ++i) {

@@ -45,6 +45,7 @@ import csv
 import json
 import os
 import sys
+import tomllib
 
 P_ATM = 101325.0
 SWEEP_TEXT = ("case", "air_model", "status")
@@ -95,44 +96,31 @@ def read_csv(path, numbers, texts=()):
 
 
 def read_scene(case_dir):
-    """The case's scene.toml as {section: {key: value}} (quoted strings as
-    text, numbers as floats, anything else as its text), None when there is
-    no file. Resolved scene files are flat: one key = value a line."""
+    """The case's scene.toml as nested dicts (tomllib), None when there is no
+    file."""
     path = os.path.join(case_dir, "scene.toml")
     if not os.path.exists(path):
         return None
-    scene, section = {"": {}}, ""
     try:
-        with open(path, encoding="utf-8") as f:
-            lines = list(f)
-    except (OSError, UnicodeDecodeError) as e:
+        with open(path, "rb") as f:
+            return tomllib.load(f)
+    except (OSError, tomllib.TOMLDecodeError) as e:
         raise InputError(f"{path}: unreadable ({e})")
-    for n, line in enumerate(lines, start=1):
-        line = line.strip()
-        if line.startswith("["):
-            section = line.split("#", 1)[0].strip("[] ")
-            scene.setdefault(section, {})
-        elif "=" in line and not line.startswith("#"):
-            key, value = (part.strip() for part in line.split("=", 1))
-            if value.startswith('"'):
-                value = value[1:].split('"', 1)[0]
-            else:
-                value = value.split("#", 1)[0].strip()
-                try:
-                    value = float(value)
-                except ValueError:
-                    pass
-            scene[section][key] = (n, value)
-    return scene
 
 
 def scene_value(scene, path, section, key, default, kind):
-    """scene[section][key], checked to be a `kind` (str or float)."""
-    n, value = scene.get(section, {}).get(key, (0, default))
-    if not isinstance(value, kind):
-        what = "a number" if kind is float else "a quoted string"
-        raise InputError(f"{path}: line {n}: [{section}] {key} is not {what}")
-    return value
+    """scene[section][key] (section dotted, as in "handle.pull"), checked to be
+    a `kind`: str, bool or float (an integer counts as a number)."""
+    table = scene
+    for part in section.split("."):
+        table = table.get(part, {})
+    value = table.get(key, default)
+    ok = isinstance(value, (int, float)) and not isinstance(value, bool) if kind is float \
+        else isinstance(value, kind)
+    if not ok:
+        what = {float: "a number", bool: "true or false", str: "a quoted string"}[kind]
+        raise InputError(f"{path}: [{section}] {key} is not {what}")
+    return float(value) if kind is float else value
 
 
 def describe(case_dir, metrics):
@@ -148,10 +136,10 @@ def describe(case_dir, metrics):
     path = os.path.join(case_dir, "scene.toml")
     get = lambda section, key, default, kind=str: scene_value(scene, path, section, key, default, kind)
     surface = get("contact", "surface", "table")
-    surface = ((surface == "table" and get("table", "enabled", "true") == "true") or
-               (surface == "ball" and get("ball", "enabled", "false") == "true"))
+    surface = ((surface == "table" and get("table", "enabled", True, bool)) or
+               (surface == "ball" and get("ball", "enabled", False, bool)))
     handle = None
-    for section in sorted(s for s in scene if s.startswith("handle.")):  # the metrics' order
+    for section in sorted(f"handle.{h}" for h in scene.get("handle", {})):  # the metrics' order
         kind = get(section, "type", "force")
         if kind not in ("force", "move", "pin"):
             raise InputError(f"{path}: [{section}] type = '{kind}' is not force, move or pin")

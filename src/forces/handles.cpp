@@ -30,16 +30,10 @@ void add_handle_forces(const Model& m, const State& s, Workspace& w) {
 // the particles it drives (they do not accelerate).
 void apply_handle_constraints(const Model& m, State& s, Workspace& w) {
   // The force recorded is the measured handle's, the one whose height the
-  // metrics give: the first that is not a pin (a force handle's is zero
-  // before it starts; a move handle holds its patch, and takes a force, from
-  // t = 0).
+  // metrics give (a force handle's is zero before it starts; a move handle
+  // holds its patch, and takes a force, from t = 0).
   w.handle_force = Vec3::Zero();
-  const Handle* measured = nullptr;
-  for (const Handle& h : m.handles)
-    if (h.type != HandleType::Pin) {
-      measured = &h;
-      break;
-    }
+  const Handle* measured = m.measured_handle >= 0 ? &m.handles[m.measured_handle] : nullptr;
   for (const Handle& h : m.handles) {
     if (h.type == HandleType::Force) {
       if ((h.max_height > 0 || h.max_travel > 0) && !s.held[h.particles[0]]) {

@@ -253,7 +253,12 @@ void add_air_pressure(const Model& m, const State& s, Workspace& w) {
 // make explicit steps blow up.
 void correct_air_implicitly(const Model& m, State& s, Workspace& w, double dt) {
   const std::size_t pockets = w.pocket_air.size();
-  if (pockets == 0) return;
+  // Air open to the room (or `off`) has no stiffness and nothing to seep:
+  // every change below would be zero.
+  const auto inert = [](const PocketAir& a) {
+    return a.gas == 0 && a.spring == 0 && a.seep_rate == 0;
+  };
+  if (std::all_of(w.pocket_air.begin(), w.pocket_air.end(), inert)) return;
   const double p_atm = m.params.air.p_atm;
   // Per pocket: Σ b·v (with the seeped deficit given back), Σ b·M⁻¹a, and the
   // share of the deficit that seeps away over the step.

@@ -196,7 +196,8 @@ double step_strain(const Model& m, const State& s, double h);
 constexpr int kMostHalvings = 10;
 // handles.cpp: pins, driven particles, height caps; records the rig's force.
 void apply_handle_constraints(const Model& m, State& s, Workspace& w);
-// Keeps the particles of a force handle that reached its height cap where it stopped.
+// Keeps held particles where their handle has them: a force handle's where it
+// stopped, a late pin's or move handle's on its path.
 void hold_stopped_handles(const Model& m, State& s);
 // friction.cpp: eq. 14 on particles in contact.
 void apply_friction(const Model& m, State& s, const Workspace& w,

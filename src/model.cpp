@@ -191,10 +191,9 @@ Model build_model(const Params& p) {
     h.start = hp.start;
     for (int k : h.particles) {
       h.anchor.push_back(m.rest_position[k]);
-      // A pin that starts late is free until then (apply_handle_constraints
-      // then holds it where it is).
-      if (h.type == HandleType::Move || (h.type == HandleType::Pin && h.start == 0))
-        m.driven[k] = 1;
+      // A pin or move handle that starts late leaves its particles free until
+      // then (apply_handle_constraints then takes them where they are).
+      if (h.type != HandleType::Force && h.start == 0) m.driven[k] = 1;
     }
     if (m.measured_handle < 0 && h.type != HandleType::Pin)
       m.measured_handle = static_cast<int>(m.handles.size());

@@ -190,8 +190,8 @@ std::vector<ParamDef> make_defs() {
                    "force, move: stop and hold once the patch has moved this far (0: never)",
                    H(max_travel)),
       handle_field("start", "s", 0, 1e6,
-                   "time the handle starts acting (a move handle holds its patch still until "
-                   "then; a pin holds its particles where they are then)",
+                   "time the handle starts acting (a pin or move handle leaves its particles free "
+                   "until then, then holds or drives them from where they are)",
                    H(start)),
   };
 }

@@ -148,6 +148,31 @@ TEST(Scenes, LatePinAndMoveThatStops) {
   EXPECT_EQ(sim.state().v[k].norm(), 0.0);
 }
 
+// A move handle that starts late leaves its patch free until then, then
+// drives it along its path from where it is.
+TEST(Scenes, LateMoveHandleIsFreeUntilItStarts) {
+  Params p = test::coarse("hang");
+  for (auto& [name, h] : p.handles) {
+    h.type = "move";
+    h.velocity = {0.05, 0, 0};
+    h.start = 0.1;
+  }
+  Simulation sim(p);
+  const int corner = sim.model().handles.front().particles.front();
+  const double z0 = sim.state().x[corner].z();
+  ASSERT_TRUE(sim.advance_to(0.09)) << sim.blow_up_reason();
+  EXPECT_LT(sim.state().x[corner].z(), z0 - 0.02);  // fell with the cloth
+  EXPECT_EQ(sim.workspace().handle_force, Vec3::Zero());
+  ASSERT_TRUE(sim.advance_to(0.2)) << sim.blow_up_reason();
+  const Vec3 a = sim.state().x[corner];
+  ASSERT_TRUE(sim.advance_to(0.4)) << sim.blow_up_reason();
+  const Vec3 b = sim.state().x[corner];
+  EXPECT_EQ(b.z(), a.z());
+  EXPECT_NEAR(b.x() - a.x(), 0.05 * 0.2, 1e-12);
+  EXPECT_EQ(sim.state().v[corner], Vec3(0.05, 0, 0));
+  EXPECT_GT(sim.workspace().handle_force.z(), 0.0);  // it holds the cloth up
+}
+
 // A handle with a span takes a whole edge: a curtain pinned along its top.
 TEST(Scenes, PinAlongAnEdge) {
   Params p = test::coarse("hang");

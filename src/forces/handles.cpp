@@ -1,4 +1,5 @@
 // Handles (MODEL.md section 9): how scenes pull, drive and pin the cloth.
+#include <algorithm>
 #include <cmath>
 
 #include "../detail.hpp"
@@ -7,6 +8,27 @@ namespace wetcloth::detail {
 
 namespace {
 bool active(const Handle& h, const State& s) { return s.time >= h.start; }
+// Where a handle's particle e starts its path: its rest position, or for a
+// handle that starts late (held from then on), where it was at `start`.
+const Vec3& origin(const Handle& h, const State& s, std::size_t e) {
+  return h.start > 0 ? s.held_at[h.particles[e]] : h.anchor[e];
+}
+// A pin's or move handle's particle e where its path has it now.
+void put_on_path(const Handle& h, State& s, std::size_t e) {
+  const int k = h.particles[e];
+  if (h.type == HandleType::Pin) {
+    s.x[k] = origin(h, s, e);
+    s.v[k].setZero();
+    return;
+  }
+  // Its time on the path, which ends after max_travel.
+  const double t = std::max(0.0, s.time - h.start), speed = h.velocity.norm();
+  const bool moving = active(h, s) && !(h.max_travel > 0 && speed * t >= h.max_travel);
+  const double on_path = h.max_travel > 0 && speed > 0 ? std::min(t, h.max_travel / speed) : t;
+  s.x[k] = origin(h, s, e) + h.velocity * on_path;
+  s.v[k] = moving ? h.velocity : Vec3::Zero();
+}
+
 double height(const Model& m, const Vec3& x) {
   return m.params.table.enabled ? x.z() - m.params.table.height : x.z();
 }
@@ -30,8 +52,7 @@ void add_handle_forces(const Model& m, const State& s, Workspace& w) {
 // the particles it drives (they do not accelerate).
 void apply_handle_constraints(const Model& m, State& s, Workspace& w) {
   // The force recorded is the measured handle's, the one whose height the
-  // metrics give (a force handle's is zero before it starts; a move handle
-  // holds its patch, and takes a force, from t = 0).
+  // metrics give (zero before it starts).
   w.handle_force = Vec3::Zero();
   const Handle* measured = m.measured_handle >= 0 ? &m.handles[m.measured_handle] : nullptr;
   for (const Handle& h : m.handles) {
@@ -62,33 +83,22 @@ void apply_handle_constraints(const Model& m, State& s, Workspace& w) {
       }
       continue;
     }
-    if (h.type == HandleType::Pin && h.start > 0) {
-      // A pin that starts late holds its particles where they are then.
-      if (active(h, s))
-        for (int k : h.particles)
-          if (!s.held[k]) {
-            s.held[k] = 1;
-            s.held_at[k] = s.x[k];
-          }
-      continue;
+    // Pins and move handles. A late one leaves its particles free until it
+    // starts, then takes them where they are and holds them on its path
+    // (hold_stopped_handles puts them there again at the end of the step).
+    if (h.start > 0) {
+      if (!active(h, s)) continue;
+      for (int k : h.particles)
+        if (!s.held[k]) {
+          s.held[k] = 1;
+          s.held_at[k] = s.x[k];
+        }
     }
-    // A move handle's time on its path, which ends after max_travel.
-    double t = std::max(0.0, s.time - h.start);
-    const double speed = h.velocity.norm();
-    const bool moving = active(h, s) && !(h.max_travel > 0 && speed * t >= h.max_travel);
-    if (h.max_travel > 0 && speed > 0) t = std::min(t, h.max_travel / speed);
     Vec3 rig = Vec3::Zero();
     for (std::size_t e = 0; e < h.particles.size(); ++e) {
       const int k = h.particles[e];
       rig -= w.force[k];
-      if (h.type == HandleType::Pin) {
-        s.x[k] = h.anchor[e];
-        s.v[k].setZero();
-      } else {
-        // Driven particles: where they were at t = 0 plus the path so far.
-        s.x[k] = h.anchor[e] + h.velocity * t;
-        s.v[k] = moving ? h.velocity : Vec3::Zero();
-      }
+      put_on_path(h, s, e);
     }
     if (&h == measured) w.handle_force = rig;
   }
@@ -96,11 +106,16 @@ void apply_handle_constraints(const Model& m, State& s, Workspace& w) {
 
 void hold_stopped_handles(const Model& m, State& s) {
   for (const Handle& h : m.handles)
-    for (int k : h.particles)
-      if (s.held[k]) {
+    for (std::size_t e = 0; e < h.particles.size(); ++e) {
+      const int k = h.particles[e];
+      if (!s.held[k]) continue;
+      if (h.type == HandleType::Force) {
         s.x[k] = s.held_at[k];
         s.v[k].setZero();
+      } else {
+        put_on_path(h, s, e);
       }
+    }
 }
 
 }  // namespace wetcloth::detail

@@ -54,6 +54,12 @@ expect_bad handletype "pull-corner.toml with --set 'handle.pull.type=\"move\"': 
 "$W" run hang --out /proc/wetcloth-out --quiet 2>"$T/err"; code=$?
 [ $code -eq 2 ] && grep -qF -- "--out /proc/wetcloth-out: cannot make it" "$T/err" &&
   ok "--out that cannot be made: exit 2, named" || bad "--out /proc: exit $code, $(cat "$T/err")"
+# An empty --out (an unset variable) is a mistake, not the default folder.
+for cmd in "run hang" "sweep hang --humidity 0.5" "converge hang" "bench"; do
+  (cd "$T" && "$W" $cmd --out "" 2>"$T/err" >/dev/null); code=$?
+  [ $code -eq 2 ] && grep -qF -- "--out: an empty path" "$T/err" && [ ! -e "$T/out" ] &&
+    ok "$cmd --out '': exit 2, named" || bad "$cmd --out '': exit $code, $(cat "$T/err")"
+done
 echo keep > "$T/afile"
 "$W" run hang --out "$T/afile" --quiet 2>"$T/err"; code=$?
 [ $code -eq 2 ] && grep -qF -- "--out $T/afile: exists and is not a folder" "$T/err" &&

@@ -264,7 +264,7 @@ std::function<int()> add_bench_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--set", o->sets, "override a parameter, KEY=VALUE (repeatable)")
       ->allow_extra_args(false);
-  cmd->add_option("--out", o->out, "the results as JSON")->capture_default_str();
+  cmd->add_option("--out", o->out, "the results as JSON")->capture_default_str()->check(a_path());
   cmd->footer(
       "Each grid runs in a process of its own (its peak memory is its own); each repetition "
       "builds\n"

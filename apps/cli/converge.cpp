@@ -62,7 +62,7 @@ std::function<int()> add_converge_command(CLI::App& app) {
   cmd->add_option("--duration", o->scene.duration, "simulated time per run, s")
       ->check(in_range_of("run.duration"));
   o->scene.add_grid_to(cmd);
-  cmd->add_option("--out", o->out, "output folder (default out/<scene>-converge)");
+  cmd->add_option("--out", o->out, "output folder (default out/<scene>-converge)")->check(a_path());
   cmd->add_option("--jobs", o->jobs, "runs at once (default: all cores)")
       ->check(CLI::PositiveNumber);
   cmd->add_flag("--quiet", o->quiet, "print nothing but errors");

@@ -33,7 +33,7 @@ int main(int argc, char** argv) {
   bool quiet = false;
   auto* run = app.add_subcommand("run", "run a scene and write its results into a folder");
   run_opts.add_to(run);
-  run->add_option("--out", out_dir, "output folder (default out/<scene name>)");
+  run->add_option("--out", out_dir, "output folder (default out/<scene name>)")->check(cli::a_path());
   run->add_flag("--quiet", quiet, "no progress bar");
   run->footer(
       "Writes DIR/metrics.csv (one row per frame, SI units in the header), DIR/frames/*.obj,\n"

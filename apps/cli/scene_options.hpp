@@ -58,6 +58,12 @@ inline CLI::Validator in_range_of(const std::string& key) {
 
 // Throws SceneError (bad input) when `out`, or the nearest part of it that
 // exists, is not a folder: checked before anything runs or is written.
+// An --out that is empty (an unset shell variable) is a mistake, not "the default".
+inline CLI::Validator a_path() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string { return text.empty() ? "an empty path" : ""; }, "");
+}
+
 inline void check_output_folder(const std::filesystem::path& out, const std::string& option = "--out") {
   namespace fs = std::filesystem;
   for (fs::path at = out; !at.empty() && at != at.parent_path(); at = at.parent_path()) {

@@ -104,7 +104,7 @@ std::function<int()> add_sweep_command(CLI::App& app) {
   cmd->add_option("--duration", o->scene.duration, "simulated time per case, s")
       ->check(in_range_of("run.duration"));
   o->scene.add_grid_to(cmd);
-  cmd->add_option("--out", o->out, "output folder (default out/<scene>-sweep)");
+  cmd->add_option("--out", o->out, "output folder (default out/<scene>-sweep)")->check(a_path());
   cmd->add_option("--jobs", o->jobs, "cases run at once (default: all cores)")->check(CLI::PositiveNumber);
   cmd->add_flag("--render", o->render, "also render a contact sheet of the last frames (contact_sheet.png)");
   cmd->add_flag("--no-plots", o->no_plots, "skip the plots");

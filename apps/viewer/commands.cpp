@@ -100,7 +100,7 @@ std::function<std::optional<int>()> add_commands(CLI::App& app) {
 
   c->render = app.add_subcommand("render", "render a scene offscreen to PNG frames (and an MP4)");
   c->render_scene.add_to(c->render);
-  c->render->add_option("--out", c->out, "output folder")->required();
+  c->render->add_option("--out", c->out, "output folder")->required()->check(cli::a_path());
   c->render->add_option("--size", c->render_size, "image size")
       ->check(kSize)
       ->capture_default_str();

@@ -54,6 +54,16 @@ expect_bad handletype "pull-corner.toml with --set 'handle.pull.type=\"move\"': 
 "$W" run hang --out /proc/wetcloth-out --quiet 2>"$T/err"; code=$?
 [ $code -eq 2 ] && grep -qF -- "--out /proc/wetcloth-out: cannot make it" "$T/err" &&
   ok "--out that cannot be made: exit 2, named" || bad "--out /proc: exit $code, $(cat "$T/err")"
+# A misspelt command, an option before it, or none: exit 2, and what there is.
+"$W" runn hang 2>"$T/err"; code=$?
+[ $code -eq 2 ] && grep -qF "unknown command 'runn' (the commands: run, scenes" "$T/err" &&
+  ok "misspelt command: exit 2, named" || bad "runn: exit $code, $(cat "$T/err")"
+"$W" --bogus run hang 2>"$T/err"; code=$?
+[ $code -eq 2 ] && grep -qF "unknown option '--bogus' before the command" "$T/err" &&
+  ok "option before the command: exit 2, named" || bad "--bogus: exit $code, $(cat "$T/err")"
+"$W" 2>"$T/err"; code=$?
+[ $code -eq 2 ] && grep -q "Subcommands:" "$T/err" && ok "no command: exit 2, the help" ||
+  bad "no command: exit $code, $(cat "$T/err")"
 # An empty --out (an unset variable) is a mistake, not the default folder.
 for cmd in "run hang" "sweep hang --humidity 0.5" "converge hang" "bench"; do
   (cd "$T" && "$W" $cmd --out "" 2>"$T/err" >/dev/null); code=$?

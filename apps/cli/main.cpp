@@ -58,6 +58,28 @@ int main(int argc, char** argv) {
   auto viewer_command = viewer::add_commands(app);  // view, render
 #endif
 
+  // The first word names the command: CLI11 would answer a misspelt one
+  // (`runn`, or an option before the command) with "A subcommand is required".
+  if (argc > 1) {
+    const std::string first = argv[1];
+    std::string names;
+    bool known = first == "-h" || first == "--help" || first == "--version";
+    for (const CLI::App* sub : app.get_subcommands([](const CLI::App*) { return true; })) {
+      known = known || sub->check_name(first);
+      names += (names.empty() ? "" : ", ") + sub->get_name();
+    }
+    if (!known) {
+      std::fprintf(stderr, "wetcloth: unknown %s '%s'%s (the commands: %s; wetcloth --help)\n",
+                   first[0] == '-' ? "option" : "command", first.c_str(),
+                   first[0] == '-' ? " before the command" : "", names.c_str());
+      return cli::kBadInput;
+    }
+  } else {  // no command: what there is to do
+    app.name(argv[0]);
+    std::cerr << app.help();
+    return cli::kBadInput;
+  }
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {

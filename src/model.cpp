@@ -199,6 +199,8 @@ Model build_model(const Params& p) {
       m.measured_handle = static_cast<int>(m.handles.size());
     m.handles.push_back(std::move(h));
   }
+  // With pins alone the metrics follow the first: the force it holds the cloth up with.
+  if (m.measured_handle < 0 && !m.handles.empty()) m.measured_handle = 0;
   set_humidity(m, p.cloth.humidity);
   return m;
 }

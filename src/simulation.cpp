@@ -453,7 +453,9 @@ Metrics Simulation::metrics() const {
     double z = 0;
     for (int k : h.particles) z += s.x[k].z();
     r.handle_height_m = z / h.particles.size() - base;
-    const Vec3 dir = h.type == HandleType::Move ? h.velocity : h.force;
+    const Vec3 dir = h.type == HandleType::Move  ? h.velocity
+                     : h.type == HandleType::Pin ? Vec3::UnitZ()
+                                                 : h.force;
     r.handle_force_n = dir.norm() > 0 ? ws_.handle_force.dot(dir.normalized()) : 0.0;
   }
   double zmax = -kInf, cx = 0, cy = 0, mass = 0;

@@ -173,6 +173,17 @@ TEST(Scenes, LateMoveHandleIsFreeUntilItStarts) {
   EXPECT_GT(sim.workspace().handle_force.z(), 0.0);  // it holds the cloth up
 }
 
+// With pins alone the metrics follow the first pin: hanging still from two
+// corners, it holds up half the cloth's weight.
+TEST(Scenes, PinsAloneMeasureTheFirstPin) {
+  Simulation sim(test::coarse("hang"));
+  ASSERT_TRUE(sim.advance_to(3.0)) << sim.blow_up_reason();
+  double weight = 0;
+  for (double mass : sim.model().mass) weight -= mass * sim.model().params.forces.gravity[2];
+  EXPECT_NEAR(sim.metrics().handle_force_n, weight / 2, 0.01 * weight / 2);
+  EXPECT_EQ(sim.metrics().handle_height_m, sim.state().x[sim.model().handles[0].particles[0]].z());
+}
+
 // A handle with a span takes a whole edge: a curtain pinned along its top.
 TEST(Scenes, PinAlongAnEdge) {
   Params p = test::coarse("hang");

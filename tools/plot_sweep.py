@@ -26,7 +26,7 @@ whose quantities mean something for the scene:
                  time, the air models compared at each humidity
 
 The handle is the one the metrics follow: the first, by name, that is not a
-pin. Without scene.toml the metrics decide: a handle if handle_height_m is
+pin (pins alone make no handle plots). Without scene.toml the metrics decide: a handle if handle_height_m is
 ever nonzero (taken as force-driven), a contact surface if contact_area_m2 or
 base_diagonal_m is, air if the pressure deficit is, and p_atm = 101325 Pa.
 It prints the plots it wrote and those it did not make, with why, and removes

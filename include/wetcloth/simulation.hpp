@@ -124,7 +124,8 @@ struct Model {
   // 0: a column, so that compute_normals runs over whole blocks of rows.
   std::vector<double> chequer;
   std::vector<Handle> handles;
-  int measured_handle = -1;  // the one the metrics follow: the first that is not a pin (-1: none)
+  int measured_handle = -1;  // the one the metrics follow: the first that is not a pin, else the
+                            // first pin (-1: no handle)
   SurfaceKind contact_surface = SurfaceKind::None;
   int index(int i, int j) const { return j * nu + i; }
 };

@@ -138,7 +138,12 @@ void update_vented(const Model& m, State& s, Workspace& w, double dt) {
   for (int k = 0; k < m.n; ++k) {
     if (w.pocket[k] >= 0) continue;
     w.pocket[k] = kNone;
-    s.air_share[k] = 0;  // the liquid film holds no air
+    // Open to the room: its gap's air at P_atm, which it brings to the pocket
+    // it joins (one peeling from contact, one entering the band), so V_atm
+    // stays continuous. Bringing none, each particle a closed tent peeled
+    // was a vacuum of its 1 mm gap: the straight pull's tent sat at the
+    // breakthrough cap, 5 times the suction of `exchange`.
+    s.air_share[k] = m.area[k] * air_gap(m, w.distance[k]);
     s.pocket_pressure[k] = p.air.p_atm;
   }
   for (int k = 0; k < m.n; ++k) s.air_gap[k] = m.area[k] * air_gap(m, w.distance[k]);
@@ -204,9 +209,7 @@ void update_air(const Model& m, State& s, Workspace& w, double dt) {
 }
 
 void start_air(const Model& m, State& s, Workspace& w) {
-  for (int i = 0; i < m.n; ++i)
-    s.air_share[i] =
-        holds_air(m, w.distance[i]) && !s.contact[i] ? m.area[i] * air_gap(m, w.distance[i]) : 0;
+  for (int i = 0; i < m.n; ++i) s.air_share[i] = m.area[i] * air_gap(m, w.distance[i]);
   update_air(m, s, w, 0.0);
   s.air_atm_volume = s.air_volume;
   s.inner_pressure = m.params.air.p_atm;

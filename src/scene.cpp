@@ -199,11 +199,14 @@ std::vector<ParamDef> make_defs() {
 #undef P
 #undef H
 
+// The source name of Params made in code (check_params).
+const std::string kInCode = "Params";
+
 // Where a node came from: "file:line" for scene files, the --set text for overrides.
 std::string where(const toml::node& n) {
   const auto& src = n.source();
   const std::string path = src.path ? *src.path : std::string("<scene>");
-  if (path.rfind("--set", 0) == 0) return path;
+  if (path.rfind("--set", 0) == 0 || path == kInCode) return path;  // no line to name
   return path + ":" + std::to_string(src.begin.line);
 }
 
@@ -584,5 +587,7 @@ Params at_resolution(Params p, long long grid) {
   p.cloth.resolution = {grid, height};
   return p;
 }
+
+void check_params(const Params& p) { parse_scene(to_toml(p), kInCode); }
 
 }  // namespace wetcloth

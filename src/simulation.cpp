@@ -8,6 +8,7 @@
 #include <sstream>
 
 #include "detail.hpp"
+#include "wetcloth/scene.hpp"
 
 namespace wetcloth {
 
@@ -100,7 +101,7 @@ void compute_normals(const Model& m, const Vec3Array& x, Vec3Array& normal) {
   detail::compute_normals(m, x.column(0), normal, quad_normals);
 }
 
-Simulation::Simulation(const Params& p) : model_(build_model(p)) {
+Simulation::Simulation(const Params& p) : model_((check_params(p), build_model(p))) {
   start_thread_choice();
   reset();
 }
@@ -148,6 +149,7 @@ void Simulation::reset() {
 void Simulation::set_humidity(double omega) { wetcloth::set_humidity(model_, omega); }
 
 void Simulation::set_params(const Params& p) {
+  check_params(p);
   const bool same_grid = p.cloth.resolution == model_.params.cloth.resolution;
   model_ = build_model(p);
   start_thread_choice();

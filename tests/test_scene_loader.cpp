@@ -1,6 +1,7 @@
 #include <gtest/gtest.h>
 
 #include "wetcloth/scene.hpp"
+#include "wetcloth/simulation.hpp"
 
 using namespace wetcloth;
 
@@ -151,4 +152,33 @@ TEST(SceneLoader, AtResolutionKeepsTheClothInMetres) {
   EXPECT_EQ(at_resolution(implicit, 41).integrator.dt, implicit.integrator.dt);
   EXPECT_THROW(at_resolution(p, 1), SceneError);  // 1 x 1
   EXPECT_THROW(at_resolution(p, 2002), SceneError);
+}
+
+// Params made in code get the checks a scene file gets: a Simulation is not
+// built on values out of range (it used to run, and do nothing or blow up).
+TEST(SceneLoader, ParamsMadeInCodeAreChecked) {
+  const auto error_building = [](const Params& p) -> std::string {
+    try {
+      Simulation sim(p);
+    } catch (const SceneError& e) {
+      return e.what();
+    }
+    return "";
+  };
+  Params p = load_scene("drop-table");
+  EXPECT_EQ(error_building(p), "");
+  p.cloth.humidity = 3.0;
+  EXPECT_EQ(error_building(p), "Params: cloth.humidity: value 3.0 is out of range [0, 1]");
+  p = load_scene("drop-table");
+  p.integrator.dt = -1e-3;
+  EXPECT_NE(error_building(p).find("Params: integrator.dt: value -0.001 is out of range"),
+            std::string::npos);
+  p = load_scene("drop-table");
+  p.contact.surface = "ball";
+  EXPECT_NE(error_building(p).find("contact.surface: is 'ball' but ball.enabled is false"),
+            std::string::npos);
+  Simulation sim(load_scene("drop-table"));
+  p = sim.model().params;
+  p.air.model = "leaky";
+  EXPECT_THROW(sim.set_params(p), SceneError);
 }

@@ -203,7 +203,12 @@ class Viewer {
   }
 
   void apply_params() {
-    sim_->set_params(params_);
+    try {
+      sim_->set_params(params_);
+    } catch (const SceneError& e) {  // a value typed past a slider's range
+      status_ = e.what();
+      params_ = sim_->model().params;
+    }
     stage_ = stage_from(params_);
   }
 

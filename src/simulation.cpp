@@ -383,6 +383,16 @@ std::string Simulation::blow_up_reason() const {
   // single particle of a few mg takes 1 N as 1e5 m/s².
   const bool explicit_step = p.integrator.type != "implicit-euler";
   const char* lead = " Likely cause: ";
+  if (p.integrator.type == "explicit-euler" && p.integrator.dt <= limit) {
+    // Forward Euler grows every oscillation a little each step, whatever the
+    // step: the limit below is the symplectic step's.
+    o << lead << "integrator.type = \"explicit-euler\" (the blog's forward Euler) amplifies "
+      << "every spring's oscillation a little each step, and integrator.dt = " << p.integrator.dt
+      << " s lets it grow (the symplectic step's limit, " << limit
+      << " s, does not hold for it). Use integrator.type = \"symplectic-euler\", or a much "
+         "smaller integrator.dt.";
+    lead = " Or: ";
+  }
   for (const Handle& h : model_.handles) {
     if (h.type != HandleType::Force || (explicit_step && p.integrator.dt > limit)) continue;
     double a = 0;

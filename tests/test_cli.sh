@@ -122,6 +122,11 @@ grep -q "integrator.dt" "$T/err" && ok "blow-up message names integrator.dt" || 
   --set 'cloth.resolution=[15,15]' --out "$T/boom2" --quiet 2>"$T/err"; code=$?
 [ $code -eq 3 ] && grep -q "Likely cause: handle.pull.force = 3 N on its 1 particle" "$T/err" &&
   ok "blow-up by a handle's force names it" || bad "handle blow-up: exit $code, $(cat "$T/err")"
+# Forward Euler within the symplectic step's limit: the message names the integrator first.
+"$W" run pull-straight --set springs.structural_k=2000 --set 'integrator.type="explicit-euler"' \
+  --set integrator.dt=1e-5 --duration 0.02 --threads 1 --out "$T/boom3" --quiet 2>"$T/err"; code=$?
+[ $code -eq 3 ] && grep -q 'Likely cause: integrator.type = "explicit-euler"' "$T/err" &&
+  ok "forward Euler's blow-up names the integrator" || bad "explicit-euler blow-up: exit $code, $(cat "$T/err")"
 
 # The README's example scenes stay valid and run.
 for f in "$SRC"/examples/scenes/*.toml; do

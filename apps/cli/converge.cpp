@@ -163,10 +163,17 @@ std::function<int()> add_converge_command(CLI::App& app) {
       fits.push_back(ratio > 0
                          ? richardson(values[k - 3][q], values[k - 2][q], values[k - 1][q], ratio)
                          : Extrapolation{});
+    // A limit is trusted at an order of a half or more: below, the differences
+    // shrink too slowly with the step for the extrapolation to mean much.
+    constexpr double kLeastOrder = 0.5;
+    const auto trusted = [&](std::size_t q) {
+      return !same[q] && std::isfinite(fits[q].limit) && fits[q].limit != 0 &&
+             fits[q].order >= kLeastOrder;
+    };
 
     std::printf("\nfinal values at t = %s s",
                 format_time(cases.front().result.final.time_s).c_str());
-    if (ratio > 0) std::printf("; in brackets, the error against the limit as dt -> 0");
+    if (ratio > 0) std::printf("; in brackets, the error against the limit as dt -> 0, where trusted");
     std::printf("\n%-14s", "dt s");
     for (const char* name : kShown) std::printf("  %-24s", name);
     std::printf("\n");
@@ -175,7 +182,7 @@ std::function<int()> add_converge_command(CLI::App& app) {
       for (std::size_t q = 0; q < at.size(); ++q) {
         const double v = values[i][at[q]], limit = fits[q].limit;
         char cell[64];
-        if (!same[q] && std::isfinite(limit) && limit != 0)
+        if (trusted(q))
           std::snprintf(cell, sizeof cell, "%.*g (%+.1f %%)", kDigits, v, 100 * (v / limit - 1));
         else
           std::snprintf(cell, sizeof cell, "%.*g", kDigits, v == 0 ? 0.0 : v);
@@ -196,11 +203,22 @@ std::function<int()> add_converge_command(CLI::App& app) {
         }
       }
       std::printf("\n%-14s", "limit dt->0");
+      bool any_untrusted = false;
       for (std::size_t q = 0; q < at.size(); ++q) {
         const double v = values[k - 1][at[q]];
-        std::printf("  %-24.*g", kDigits, same[q] ? (v == 0 ? 0.0 : v) : fits[q].limit);
+        char cell[64];
+        std::snprintf(cell, sizeof cell, "%.*g%s", kDigits,
+                      same[q] ? (v == 0 ? 0.0 : v) : fits[q].limit,
+                      same[q] || trusted(q) || std::isnan(fits[q].limit) ? "" : " ?");
+        any_untrusted = any_untrusted || std::string(cell).ends_with(" ?");
+        std::printf("  %-24s", cell);
       }
       std::printf("\n");
+      if (any_untrusted)
+        std::printf(
+            "(?: an order under %.1f: the differences shrink too slowly with the step to trust "
+            "the limit; the spread of the values is the better error bar)\n",
+            kLeastOrder);
       if (any_same)
         std::printf(
             "(same at every dt: the value is the same, to the digits shown, at every step: "

@@ -129,6 +129,26 @@ if "$PY" -c 'import sys; sys.path.insert(0, sys.argv[1]); import plot_sweep
 t = {c["case"]: c["time_to_5cm_s"] for c in plot_sweep.load(sys.argv[2])[0]}
 sys.exit(not (t["exchange_omega_1"] == 0.75 and t["sealed_omega_1"] is None))' "$SRC/tools" "$PEEL" 2>"$T/err"
 then ok "time_to_5cm_s -1 read as never (None)"; else bad "time_to_5cm_s -1 not read as never: $(cat "$T/err")"; fi
+# ... a rig's force-displacement curve: handle_force against how far the
+# handle has moved (its height on a vertical path), fig8 still against time.
+if grep -q '<!-- handle displacement since the first frame, from its height (mm) -->' "$PEEL/handle_force.svg" \
+   && ! grep -q '<!-- time (s) -->' "$PEEL/handle_force.svg" && grep -q '<!-- time (s) -->' "$PEEL/fig8.svg"
+then ok "driven handle: force against displacement, fig8 against time"
+else bad "driven handle: handle_force not against displacement: $(grep -o '<!-- [a-z][^>]* -->' "$PEEL/handle_force.svg" | tr "\n" " ")"; fi
+# Off the vertical the height does not tell: the distance along the path,
+# |velocity| times the time on it (from start, until max_travel).
+OBLIQUE="$T/plots/oblique"; new_sweep "$OBLIQUE"
+add_case "$OBLIQUE" omega_0.5 0.5 exchange ok 800 "" move
+sed -i 's/^velocity = .*/velocity = [0.03, 0.0, 0.04]\nstart = 0.25\nmax_travel = 0.025/' "$OBLIQUE/omega_0.5/scene.toml"
+if "$PY" "$PLOT" "$OBLIQUE" >"$T/out" 2>&1 \
+   && grep -q '<!-- handle displacement along its path, |velocity| × time on it (mm) -->' "$OBLIQUE/handle_force.svg"
+then ok "oblique driven handle: displacement along its path"; else bad "oblique driven handle: $(cat "$T/out")"; fi
+if "$PY" -c 'import sys; sys.path.insert(0, sys.argv[1]); import plot_sweep
+d = {c["case"]: [round(x, 9) for x in plot_sweep.displacement(c)] for p in sys.argv[2:] for c in plot_sweep.load(p)[0]}
+sys.exit(not (d["exchange_omega_1"] == [0, 5, 10, 15, 20] and d["omega_0.5"] == [0, 0, 12.5, 25, 25]))' \
+   "$SRC/tools" "$PEEL" "$OBLIQUE" 2>"$T/err"
+then ok "driven handle displacement: height change; speed × time on the path, capped"
+else bad "driven handle displacement: $(cat "$T/err")"; fi
 
 # No handle (drape-ball): no fig7, no handle plot, and an older sweep's copies removed.
 DRAPE="$T/plots/drape"; new_sweep "$DRAPE"

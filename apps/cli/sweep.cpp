@@ -113,8 +113,9 @@ std::function<int()> add_sweep_command(CLI::App& app) {
       "Writes DIR/<case>/ (the outputs of `run`) for every case, DIR/sweep.csv (one row per case:\n"
       "humidity, final metrics, peak pressure deficit, time until the handle first reaches 5 cm)\n"
       "and the plots that mean something for the scene: fig7 (pulled height and base diagonal\n"
-      "against humidity), pressure, contact_area, handle_height (handle_force for a driven\n"
-      "handle) over time, and fig8 with several air models (PNG and SVG).");
+      "against humidity), pressure, contact_area and handle_height over time (for a driven\n"
+      "handle handle_force, against how far it has moved), and fig8 with several air models\n"
+      "(PNG and SVG).");
 
   return [cmd, o]() -> int {
     if (!*cmd) return -1;

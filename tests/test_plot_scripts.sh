@@ -3,6 +3,8 @@
 # tiny sweep folders (the formats of `wetcloth sweep`) in a temporary folder,
 # runs both scripts, checks their outputs, and checks that bad input gives
 # exit code 2 and no figures. Ends with "N passed, M failed".
+# With WETCLOTH set to the program it also runs `wetcloth sweep` on tiny cases
+# and checks what the sweep prints (ctest does not set it: those checks skip).
 # Usage: tests/test_plot_scripts.sh [SOURCE_DIR]   (PYTHON: default /usr/bin/python3)
 set -u
 SRC="${1:-$(cd "$(dirname "$0")/.." && pwd)}"
@@ -206,6 +208,25 @@ if [ -s "$T/val/figures/pull-straight_fig7.png" ] && grep -q '](figures/pull-str
 if grep -q '^| 1.00 | blew up |' "$R"; then ok "sweep table shows the blown-up case"; else bad "sweep table lacks the blown-up case"; fi
 if "$PY" "$REPORT" "$T/nowhere" "$T/val2/report.md" >/dev/null 2>&1 && [ "$(grep -c '| not run |$' "$T/val2/report.md")" -eq 16 ]
 then ok "report on no runs: every claim not run"; else bad "report on no runs"; fi
+
+# The sweep command's printout, with a program to run (WETCLOTH=build/wetcloth).
+W="${WETCLOTH:-}"
+if [ -z "$W" ]; then
+  echo "skip: the sweep's printout (set WETCLOTH to the program to check it)"
+else
+  export WETCLOTH_PLOT_SCRIPT="$PLOT"
+  # The closing line names the contact sheet when --render made one (a
+  # program built without the viewer makes none and exits 1).
+  "$W" sweep hang --humidity 0.5 --duration 1e-3 --jobs 1 --render --out "$T/sw-render" >"$T/out" 2>&1; code=$?
+  if [ $code -eq 0 ] && [ -s "$T/sw-render/contact_sheet.png" ]; then
+    want="results: $T/sw-render (sweep.csv, the plots listed above and contact_sheet.png)"
+  else want="results: $T/sw-render (sweep.csv and the plots listed above)"; fi
+  if grep -qxF "$want" "$T/out"; then ok "sweep: the closing line lists what was made (exit $code)"
+  else bad "sweep: closing line, want '$want': $(cat "$T/out")"; fi
+  "$W" sweep hang --humidity 0.5 --duration 1e-3 --jobs 1 --no-plots --out "$T/sw-noplots" >"$T/out" 2>&1
+  if grep -qxF "results: $T/sw-noplots (sweep.csv)" "$T/out"; then ok "sweep --no-plots: the closing line lists sweep.csv"
+  else bad "sweep --no-plots: closing line: $(cat "$T/out")"; fi
+fi
 
 echo "$passes passed, $fails failed"
 [ "$fails" -eq 0 ]

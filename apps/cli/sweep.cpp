@@ -168,17 +168,20 @@ std::function<int()> add_sweep_command(CLI::App& app) {
         if (code == kOk) code = kError;
       }
     }
+    bool sheet = false;
     if (o->render) {
 #ifdef WETCLOTH_VIEWER
       std::vector<std::pair<std::string, fs::path>> tiles;
       for (const auto& c : cases) {
+        // "omega", spelt out: the sheet's font is ASCII, it drew ω as 'w'.
         char label[64];
-        std::snprintf(label, sizeof label, "%s w = %.*f", several ? c.air_model.c_str() : "", decimals,
-                      c.humidity);
+        std::snprintf(label, sizeof label, "%s%somega = %.*f", several ? c.air_model.c_str() : "",
+                      several ? ", " : "", decimals, c.humidity);
         tiles.emplace_back(label, out / c.name);
       }
       std::string error;
-      if (!viewer::render_contact_sheet(tiles, out / "contact_sheet.png", 480, 360, &error)) {
+      sheet = viewer::render_contact_sheet(tiles, out / "contact_sheet.png", 480, 360, &error);
+      if (!sheet) {
         std::fprintf(stderr, "wetcloth: contact sheet: %s\n", error.c_str());
         if (code == kOk) code = kError;
       }
@@ -187,9 +190,16 @@ std::function<int()> add_sweep_command(CLI::App& app) {
       if (code == kOk) code = kError;
 #endif
     }
-    if (!o->quiet)
-      std::printf("results: %s (sweep.csv%s)\n", out.c_str(),
-                  o->no_plots ? "" : " and the plots listed above");
+    if (!o->quiet) {
+      // Every file the sweep made, the contact sheet too: it is listed nowhere else.
+      std::vector<std::string> made{"sweep.csv"};
+      if (!o->no_plots) made.push_back("the plots listed above");
+      if (sheet) made.push_back("contact_sheet.png");
+      std::string list = made[0];
+      for (std::size_t k = 1; k < made.size(); ++k)
+        list += (k + 1 == made.size() ? " and " : ", ") + made[k];
+      std::printf("results: %s (%s)\n", out.c_str(), list.c_str());
+    }
     return code;
   };
 }

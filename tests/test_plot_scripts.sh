@@ -226,6 +226,12 @@ else
   "$W" sweep hang --humidity 0.5 --duration 1e-3 --jobs 1 --no-plots --out "$T/sw-noplots" >"$T/out" 2>&1
   if grep -qxF "results: $T/sw-noplots (sweep.csv)" "$T/out"; then ok "sweep --no-plots: the closing line lists sweep.csv"
   else bad "sweep --no-plots: closing line: $(cat "$T/out")"; fi
+  # Cases print in the order of --humidity (air model first), however they end.
+  "$W" sweep hang --humidity 0.9,0.1,0.5,0.3 --air-models off,sealed --duration 1e-3 --jobs 4 --no-plots \
+    --out "$T/sw-order" >"$T/out" 2>&1
+  order=$(grep -o '^[a-z]*_omega_[0-9.]*' "$T/out" | tr '\n' ' ')
+  if [ "$order" = "off_omega_0.90 off_omega_0.10 off_omega_0.50 off_omega_0.30 sealed_omega_0.90 sealed_omega_0.10 sealed_omega_0.50 sealed_omega_0.30 " ]
+  then ok "sweep: cases printed in the order asked for"; else bad "sweep: cases printed as $order"; fi
 fi
 
 echo "$passes passed, $fails failed"

@@ -144,12 +144,21 @@ std::function<int()> add_sweep_command(CLI::App& app) {
 
     std::vector<std::pair<Params, fs::path>> runs;
     for (const auto& c : cases) runs.emplace_back(c.params, out / c.name);
+    // Cases end in any order; each is printed once those before it in the
+    // list have been, so that the table reads in the order asked for.
+    std::vector<bool> ended(cases.size(), false);
+    std::size_t printed = 0;
     run_all(runs, o->jobs, [&](std::size_t i, const RunResult& r) {
       cases[i].result = r;
-      if (o->quiet) return;
-      std::printf("%-22s %s  handle %.4f m  contact %.5f m²  peak deficit %.1f Pa  (%.1f s wall)\n",
-                  cases[i].name.c_str(), r.code == kOk ? "ok     " : "BLEW UP", r.final.handle_height_m,
-                  r.final.contact_area_m2, r.peak_deficit_pa, r.wall_seconds);
+      ended[i] = true;
+      for (; printed < cases.size() && ended[printed]; ++printed) {
+        if (o->quiet) continue;
+        const Case& c = cases[printed];
+        std::printf("%-22s %s  handle %.4f m  contact %.5f m²  peak deficit %.1f Pa  (%.1f s wall)\n",
+                    c.name.c_str(), c.result.code == kOk ? "ok     " : "BLEW UP",
+                    c.result.final.handle_height_m, c.result.final.contact_area_m2,
+                    c.result.peak_deficit_pa, c.result.wall_seconds);
+      }
       std::fflush(stdout);
     });
     write_file_atomic(out / "sweep.csv", sweep_csv(cases));

@@ -18,7 +18,10 @@ bad() { fails=$((fails + 1)); echo "FAIL: $1"; }
 METRICS=time_s,handle_height_m,handle_force_n,max_height_m,contact_area_m2,lifted_area_m2,base_diagonal_m,outer_diagonal_m,inner_pressure_pa,trapped_air_m3,air_volume_m3,kinetic_energy_j,max_strain,wrinkle_rad,centroid_x_m,centroid_y_m
 
 # new_sweep DIR: an empty sweep folder with the sweep.csv header.
-new_sweep() { mkdir -p "$1"; echo "case,air_model,humidity,status,peak_deficit_pa,time_to_5cm_s,$METRICS" >"$1/sweep.csv"; }
+new_sweep() {
+  mkdir -p "$1"
+  echo "case,air_model,humidity,status,peak_deficit_pa,frame_peak_deficit_pa,time_to_5cm_s,$METRICS" >"$1/sweep.csv"
+}
 
 # add_case DIR CASE HUMIDITY AIR_MODEL STATUS PEAK_DEFICIT [METRICS_HUMIDITY [HANDLE [SURFACE]]]:
 # the case's folder (5 frames of metrics, made up from METRICS_HUMIDITY, default
@@ -46,7 +49,7 @@ add_case() {
   [ "$surface" = ball ] && printf '\n[ball]\nenabled = true\n' >>"$dir/$name/scene.toml"
   printf '{"scene": "pull-straight", "status": "%s", "wall_seconds": 0.5, "version": "test"}\n' "$status" \
     >"$dir/$name/summary.json"
-  echo "$name,$model,$w,$status,$peak,-1,$(tail -1 "$dir/$name/metrics.csv")" >>"$dir/sweep.csv"
+  echo "$name,$model,$w,$status,$peak,$peak,-1,$(tail -1 "$dir/$name/metrics.csv")" >>"$dir/sweep.csv"
 }
 
 # figures DIR: how many figure files (and leftover temporaries) DIR holds.
@@ -110,12 +113,22 @@ if [ -z "$(find "$ONE" -name '*.tmp')" ]; then ok "no temporaries left"; else ba
 if "$PY" "$PLOT" "$TWO" >"$T/out" 2>&1 && [ -s "$TWO/fig8.png" ] && [ -s "$TWO/fig8.svg" ]; then ok "fig8 with two air models"
 else bad "fig8 with two air models: $(cat "$T/out")"; fi
 
+# plot_sweep.py: the pressure plots show the frames; a case whose peak at any
+# step (sweep.csv's peak_deficit_pa) is higher says so in the legend.
+STEP="$T/plots/step-peak"; mkdir -p "$T/plots"; cp -r "$TWO" "$STEP"; rm -f "$STEP"/*.png "$STEP"/*.svg
+sed -i 's/^\(exchange_omega_1.00,exchange,1,ok\),600,/\1,1000,/' "$STEP/sweep.csv"
+if "$PY" "$PLOT" "$STEP" >"$T/out" 2>&1 && grep -q '<!-- ω=1.00, exchange (peak at any step: 1000 Pa) -->' "$STEP/pressure.svg" \
+   && grep -q '<!-- ω=1.00, sealed -->' "$STEP/pressure.svg" && grep -q '<!-- exchange (peak at any step: 1000 Pa) -->' "$STEP/fig8.svg" \
+   && ! grep -q 'peak at any step' "$TWO/pressure.svg" "$STEP/handle_height.svg"
+then ok "a peak at a step above the frames: in the pressure legends"
+else bad "peak at a step: $(grep -ho '<!-- [a-zω][^>]* -->' "$STEP/pressure.svg" "$STEP/fig8.svg" | tr "\n" " ") $(cat "$T/out")"; fi
+
 # plot_sweep.py: only the plots that mean something for the scene, decided
 # from scene.toml (the metrics without it). A driven handle (peel-rig): its
 # force over time, in fig8 too, and no fig7 (its height is set).
 PEEL="$T/plots/peel"; new_sweep "$PEEL"
 for m in exchange sealed; do for w in 0.5 1; do add_case "$PEEL" "${m}_omega_$w" $w $m ok 800 "" move; done; done
-sed -i 's/^\(exchange_omega_1,exchange,1,ok,800\),-1,/\1,0.75,/' "$PEEL/sweep.csv"
+sed -i 's/^\(exchange_omega_1,exchange,1,ok,800,800\),-1,/\1,0.75,/' "$PEEL/sweep.csv"
 if "$PY" "$PLOT" "$PEEL" >"$T/out" 2>&1; then ok "plot a driven handle"; else bad "plot a driven handle: $(cat "$T/out")"; fi
 if [ -s "$PEEL/handle_force.png" ] && [ -s "$PEEL/handle_force.svg" ] && [ ! -e "$PEEL/handle_height.png" ] \
    && grep -q '<!-- handle force (N) -->' "$PEEL/handle_force.svg"; then ok "driven handle: handle_force, no handle_height"
@@ -226,6 +239,18 @@ else
   "$W" sweep hang --humidity 0.5 --duration 1e-3 --jobs 1 --no-plots --out "$T/sw-noplots" >"$T/out" 2>&1
   if grep -qxF "results: $T/sw-noplots (sweep.csv)" "$T/out"; then ok "sweep --no-plots: the closing line lists sweep.csv"
   else bad "sweep --no-plots: closing line: $(cat "$T/out")"; fi
+  # Both peaks of the pressure deficit, printed and in sweep.csv: at any step
+  # (the breakthrough cap, 1000 Pa, as the first peel starts) and over the
+  # frames (the largest in metrics.csv, what the plots show).
+  "$W" sweep pull-straight --humidity 0.5 --duration 0.005 --jobs 1 --no-plots --out "$T/sw-peak" >"$T/out" 2>&1
+  frames=$(awk -F, 'NR == 1 { for (i = 1; i <= NF; i++) if ($i == "inner_pressure_pa") c = i; next }
+    { d = 101325 - $c; if (d > m) m = d } END { printf "%.1f", m }' "$T/sw-peak/omega_0.50/metrics.csv")
+  csv=$(awk -F, 'NR == 2 { printf "%.1f %.1f", $5, $6 }' "$T/sw-peak/sweep.csv")
+  if grep -q "^omega_0.50 .* peak deficit (any step) 1000.0 Pa, over frames $frames Pa " "$T/out" \
+     && [ "$csv" = "1000.0 $frames" ] && [ "${frames%.*}" -lt 1000 ] \
+     && head -1 "$T/sw-peak/sweep.csv" | grep -q '^case,air_model,humidity,status,peak_deficit_pa,frame_peak_deficit_pa,'
+  then ok "sweep: peak deficit at any step (1000 Pa) and over the frames ($frames Pa)"
+  else bad "sweep: peak deficit: frames $frames, sweep.csv '$csv', printed $(cat "$T/out")"; fi
   # Cases print in the order of --humidity (air model first), however they end.
   "$W" sweep hang --humidity 0.9,0.1,0.5,0.3 --air-models off,sealed --duration 1e-3 --jobs 4 --no-plots \
     --out "$T/sw-order" >"$T/out" 2>&1

@@ -13,7 +13,11 @@ as PNG and SVG, the plots whose quantities mean something for the scene:
                  against humidity, one line per air model; only for a handle
                  pulled by a force (type = "force") over a contact surface
   pressure       inner pressure deficit p_atm - p against time, one curve per
-                 case; only with a contact surface and an air model not "off"
+                 case; only with a contact surface and an air model not "off".
+                 It shows the output frames: a case whose peak at any step
+                 (sweep.csv's peak_deficit_pa) is higher, e.g. at the
+                 breakthrough cap as a peel starts, between frames, says so
+                 in the legend (in fig8 too)
   contact_area   contact area against time, one curve per case; only with a
                  contact surface
   handle_height  handle height against time, one curve per case; only for a
@@ -206,6 +210,16 @@ def deficit(case):
     return [case["p_atm"] - r["inner_pressure_pa"] for r in case["metrics"]]
 
 
+def step_peak_note(case):
+    """' (peak at any step: N Pa)' when sweep.csv's peak deficit over every step is
+    above the largest at the frames the plots show, else ''."""
+    step = case.get("peak_deficit_pa")
+    if not isinstance(step, float):
+        return ""  # a sweep.csv without the column
+    shown = max(deficit(case), default=0.0)
+    return f" (peak at any step: {step:.0f} Pa)" if step > shown + max(1.0, 0.01 * abs(shown)) else ""
+
+
 def vertical_path(case):
     """Whether a driven handle moves straight up or down: then its height,
     which the metrics measure, tells how far it has gone."""
@@ -303,7 +317,7 @@ def make_figures(cases, models, title, made):
         fig, ax = plt.subplots(figsize=(7.5, 4.5), constrained_layout=True)
         for c in cases:
             ax.plot(displacement(c) if rig else column(c, "time_s"), values(c), color=hue(c),
-                    linestyle=style(c), label=c["label"])
+                    linestyle=style(c), label=c["label"] + (step_peak_note(c) if name == "pressure" else ""))
         xlabel = "time (s)"
         if rig:
             xlabel = ("handle displacement since the first frame, from its height (mm)"
@@ -328,7 +342,8 @@ def make_figures(cases, models, title, made):
                 kw = dict(color=f"C{models.index(c['air_model'])}", linestyle="-" if c["ok"] else "--",
                           label=c["air_model"] + ("" if c["ok"] else " (blew up)"))
                 for ax, (_, values) in zip(axes[i], panels):
-                    ax.plot(column(c, "time_s"), values(c), **kw)
+                    note = step_peak_note(c) if values is deficit else ""
+                    ax.plot(column(c, "time_s"), values(c), **{**kw, "label": kw["label"] + note})
             for ax, (ylabel, _) in zip(axes[i], panels):
                 what = "pressure deficit" if ylabel.startswith("p_atm") else ylabel.split(" (")[0]
                 ax.set(title=f"ω = {h:.2f}: {what}", ylabel=ylabel)

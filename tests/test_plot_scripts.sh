@@ -3,6 +3,8 @@
 # tiny sweep folders (the formats of `wetcloth sweep`) in a temporary folder,
 # runs both scripts, checks their outputs, and checks that bad input gives
 # exit code 2 and no figures. Ends with "N passed, M failed".
+# With WETCLOTH set to the program it also runs `wetcloth sweep` on tiny cases
+# and checks what the sweep prints (ctest does not set it: those checks skip).
 # Usage: tests/test_plot_scripts.sh [SOURCE_DIR]   (PYTHON: default /usr/bin/python3)
 set -u
 SRC="${1:-$(cd "$(dirname "$0")/.." && pwd)}"
@@ -16,7 +18,10 @@ bad() { fails=$((fails + 1)); echo "FAIL: $1"; }
 METRICS=time_s,handle_height_m,handle_force_n,max_height_m,contact_area_m2,lifted_area_m2,base_diagonal_m,outer_diagonal_m,inner_pressure_pa,trapped_air_m3,air_volume_m3,kinetic_energy_j,max_strain,wrinkle_rad,centroid_x_m,centroid_y_m
 
 # new_sweep DIR: an empty sweep folder with the sweep.csv header.
-new_sweep() { mkdir -p "$1"; echo "case,air_model,humidity,status,peak_deficit_pa,time_to_5cm_s,$METRICS" >"$1/sweep.csv"; }
+new_sweep() {
+  mkdir -p "$1"
+  echo "case,air_model,humidity,status,peak_deficit_pa,frame_peak_deficit_pa,time_to_5cm_s,$METRICS" >"$1/sweep.csv"
+}
 
 # add_case DIR CASE HUMIDITY AIR_MODEL STATUS PEAK_DEFICIT [METRICS_HUMIDITY [HANDLE [SURFACE]]]:
 # the case's folder (5 frames of metrics, made up from METRICS_HUMIDITY, default
@@ -44,7 +49,7 @@ add_case() {
   [ "$surface" = ball ] && printf '\n[ball]\nenabled = true\n' >>"$dir/$name/scene.toml"
   printf '{"scene": "pull-straight", "status": "%s", "wall_seconds": 0.5, "version": "test"}\n' "$status" \
     >"$dir/$name/summary.json"
-  echo "$name,$model,$w,$status,$peak,-1,$(tail -1 "$dir/$name/metrics.csv")" >>"$dir/sweep.csv"
+  echo "$name,$model,$w,$status,$peak,$peak,-1,$(tail -1 "$dir/$name/metrics.csv")" >>"$dir/sweep.csv"
 }
 
 # figures DIR: how many figure files (and leftover temporaries) DIR holds.
@@ -108,12 +113,22 @@ if [ -z "$(find "$ONE" -name '*.tmp')" ]; then ok "no temporaries left"; else ba
 if "$PY" "$PLOT" "$TWO" >"$T/out" 2>&1 && [ -s "$TWO/fig8.png" ] && [ -s "$TWO/fig8.svg" ]; then ok "fig8 with two air models"
 else bad "fig8 with two air models: $(cat "$T/out")"; fi
 
+# plot_sweep.py: the pressure plots show the frames; a case whose peak at any
+# step (sweep.csv's peak_deficit_pa) is higher says so in the legend.
+STEP="$T/plots/step-peak"; mkdir -p "$T/plots"; cp -r "$TWO" "$STEP"; rm -f "$STEP"/*.png "$STEP"/*.svg
+sed -i 's/^\(exchange_omega_1.00,exchange,1,ok\),600,/\1,1000,/' "$STEP/sweep.csv"
+if "$PY" "$PLOT" "$STEP" >"$T/out" 2>&1 && grep -q '<!-- ω=1.00, exchange (peak at any step: 1000 Pa) -->' "$STEP/pressure.svg" \
+   && grep -q '<!-- ω=1.00, sealed -->' "$STEP/pressure.svg" && grep -q '<!-- exchange (peak at any step: 1000 Pa) -->' "$STEP/fig8.svg" \
+   && ! grep -q 'peak at any step' "$TWO/pressure.svg" "$STEP/handle_height.svg"
+then ok "a peak at a step above the frames: in the pressure legends"
+else bad "peak at a step: $(grep -ho '<!-- [a-zω][^>]* -->' "$STEP/pressure.svg" "$STEP/fig8.svg" | tr "\n" " ") $(cat "$T/out")"; fi
+
 # plot_sweep.py: only the plots that mean something for the scene, decided
 # from scene.toml (the metrics without it). A driven handle (peel-rig): its
 # force over time, in fig8 too, and no fig7 (its height is set).
 PEEL="$T/plots/peel"; new_sweep "$PEEL"
 for m in exchange sealed; do for w in 0.5 1; do add_case "$PEEL" "${m}_omega_$w" $w $m ok 800 "" move; done; done
-sed -i 's/^\(exchange_omega_1,exchange,1,ok,800\),-1,/\1,0.75,/' "$PEEL/sweep.csv"
+sed -i 's/^\(exchange_omega_1,exchange,1,ok,800,800\),-1,/\1,0.75,/' "$PEEL/sweep.csv"
 if "$PY" "$PLOT" "$PEEL" >"$T/out" 2>&1; then ok "plot a driven handle"; else bad "plot a driven handle: $(cat "$T/out")"; fi
 if [ -s "$PEEL/handle_force.png" ] && [ -s "$PEEL/handle_force.svg" ] && [ ! -e "$PEEL/handle_height.png" ] \
    && grep -q '<!-- handle force (N) -->' "$PEEL/handle_force.svg"; then ok "driven handle: handle_force, no handle_height"
@@ -129,6 +144,26 @@ if "$PY" -c 'import sys; sys.path.insert(0, sys.argv[1]); import plot_sweep
 t = {c["case"]: c["time_to_5cm_s"] for c in plot_sweep.load(sys.argv[2])[0]}
 sys.exit(not (t["exchange_omega_1"] == 0.75 and t["sealed_omega_1"] is None))' "$SRC/tools" "$PEEL" 2>"$T/err"
 then ok "time_to_5cm_s -1 read as never (None)"; else bad "time_to_5cm_s -1 not read as never: $(cat "$T/err")"; fi
+# ... a rig's force-displacement curve: handle_force against how far the
+# handle has moved (its height on a vertical path), fig8 still against time.
+if grep -q '<!-- handle displacement since the first frame, from its height (mm) -->' "$PEEL/handle_force.svg" \
+   && ! grep -q '<!-- time (s) -->' "$PEEL/handle_force.svg" && grep -q '<!-- time (s) -->' "$PEEL/fig8.svg"
+then ok "driven handle: force against displacement, fig8 against time"
+else bad "driven handle: handle_force not against displacement: $(grep -o '<!-- [a-z][^>]* -->' "$PEEL/handle_force.svg" | tr "\n" " ")"; fi
+# Off the vertical the height does not tell: the distance along the path,
+# |velocity| times the time on it (from start, until max_travel).
+OBLIQUE="$T/plots/oblique"; new_sweep "$OBLIQUE"
+add_case "$OBLIQUE" omega_0.5 0.5 exchange ok 800 "" move
+sed -i 's/^velocity = .*/velocity = [0.03, 0.0, 0.04]\nstart = 0.25\nmax_travel = 0.025/' "$OBLIQUE/omega_0.5/scene.toml"
+if "$PY" "$PLOT" "$OBLIQUE" >"$T/out" 2>&1 \
+   && grep -q '<!-- handle displacement along its path, |velocity| × time on it (mm) -->' "$OBLIQUE/handle_force.svg"
+then ok "oblique driven handle: displacement along its path"; else bad "oblique driven handle: $(cat "$T/out")"; fi
+if "$PY" -c 'import sys; sys.path.insert(0, sys.argv[1]); import plot_sweep
+d = {c["case"]: [round(x, 9) for x in plot_sweep.displacement(c)] for p in sys.argv[2:] for c in plot_sweep.load(p)[0]}
+sys.exit(not (d["exchange_omega_1"] == [0, 5, 10, 15, 20] and d["omega_0.5"] == [0, 0, 12.5, 25, 25]))' \
+   "$SRC/tools" "$PEEL" "$OBLIQUE" 2>"$T/err"
+then ok "driven handle displacement: height change; speed × time on the path, capped"
+else bad "driven handle displacement: $(cat "$T/err")"; fi
 
 # No handle (drape-ball): no fig7, no handle plot, and an older sweep's copies removed.
 DRAPE="$T/plots/drape"; new_sweep "$DRAPE"
@@ -186,6 +221,43 @@ if [ -s "$T/val/figures/pull-straight_fig7.png" ] && grep -q '](figures/pull-str
 if grep -q '^| 1.00 | blew up |' "$R"; then ok "sweep table shows the blown-up case"; else bad "sweep table lacks the blown-up case"; fi
 if "$PY" "$REPORT" "$T/nowhere" "$T/val2/report.md" >/dev/null 2>&1 && [ "$(grep -c '| not run |$' "$T/val2/report.md")" -eq 16 ]
 then ok "report on no runs: every claim not run"; else bad "report on no runs"; fi
+
+# The sweep command's printout, with a program to run (WETCLOTH=build/wetcloth).
+W="${WETCLOTH:-}"
+if [ -z "$W" ]; then
+  echo "skip: the sweep's printout (set WETCLOTH to the program to check it)"
+else
+  export WETCLOTH_PLOT_SCRIPT="$PLOT"
+  # The closing line names the contact sheet when --render made one (a
+  # program built without the viewer makes none and exits 1).
+  "$W" sweep hang --humidity 0.5 --duration 1e-3 --jobs 1 --render --out "$T/sw-render" >"$T/out" 2>&1; code=$?
+  if [ $code -eq 0 ] && [ -s "$T/sw-render/contact_sheet.png" ]; then
+    want="results: $T/sw-render (sweep.csv, the plots listed above and contact_sheet.png)"
+  else want="results: $T/sw-render (sweep.csv and the plots listed above)"; fi
+  if grep -qxF "$want" "$T/out"; then ok "sweep: the closing line lists what was made (exit $code)"
+  else bad "sweep: closing line, want '$want': $(cat "$T/out")"; fi
+  "$W" sweep hang --humidity 0.5 --duration 1e-3 --jobs 1 --no-plots --out "$T/sw-noplots" >"$T/out" 2>&1
+  if grep -qxF "results: $T/sw-noplots (sweep.csv)" "$T/out"; then ok "sweep --no-plots: the closing line lists sweep.csv"
+  else bad "sweep --no-plots: closing line: $(cat "$T/out")"; fi
+  # Both peaks of the pressure deficit, printed and in sweep.csv: at any step
+  # (the breakthrough cap, 1000 Pa, as the first peel starts) and over the
+  # frames (the largest in metrics.csv, what the plots show).
+  "$W" sweep pull-straight --humidity 0.5 --duration 0.005 --jobs 1 --no-plots --out "$T/sw-peak" >"$T/out" 2>&1
+  frames=$(awk -F, 'NR == 1 { for (i = 1; i <= NF; i++) if ($i == "inner_pressure_pa") c = i; next }
+    { d = 101325 - $c; if (d > m) m = d } END { printf "%.1f", m }' "$T/sw-peak/omega_0.50/metrics.csv")
+  csv=$(awk -F, 'NR == 2 { printf "%.1f %.1f", $5, $6 }' "$T/sw-peak/sweep.csv")
+  if grep -q "^omega_0.50 .* peak deficit (any step) 1000.0 Pa, over frames $frames Pa " "$T/out" \
+     && [ "$csv" = "1000.0 $frames" ] && [ "${frames%.*}" -lt 1000 ] \
+     && head -1 "$T/sw-peak/sweep.csv" | grep -q '^case,air_model,humidity,status,peak_deficit_pa,frame_peak_deficit_pa,'
+  then ok "sweep: peak deficit at any step (1000 Pa) and over the frames ($frames Pa)"
+  else bad "sweep: peak deficit: frames $frames, sweep.csv '$csv', printed $(cat "$T/out")"; fi
+  # Cases print in the order of --humidity (air model first), however they end.
+  "$W" sweep hang --humidity 0.9,0.1,0.5,0.3 --air-models off,sealed --duration 1e-3 --jobs 4 --no-plots \
+    --out "$T/sw-order" >"$T/out" 2>&1
+  order=$(grep -o '^[a-z]*_omega_[0-9.]*' "$T/out" | tr '\n' ' ')
+  if [ "$order" = "off_omega_0.90 off_omega_0.10 off_omega_0.50 off_omega_0.30 sealed_omega_0.90 sealed_omega_0.10 sealed_omega_0.50 sealed_omega_0.30 " ]
+  then ok "sweep: cases printed in the order asked for"; else bad "sweep: cases printed as $order"; fi
+fi
 
 echo "$passes passed, $fails failed"
 [ "$fails" -eq 0 ]

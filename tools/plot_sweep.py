@@ -5,21 +5,31 @@ Usage: plot_sweep.py DIR [--title TEXT]
 
 Reads DIR/sweep.csv (written by `wetcloth sweep`) and every case's
 DIR/<case>/metrics.csv and DIR/<case>/scene.toml (the resolved scene: its
-[air] model and p_atm, [contact] surface, [table]/[ball] enabled and
-[handle.NAME] types), and writes into DIR, each as PNG and SVG, the plots
-whose quantities mean something for the scene:
+[air] model and p_atm, [contact] surface, [table]/[ball] enabled,
+[handle.NAME] types and a driven handle's path), and writes into DIR, each
+as PNG and SVG, the plots whose quantities mean something for the scene:
 
   fig7           paper Fig. 7: (a) final pulled height and (b) base diagonal
                  against humidity, one line per air model; only for a handle
                  pulled by a force (type = "force") over a contact surface
   pressure       inner pressure deficit p_atm - p against time, one curve per
-                 case; only with a contact surface and an air model not "off"
+                 case; only with a contact surface and an air model not "off".
+                 It shows the output frames: a case whose peak at any step
+                 (sweep.csv's peak_deficit_pa) is higher, e.g. at the
+                 breakthrough cap as a peel starts, between frames, says so
+                 in the legend (in fig8 too)
   contact_area   contact area against time, one curve per case; only with a
                  contact surface
   handle_height  handle height against time, one curve per case; only for a
                  handle pulled by a force
   handle_force   instead of handle_height for a driven handle (type = "move",
-                 e.g. peel-rig): the force it takes, handle_force_n
+                 e.g. peel-rig): the force it takes, handle_force_n, against
+                 how far it has moved since the first frame, one curve per
+                 case (a rig's force-displacement curve): the change of
+                 handle_height_m for a vertical path (measured), else the
+                 distance along its path, |velocity| times its time on it
+                 (from [handle.NAME] velocity, start, max_travel: the metrics
+                 give only its height)
   fig8           only with several air models and the pressure plot: paper
                  Fig. 8, the handle's height (or force, for a driven handle;
                  no column without a handle) and the pressure deficit against
@@ -110,7 +120,7 @@ def read_scene(case_dir):
 
 def scene_value(scene, path, section, key, default, kind):
     """scene[section][key] (section dotted, as in "handle.pull"), checked to be
-    a `kind`: str, bool or float (an integer counts as a number)."""
+    a `kind`: str, bool, float (an integer counts as a number) or list."""
     table = scene
     for part in section.split("."):
         table = table.get(part, {})
@@ -118,19 +128,20 @@ def scene_value(scene, path, section, key, default, kind):
     ok = isinstance(value, (int, float)) and not isinstance(value, bool) if kind is float \
         else isinstance(value, kind)
     if not ok:
-        what = {float: "a number", bool: "true or false", str: "a quoted string"}[kind]
+        what = {float: "a number", bool: "true or false", str: "a quoted string", list: "a list"}[kind]
         raise InputError(f"{path}: [{section}] {key} is not {what}")
     return float(value) if kind is float else value
 
 
 def describe(case_dir, metrics):
     """What the case's plots can show: {'p_atm', 'handle' ("force", "move" or
+    None), 'path' (a driven handle's (velocity, start, max_travel), else
     None), 'surface' (bool), 'air' (bool)}, from scene.toml (the defaults of
     `wetcloth params` for missing keys), from the metrics without it."""
     scene = read_scene(case_dir)
     if scene is None:
         nonzero = lambda name: any(r[name] != 0 for r in metrics if isinstance(r.get(name), float))
-        return {"p_atm": P_ATM, "handle": "force" if nonzero("handle_height_m") else None,
+        return {"p_atm": P_ATM, "handle": "force" if nonzero("handle_height_m") else None, "path": None,
                 "surface": nonzero("contact_area_m2") or nonzero("base_diagonal_m"),
                 "air": any(r["inner_pressure_pa"] != P_ATM for r in metrics)}
     path = os.path.join(case_dir, "scene.toml")
@@ -138,16 +149,23 @@ def describe(case_dir, metrics):
     surface = get("contact", "surface", "table")
     surface = ((surface == "table" and get("table", "enabled", True, bool)) or
                (surface == "ball" and get("ball", "enabled", False, bool)))
-    handle = None
+    handle, handle_path = None, None
     for section in sorted(f"handle.{h}" for h in scene.get("handle", {})):  # the metrics' order
         kind = get(section, "type", "force")
         if kind not in ("force", "move", "pin"):
             raise InputError(f"{path}: [{section}] type = '{kind}' is not force, move or pin")
         if kind != "pin":
             handle = kind
+            if kind == "move":
+                velocity = get(section, "velocity", [0.0, 0.0, 0.0], list)
+                if len(velocity) != 3 or not all(isinstance(v, (int, float)) and not isinstance(v, bool)
+                                                 for v in velocity):
+                    raise InputError(f"{path}: [{section}] velocity is not three numbers")
+                handle_path = ([float(v) for v in velocity], get(section, "start", 0.0, float),
+                               get(section, "max_travel", 0.0, float))
             break
-    return {"p_atm": get("air", "p_atm", P_ATM, float), "handle": handle, "surface": surface,
-            "air": surface and get("air", "model", "exchange") != "off"}
+    return {"p_atm": get("air", "p_atm", P_ATM, float), "handle": handle, "path": handle_path,
+            "surface": surface, "air": surface and get("air", "model", "exchange") != "off"}
 
 
 def load(sweep_dir):
@@ -190,6 +208,40 @@ def column(case, name, scale=1.0):
 
 def deficit(case):
     return [case["p_atm"] - r["inner_pressure_pa"] for r in case["metrics"]]
+
+
+def step_peak_note(case):
+    """' (peak at any step: N Pa)' when sweep.csv's peak deficit over every step is
+    above the largest at the frames the plots show, else ''."""
+    step = case.get("peak_deficit_pa")
+    if not isinstance(step, float):
+        return ""  # a sweep.csv without the column
+    shown = max(deficit(case), default=0.0)
+    return f" (peak at any step: {step:.0f} Pa)" if step > shown + max(1.0, 0.01 * abs(shown)) else ""
+
+
+def vertical_path(case):
+    """Whether a driven handle moves straight up or down: then its height,
+    which the metrics measure, tells how far it has gone."""
+    velocity = case["path"][0] if case["path"] else [0.0, 0.0, 0.0]
+    return velocity[0] == velocity[1] == 0 and velocity[2] != 0
+
+
+def displacement(case):
+    """How far a driven handle has moved since the first frame, mm, at every
+    frame: measured from its height on a vertical path; else the distance
+    along its path, which the handle follows exactly (|velocity| times its
+    time on the path, from `start` until `max_travel`)."""
+    if vertical_path(case):
+        sign = 1.0 if case["path"][0][2] > 0 else -1.0
+        first = case["metrics"][0]["handle_height_m"]
+        return [sign * (h - first) * 1000 for h in column(case, "handle_height_m")]
+    velocity, start, max_travel = case["path"] or ([0.0, 0.0, 0.0], 0.0, 0.0)
+    speed = sum(v * v for v in velocity) ** 0.5
+    on_path = [max(0.0, t - start) for t in column(case, "time_s")]
+    if max_travel > 0 and speed > 0:
+        on_path = [min(t, max_travel / speed) for t in on_path]
+    return [speed * t * 1000 for t in on_path]
 
 
 def plan(cases, models):
@@ -251,7 +303,7 @@ def make_figures(cases, models, title, made):
         fig.suptitle(f"{title}: Fig. 7")
         figs["fig7"] = fig
 
-    # Time series, one curve per case.
+    # One curve per case: against time, the handle's force against its displacement.
     handle = {"handle_height": ("handle height (cm)", lambda c: column(c, "handle_height_m", 100)),
               "handle_force": ("handle force (N)", lambda c: column(c, "handle_force_n"))}
     series = {"pressure": ("inner pressure deficit p_atm − p (Pa)", deficit),
@@ -259,10 +311,20 @@ def make_figures(cases, models, title, made):
               **handle}
     for name in (f for f in made if f in series):
         ylabel, values = series[name]
+        # A driven handle is a measuring rig: its force against how far it has
+        # moved (MODEL.md section 9), not against time.
+        rig = name == "handle_force"
         fig, ax = plt.subplots(figsize=(7.5, 4.5), constrained_layout=True)
         for c in cases:
-            ax.plot(column(c, "time_s"), values(c), color=hue(c), linestyle=style(c), label=c["label"])
-        ax.set(xlabel="time (s)", ylabel=ylabel, title=f"{title}: {ylabel.split(' (')[0]}")
+            ax.plot(displacement(c) if rig else column(c, "time_s"), values(c), color=hue(c),
+                    linestyle=style(c), label=c["label"] + (step_peak_note(c) if name == "pressure" else ""))
+        xlabel = "time (s)"
+        if rig:
+            xlabel = ("handle displacement since the first frame, from its height (mm)"
+                      if vertical_path(cases[0]) else
+                      "handle displacement along its path, |velocity| × time on it (mm)")
+        what = ylabel.split(" (")[0] + (" against displacement" if rig else "")
+        ax.set(xlabel=xlabel, ylabel=ylabel, title=f"{title}: {what}")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8, ncol=2 if len(cases) > 6 else 1)
         figs[name] = fig
@@ -280,7 +342,8 @@ def make_figures(cases, models, title, made):
                 kw = dict(color=f"C{models.index(c['air_model'])}", linestyle="-" if c["ok"] else "--",
                           label=c["air_model"] + ("" if c["ok"] else " (blew up)"))
                 for ax, (_, values) in zip(axes[i], panels):
-                    ax.plot(column(c, "time_s"), values(c), **kw)
+                    note = step_peak_note(c) if values is deficit else ""
+                    ax.plot(column(c, "time_s"), values(c), **{**kw, "label": kw["label"] + note})
             for ax, (ylabel, _) in zip(axes[i], panels):
                 what = "pressure deficit" if ylabel.startswith("p_atm") else ylabel.split(" (")[0]
                 ax.set(title=f"ω = {h:.2f}: {what}", ylabel=ylabel)

@@ -88,6 +88,8 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress) {
   r.first = table.rows().front();
   r.final = table.rows().back();
   r.peak_deficit_pa = sim.state().peak_deficit;
+  for (const Metrics& row : table.rows())
+    r.frame_peak_deficit_pa = std::max(r.frame_peak_deficit_pa, p.air.p_atm - row.inner_pressure_pa);
   r.steps = sim.state().steps;
   r.wall_seconds = wall();
 

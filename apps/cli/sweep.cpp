@@ -1,12 +1,9 @@
 #include "sweep.hpp"
 
 #include <algorithm>
-#include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
-#include <fstream>
-#include <limits>
 #include <sstream>
 #include <thread>
 #include <unistd.h>
@@ -29,7 +26,6 @@ struct Case {
   double humidity = 0;
   Params params;
   RunResult result;
-  double frame_peak_deficit_pa = 0;  // over the output frames, as the plots show it
 };
 
 // Decimals that tell the humidities apart in case names: two, or as many as
@@ -58,28 +54,6 @@ std::string case_name(double omega, int decimals, const std::string& air, bool s
   return several_air_models ? air + "_" + buf : buf;
 }
 
-// The largest pressure deficit p_atm - p over a run's output frames (its
-// metrics.csv, 0 without one). The run's own peak is over every step and can
-// be far above it: the exchange model holds the deficit at the breakthrough
-// cap (1000 Pa) while the first peel starts, for 2.7 ms in pull-straight
-// (between its first two frames at 30 fps) and 36 ms in peel-rig.
-double frame_peak_deficit(const fs::path& metrics, double p_atm) {
-  std::ifstream in(metrics);
-  std::string line, field;
-  if (!std::getline(in, line)) return 0;
-  std::istringstream header(line);
-  std::size_t col = 0;
-  while (std::getline(header, field, ',') && field != "inner_pressure_pa") ++col;
-  if (field != "inner_pressure_pa") return 0;
-  double peak = -std::numeric_limits<double>::infinity();
-  while (std::getline(in, line)) {
-    std::istringstream row(line);
-    for (std::size_t k = 0; k <= col && std::getline(row, field, ','); ++k)
-      if (k == col) peak = std::max(peak, p_atm - std::strtod(field.c_str(), nullptr));
-  }
-  return std::isfinite(peak) ? peak : 0;
-}
-
 // The plotting script: next to an installed program, or in the source tree.
 fs::path plot_script() {
   if (const char* env = std::getenv("WETCLOTH_PLOT_SCRIPT")) return env;
@@ -97,7 +71,7 @@ std::string sweep_csv(const std::vector<Case>& cases) {
   for (const auto& c : cases) {
     o += c.name + "," + c.air_model + "," + format_number(c.humidity) + "," +
          (c.result.code == kOk ? "ok" : "blew_up") + "," + format_number(c.result.peak_deficit_pa) +
-         "," + format_number(c.frame_peak_deficit_pa) + "," + format_number(c.result.time_to_5cm_s);
+         "," + format_number(c.result.frame_peak_deficit_pa) + "," + format_number(c.result.time_to_5cm_s);
     for (double v : metrics_values(c.result.final)) o += "," + format_number(v);
     o += "\n";
   }
@@ -177,8 +151,6 @@ std::function<int()> add_sweep_command(CLI::App& app) {
     std::size_t printed = 0;
     run_all(runs, o->jobs, [&](std::size_t i, const RunResult& r) {
       cases[i].result = r;
-      cases[i].frame_peak_deficit_pa =
-          frame_peak_deficit(out / cases[i].name / "metrics.csv", cases[i].params.air.p_atm);
       ended[i] = true;
       for (; printed < cases.size() && ended[printed]; ++printed) {
         if (o->quiet) continue;
@@ -189,7 +161,7 @@ std::function<int()> add_sweep_command(CLI::App& app) {
             "%-22s %s  handle %.4f m  contact %.5f m²  peak deficit (any step) %.1f Pa, "
             "over frames %.1f Pa  (%.1f s wall)\n",
             c.name.c_str(), c.result.code == kOk ? "ok     " : "BLEW UP", c.result.final.handle_height_m,
-            c.result.final.contact_area_m2, c.result.peak_deficit_pa, c.frame_peak_deficit_pa,
+            c.result.final.contact_area_m2, c.result.peak_deficit_pa, c.result.frame_peak_deficit_pa,
             c.result.wall_seconds);
       }
       std::fflush(stdout);

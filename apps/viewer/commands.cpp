@@ -5,6 +5,7 @@
 
 #include <CLI/CLI.hpp>
 #include <cerrno>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -66,6 +67,15 @@ bool on_path(const std::string& program) {
     rest.remove_prefix(colon + 1);
   }
 }
+
+// CLI::PositiveNumber names its range in 300 digits (0 to DBL_MAX).
+const CLI::Validator kPositive(
+    [](std::string& s) {
+      double v = 0;
+      if (!CLI::detail::lexical_cast(s, v)) return "not a number: " + s;
+      return std::isfinite(v) && v > 0 ? std::string() : std::string("must be a positive number");
+    },
+    "> 0");
 
 ColorBy color_by(const std::string& name) {
   for (std::size_t i = 0; i < kColorByNames.size(); ++i)
@@ -163,7 +173,7 @@ std::function<std::optional<int>()> add_commands(CLI::App& app) {
       ->capture_default_str();
   c->render
       ->add_option("--fps", c->fps, "frames per simulated second (default: the scene's run.fps)")
-      ->check(CLI::PositiveNumber);
+      ->check(kPositive);
   c->render->add_flag("--video", c->video, "also make DIR/video.mp4 with ffmpeg");
   c->render->add_option("--color", c->render_color, "colour the cloth by")
       ->check(CLI::IsMember(colors))

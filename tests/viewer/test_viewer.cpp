@@ -166,6 +166,7 @@ TEST(Render, BadInputExitsWithTwoAndWritesNothing) {
       2);
   EXPECT_EQ(run_cli("render pull-straight --humidity 7 --out '" + out.string() + "' 2>/dev/null"),
             2);
+  EXPECT_EQ(run_cli("render pull-straight --fps 0 --out '" + out.string() + "' 2>/dev/null"), 2);
   EXPECT_FALSE(fs::exists(out));
 }
 

@@ -391,6 +391,23 @@ Camera frame_scene(const Params& p, float aspect) {
   return frame_box(lo, hi, aspect);
 }
 
+void content_box(const Params& p, const std::vector<Vec3f>& cloth, Vec3f& lo, Vec3f& hi) {
+  lo = Vec3f::Constant(1e30f), hi = Vec3f::Constant(-1e30f);
+  for (const auto& x : cloth) lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
+  if (lo.x() > hi.x()) lo = hi = Eigen::Vector3d(p.cloth.center[0], p.cloth.center[1],
+                                                 p.cloth.center[2]).cast<float>();
+  const float size = static_cast<float>(std::max(p.cloth.size[0], p.cloth.size[1]));
+  const float table = static_cast<float>(p.table.height);
+  if (p.table.enabled && lo.z() - table < size * 0.5f) lo.z() = std::min(lo.z(), table);
+  if (p.ball.enabled) {
+    const Vec3f b =
+        Eigen::Vector3d(p.ball.center[0], p.ball.center[1], p.ball.center[2]).cast<float>();
+    const float r = static_cast<float>(p.ball.radius);
+    lo = lo.cwiseMin(b - Vec3f::Constant(r));
+    hi = hi.cwiseMax(b + Vec3f::Constant(r));
+  }
+}
+
 Stage stage_from(const Params& p) {
   Stage s;
   s.table = p.table.enabled;

@@ -39,6 +39,9 @@ struct Camera {
 Camera frame_box(const Vec3f& lo, const Vec3f& hi, float aspect);
 // Frames the cloth at rest, room left above it for a tent (or a fall).
 Camera frame_scene(const Params& p, float aspect);
+// The box of what a picture must show: the cloth as it is now, the ball, and the
+// table's height when the cloth is near it.
+void content_box(const Params& p, const std::vector<Vec3f>& cloth, Vec3f& lo, Vec3f& hi);
 
 // Everything drawn besides the cloth, from the scene's parameters.
 struct Stage {

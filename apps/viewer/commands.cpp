@@ -90,7 +90,7 @@ struct Commands {
   std::string view_color = "none", render_color = "none";
   std::pair<double, std::string> shot;
   std::string out;
-  double fps = 0;
+  double fps = 0, color_range = 0;
   bool video = false, quiet = false;
 
   int run_view() {
@@ -130,6 +130,7 @@ struct Commands {
     o.video = video;
     o.quiet = quiet;
     o.color = color_by(render_color);
+    o.color_range = static_cast<float>(color_range);
     // Everything that would fail after the simulation is checked before it.
     if (video && !on_path("ffmpeg"))
       throw SceneError("--video: ffmpeg is not on PATH (apt-get install ffmpeg)");
@@ -178,9 +179,16 @@ std::function<std::optional<int>()> add_commands(CLI::App& app) {
   c->render->add_option("--color", c->render_color, "colour the cloth by")
       ->check(CLI::IsMember(colors))
       ->capture_default_str();
+  c->render
+      ->add_option("--color-range", c->color_range,
+                   "top of the colour scale: pressure +-MAX Pa (default air.breakthrough_pressure), "
+                   "strain 0 to MAX (default strain_limit.tau), adhesion 0 to MAX N (default twice "
+                   "an inner particle's share)")
+      ->check(kPositive);
   c->render->add_flag("--quiet", c->quiet, "no progress, no summary");
   c->render->footer(
-      "Writes DIR/frame_00000.png ... one per output frame (EGL, no display needed), and with\n"
+      "Writes DIR/frame_00000.png ... one per output frame (EGL, no display needed), with a key\n"
+      "to the colours when --color is given, and with\n"
       "--video DIR/video.mp4. Exit codes: 0 ok, 1 error (no OpenGL, ffmpeg failed), 2 bad input:\n"
       "options, an --out that cannot be written, --video without ffmpeg (nothing written),\n"
       "3 the simulation blew up (frames so far kept).");

@@ -178,6 +178,7 @@ int render_frames(const RenderOptions& o) {
     // Frames wait here, simulated, until the camera has seen far enough ahead.
     std::deque<std::pair<long long, ClothMesh>> pending;
     float scale = 0;
+    Legend legend;
     double draw_ms = 0, png_ms = 0;
     long long written = 0;
     bool ok = true;
@@ -185,7 +186,7 @@ int render_frames(const RenderOptions& o) {
       const double t = frame_time(f, p.run.duration, fps);
       ok = sim.advance_to(t);
       ClothMesh mesh;
-      cloth_mesh(sim, o.color, scale, mesh);
+      legend = cloth_mesh(sim, o.color, scale, mesh, o.color_range);
       Vec3f lo, hi;
       content_box(p, mesh.position, lo, hi);
       follow.add(t, lo, hi);
@@ -196,7 +197,8 @@ int render_frames(const RenderOptions& o) {
         auto t0 = Clock::now();
         target.bind();
         renderer.draw(pending.front().second, stage, follow.at(g), o.width, o.height, opt);
-        const Image img = target.read();
+        Image img = target.read();
+        if (o.color != ColorBy::Fabric) draw_key(img, legend);  // the scale is fixed: any frame's
         if (g > 0 || frames == 0) draw_ms += ms_since(t0);  // frame 0 also compiles the shaders
         pending.pop_front();
         t0 = Clock::now();
@@ -236,6 +238,9 @@ int render_frames(const RenderOptions& o) {
       std::printf("%s: %lld frames, %dx%d, in %s%s (%.1f ms per frame to draw, %.1f ms to write)\n",
                   p.name.c_str(), written, o.width, o.height, o.out.c_str(),
                   o.video ? " + video.mp4" : "", draw_ms / std::max(1LL, frames), png_ms / written);
+    if (!o.quiet && o.color != ColorBy::Fabric && !legend.binary)
+      std::printf("colour: %s, %s to %s\n", legend.title.c_str(), key_number(legend.lo).c_str(),
+                  key_number(legend.hi).c_str());
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "wetcloth: error: %s\n", e.what());

@@ -452,11 +452,10 @@ class Viewer {
                         ImGui::GetColorU32(ImVec4(c.x(), c.y(), c.z(), 1)));
     }
     ImGui::Dummy(ImVec2(w, h));
-    ImGui::Text("%.3g", legend_.lo);
-    char hi[32];
-    std::snprintf(hi, sizeof hi, "%.3g", legend_.hi);
-    ImGui::SameLine(std::max(0.0f, w - ImGui::CalcTextSize(hi).x));
-    ImGui::Text("%s", hi);
+    ImGui::Text("%s", key_number(legend_.lo).c_str());
+    const std::string hi = key_number(legend_.hi);
+    ImGui::SameLine(std::max(0.0f, w - ImGui::CalcTextSize(hi.c_str()).x));
+    ImGui::Text("%s", hi.c_str());
   }
 
   bool combo(const char* label, std::string& value, const std::vector<std::string>& choices) {

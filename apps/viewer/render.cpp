@@ -105,7 +105,7 @@ class FollowCamera {
  public:
   static constexpr double kWindow = 1.0, kBlur = 0.25;  // s of simulated time
 
-  explicit FollowCamera(float aspect) : aspect_(aspect) {}
+  FollowCamera(float aspect, const Camera& view) : aspect_(aspect), view_(view) {}
 
   void add(double t, const Vec3f& lo, const Vec3f& hi) {
     if (time_.empty()) rate_ = std::max(0.05f, 0.5f * (hi - lo).norm());  // m per s
@@ -132,7 +132,7 @@ class FollowCamera {
     lo = (lo / count).cwiseMin(lo_[f]);
     hi = (hi / count).cwiseMax(hi_[f]);
     const Vec3f pad = Vec3f::Constant(rate_ * 0.1f);  // a little floor around the cloth
-    return frame_box(lo - pad, hi + pad, aspect_);
+    return frame_box(lo - pad, hi + pad, aspect_, view_);
   }
 
  private:
@@ -145,6 +145,7 @@ class FollowCamera {
   }
 
   float aspect_, rate_ = 1;
+  Camera view_;  // its direction
   std::vector<double> time_;
   std::vector<Vec3f> lo_, hi_;
 };
@@ -174,7 +175,7 @@ int render_frames(const RenderOptions& o) {
     opt.wetness = static_cast<float>(p.cloth.humidity);
     const long long frames = last_frame_index(p.run.duration, fps);
     const bool progress = !o.quiet && isatty(STDERR_FILENO);
-    FollowCamera follow(static_cast<float>(o.width) / o.height);
+    FollowCamera follow(static_cast<float>(o.width) / o.height, scene_view(p));
     // Frames wait here, simulated, until the camera has seen far enough ahead.
     std::deque<std::pair<long long, ClothMesh>> pending;
     float scale = 0;
@@ -285,7 +286,8 @@ bool render_contact_sheet(const std::vector<std::pair<std::string, fs::path>>& c
     tiles.push_back(std::move(t));
   }
   // One camera for every tile, so that the tiles compare.
-  const Camera cam = frame_box(lo, hi, static_cast<float>(tile_w) / tile_h);
+  const Camera cam =
+      frame_box(lo, hi, static_cast<float>(tile_w) / tile_h, scene_view(tiles.front().params));
 
   // A row for a few cases, a grid for many.
   const int n = static_cast<int>(tiles.size());

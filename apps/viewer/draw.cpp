@@ -377,6 +377,18 @@ Camera scene_view(const Params& p) {
     c.pitch_deg = 12;
     return c;
   }
+  for (const auto& [name, h] : p.handles) {  // the first pulling handle, by name
+    if (h.type != "force") continue;
+    const float du = static_cast<float>((h.at[0] - 0.5) * p.cloth.size[0]),
+                dv = static_cast<float>((h.at[1] - 0.5) * p.cloth.size[1]);
+    if (std::hypot(du, dv) > 0.25f * static_cast<float>(std::max(p.cloth.size[0], p.cloth.size[1]))) {
+      // From the far side, turned 30 degrees: the flap a corner or edge lifts
+      // faces the camera; from the default side it was a thin sliver.
+      c.yaw_deg = std::atan2(-dv, -du) / kDeg - 30;
+      c.pitch_deg = 28;
+    }
+    break;
+  }
   return c;
 }
 

@@ -39,7 +39,8 @@ struct Camera {
 // (its yaw and pitch; by default a 3/4 view from above).
 Camera frame_box(const Vec3f& lo, const Vec3f& hi, float aspect, const Camera& view = {});
 // The direction a scene is best seen from: a hanging cloth face on, nearly level;
-// anything else the default 3/4 view.
+// a cloth pulled by a corner or an edge from across it, so that the lifted part
+// shows its face, not its edge; anything else the default 3/4 view.
 Camera scene_view(const Params& p);
 // Frames the cloth at rest, room left above it for a tent (or a fall), from scene_view.
 Camera frame_scene(const Params& p, float aspect);

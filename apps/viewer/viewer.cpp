@@ -405,13 +405,23 @@ class Viewer {
 
   // --- the panel ------------------------------------------------------------------------
 
-  void plot(const char* label, const History& h, const char* format) {
+  // A scrolling plot whose scale spans at least min_span: noise around a steady
+  // value stays a flat line instead of being stretched into spikes.
+  void plot(const char* label, const History& h, const char* format, float min_span) {
     std::vector<float> v(h.value.begin(), h.value.end());
     char overlay[64] = "";
     if (!v.empty()) std::snprintf(overlay, sizeof overlay, format, v.back());
+    float lo = FLT_MAX, hi = -FLT_MAX;
+    for (float x : v)
+      if (std::isfinite(x)) lo = std::min(lo, x), hi = std::max(hi, x);
+    if (lo > hi) lo = hi = 0;
+    if (hi - lo < min_span) {
+      const float mid = (lo + hi) / 2;
+      lo = mid - min_span / 2, hi = mid + min_span / 2;
+    }
     ImGui::Text("%s", label);
     ImGui::PlotLines((std::string("##") + label).c_str(), v.data(), static_cast<int>(v.size()), 0,
-                     overlay, FLT_MAX, FLT_MAX, ImVec2(ImGui::GetContentRegionAvail().x, 45));
+                     overlay, lo, hi, ImVec2(ImGui::GetContentRegionAvail().x, 45));
   }
 
   // The plots' samples, on the simulation's clock so that they do not depend on the frame rate.
@@ -420,7 +430,7 @@ class Viewer {
     if (s.time < next_sample_) return;
     next_sample_ = s.time + kSampleInterval;
     const Metrics m = sim_->metrics();
-    pressure_.add(s.time, m.inner_pressure_pa - params_.air.p_atm);
+    pressure_.add(s.time, params_.air.p_atm - m.inner_pressure_pa);  // the deficit, as the sweep plots it
     contact_.add(s.time, m.contact_area_m2 * 1e4);
     height_.add(s.time, m.handle_height_m * 1e2);
   }
@@ -560,10 +570,12 @@ class Viewer {
     ImGui::Checkbox("anti-alias", &antialias_);
 
     ImGui::Separator();
-    ImGui::TextDisabled("last %.2f s of simulated time", height_.span());
-    plot("inner pressure - P_atm, Pa", pressure_, "%.1f Pa");
-    plot("contact area, cm\xC2\xB2", contact_, "%.1f cm\xC2\xB2");
-    plot("handle height, cm", height_, "%.2f cm");
+    ImGui::TextDisabled("last %.2f s of simulated time", pressure_.span());
+    // At least 5 % of the breakthrough deficit: a vented or open cloth's 0 Pa stays flat.
+    plot("pressure deficit P_atm - p, Pa", pressure_, "%.1f Pa",
+         std::max(10.0f, 0.05f * static_cast<float>(params_.air.breakthrough_pressure)));
+    plot("contact area, cm\xC2\xB2", contact_, "%.1f cm\xC2\xB2", 1.0f);
+    if (!params_.handles.empty()) plot("handle height, cm", height_, "%.2f cm", 1.0f);
 
     if (ImGui::CollapsingHeader("mouse and keys")) {
       ImGui::TextWrapped(

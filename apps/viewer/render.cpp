@@ -236,8 +236,8 @@ int render_frames(const RenderOptions& o) {
       }
     }
     if (!o.quiet)
-      std::printf("%s: %lld frames, %dx%d, in %s%s (%.1f ms per frame to draw, %.1f ms to write)\n",
-                  p.name.c_str(), written, o.width, o.height, o.out.c_str(),
+      std::printf("%s: %lld frame%s, %dx%d, in %s%s (%.1f ms per frame to draw, %.1f ms to write)\n",
+                  p.name.c_str(), written, written == 1 ? "" : "s", o.width, o.height, o.out.c_str(),
                   o.video ? " + video.mp4" : "", draw_ms / std::max(1LL, frames), png_ms / written);
     if (!o.quiet && o.color != ColorBy::Fabric && !legend.binary)
       std::printf("colour: %s, %s to %s\n", legend.title.c_str(), key_number(legend.lo).c_str(),

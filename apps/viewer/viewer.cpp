@@ -211,6 +211,7 @@ class Viewer {
   void advance(double wall_dt) {
     const auto t0 = Clock::now();
     const double dt = params_.integrator.dt;
+    const long long steps = sim_->state().steps;
     if (blow_up_.empty()) {
       if (step_once_) {
         sim_->step();
@@ -229,7 +230,9 @@ class Viewer {
       if (!blow_up_.empty()) paused_ = true;
     }
     step_once_ = false;
-    physics_ms_ = ms_since(t0);
+    // Frames that step nothing (paused, or the screenshot's last few) keep the last
+    // figure: the panel would read 0 ms.
+    if (sim_->state().steps != steps) physics_ms_ = ms_since(t0);
   }
 
   // --- mouse and keys ---------------------------------------------------------------

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 namespace wetcloth::viewer {
 
@@ -29,7 +30,8 @@ float follow(float scale, float current_max, float floor) {
 
 }  // namespace
 
-Legend cloth_mesh(const Simulation& sim, ColorBy mode, float& scale, ClothMesh& mesh) {
+Legend cloth_mesh(const Simulation& sim, ColorBy mode, float& scale, ClothMesh& mesh,
+                  float range) {
   const Model& m = sim.model();
   const State& s = sim.state();
   const Workspace& w = sim.workspace();
@@ -60,15 +62,13 @@ Legend cloth_mesh(const Simulation& sim, ColorBy mode, float& scale, ClothMesh& 
     case ColorBy::Pressure: {
       // Gauge pressure of the air pocket under each particle: below zero holds the cloth down.
       std::vector<float> g(n, 0.0f);
-      float peak = 0;
       const double p_atm = m.params.air.p_atm;
-      for (int i = 0; i < n && i < static_cast<int>(s.pocket_pressure.size()); ++i) {
+      for (int i = 0; i < n && i < static_cast<int>(s.pocket_pressure.size()); ++i)
         g[i] = static_cast<float>(s.pocket_pressure[i] - p_atm);
-        if (std::isfinite(g[i])) peak = std::max(peak, std::abs(g[i]));
-      }
-      scale = follow(scale, peak, 1.0f);
-      legend = {"air pressure - P_atm, Pa", -scale, scale, true, false};
-      for (int i = 0; i < n; ++i) mesh.color[i] = colormap(0.5f + 0.5f * g[i] / scale, true);
+      const float pb = static_cast<float>(m.params.air.breakthrough_pressure);
+      const float top = range > 0 ? range : pb > 0 ? pb : 1000.0f;
+      legend = {"air pressure - P_atm, Pa", -top, top, true, false};
+      for (int i = 0; i < n; ++i) mesh.color[i] = colormap(0.5f + 0.5f * g[i] / top, true);
       break;
     }
     case ColorBy::Strain: {
@@ -80,25 +80,84 @@ Legend cloth_mesh(const Simulation& sim, ColorBy mode, float& scale, ClothMesh& 
         strain[sp.a[k]] = std::max(strain[sp.a[k]], e);
         strain[sp.b[k]] = std::max(strain[sp.b[k]], e);
       }
-      const float hi =
-          m.params.strain_limit.tau > 0 ? static_cast<float>(m.params.strain_limit.tau) : 0.1f;
+      const float hi = range > 0                     ? range
+                       : m.params.strain_limit.tau > 0 ? static_cast<float>(m.params.strain_limit.tau)
+                                                       : 0.1f;
       legend = {"stretch of structural springs", 0, hi, false, false};
       for (int i = 0; i < n; ++i) mesh.color[i] = colormap(strain[i] / hi, false);
       break;
     }
     case ColorBy::Adhesion: {
-      float peak = 0;
       const int na = std::min(n, static_cast<int>(w.adhesion.size()));
-      for (int i = 0; i < na; ++i)
-        if (std::isfinite(w.adhesion[i])) peak = std::max(peak, static_cast<float>(w.adhesion[i]));
-      scale = follow(scale, peak, 1e-9f);
-      legend = {"adhesion force per particle, N", 0, scale, false, false};
+      // An inner particle in contact holds adhesion_pressure * its area; the
+      // border's share of the edge term comes on top, so the scale goes to twice that.
+      const double cell = m.params.cloth.size[0] / std::max(1, m.nu - 1) *
+                          m.params.cloth.size[1] / std::max(1, m.nv - 1);
+      float top = range > 0 ? range : static_cast<float>(2 * adhesion_pressure(m.params) * cell);
+      if (!(top > 0)) {
+        float peak = 0;
+        for (int i = 0; i < na; ++i)
+          if (std::isfinite(w.adhesion[i])) peak = std::max(peak, static_cast<float>(w.adhesion[i]));
+        top = scale = follow(scale, peak, 1e-9f);
+      }
+      legend = {"adhesion force per particle, N", 0, top, false, false};
       for (int i = 0; i < n; ++i)
-        mesh.color[i] = colormap(i < na ? static_cast<float>(w.adhesion[i]) / scale : 0.0f, false);
+        mesh.color[i] = colormap(i < na ? static_cast<float>(w.adhesion[i]) / top : 0.0f, false);
       break;
     }
   }
   return legend;
+}
+
+std::string key_number(float v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.4g", v);
+  return text;
+}
+
+void draw_key(Image& img, const Legend& legend) {
+  const int s = std::max(1, img.height / 400);  // font pixels per unit
+  const int margin = 8 * s, bar_w = std::min(180 * s, img.width / 3), bar_h = 10 * s;
+  auto rgb = [](const Vec3f& c, std::uint8_t out[3]) {
+    for (int k = 0; k < 3; ++k) out[k] = static_cast<std::uint8_t>(std::clamp(c[k], 0.0f, 1.0f) * 255 + 0.5f);
+  };
+  int tw = 0, th = 0;
+  label_size(legend.title, s, tw, th);
+  std::uint8_t c[3];
+  if (legend.binary) {  // title, then a swatch and a word for each colour
+    const int y = img.height - margin - th;
+    int x = margin;
+    const std::array<std::pair<Vec3f, const char*>, 2> swatches{
+        {{kContactColor, "in contact"}, {kFreeColor, "free"}}};
+    for (const auto& [color, word] : swatches) {
+      rgb(color, c);
+      fill_rect(img, x, y + (th - bar_h) / 2, x + bar_h, y + (th + bar_h) / 2, c, 1.0f);
+      int ww = 0, wh = 0;
+      label_size(word, s, ww, wh);
+      draw_label(img, x + bar_h + 2 * s, y, word, s);
+      x += bar_h + 2 * s + ww + 6 * s;
+    }
+    draw_label(img, margin, y - th - 2 * s, legend.title, s);
+    return;
+  }
+  // Title, the bar, its numbers under it: the ends, and 0 in the middle of a diverging one.
+  const int numbers_y = img.height - margin - th, bar_y = numbers_y - bar_h - s;
+  const std::uint8_t dark[3] = {0, 0, 0};
+  fill_rect(img, margin - s, bar_y - s, margin + bar_w + s, bar_y + bar_h + s, dark, 0.55f);
+  for (int x = 0; x < bar_w; ++x) {
+    rgb(colormap((x + 0.5f) / bar_w, legend.diverging), c);
+    fill_rect(img, margin + x, bar_y, margin + x + 1, bar_y + bar_h, c, 1.0f);
+  }
+  const std::string lo = key_number(legend.lo), hi = key_number(legend.hi);
+  int w = 0, h = 0;
+  draw_label(img, margin, numbers_y, lo, s);
+  label_size(hi, s, w, h);
+  draw_label(img, margin + bar_w - w, numbers_y, hi, s);
+  if (legend.diverging) {
+    label_size("0", s, w, h);
+    draw_label(img, margin + (bar_w - w) / 2, numbers_y, "0", s);
+  }
+  draw_label(img, margin, bar_y - s - th, legend.title, s);
 }
 
 }  // namespace wetcloth::viewer

@@ -28,9 +28,21 @@ Vec3f colormap(float t, bool diverging);
 // The two colours of the contact colouring.
 inline const Vec3f kContactColor{0.95f, 0.55f, 0.15f}, kFreeColor{0.55f, 0.60f, 0.68f};
 
-// Builds the mesh of the simulation's cloth, coloured by mode. scale is the
-// range of the automatic scales (pressure, adhesion): it grows at once and
-// shrinks slowly, so that colours do not flicker; keep it between calls.
-Legend cloth_mesh(const Simulation& sim, ColorBy mode, float& scale, ClothMesh& mesh);
+// Builds the mesh of the simulation's cloth, coloured by mode. The scales are
+// fixed by the scene, so that a colour means the same value all along a run:
+// pressure +-air.breakthrough_pressure (the deficit at which air breaks
+// through), strain 0 to strain_limit.tau, adhesion 0 to twice an inner
+// particle's share of eq. 13. range > 0 sets the top of the scale instead.
+// Only without adhesion (a scale of 0) is there an automatic one: scale grows
+// at once and shrinks slowly, so that colours do not flicker; keep it between calls.
+Legend cloth_mesh(const Simulation& sim, ColorBy mode, float& scale, ClothMesh& mesh,
+                  float range = 0);
+
+// Draws the legend as a key into the bottom-left corner of a picture (what the
+// viewer's panel shows): a colour bar with its numbers, or the two contact colours.
+void draw_key(Image& img, const Legend& legend);
+
+// A legend's number, short: 1000, 0.05, 1.2e-05.
+std::string key_number(float v);
 
 }  // namespace wetcloth::viewer

@@ -15,9 +15,12 @@ namespace wetcloth::viewer {
 namespace {
 
 constexpr float kDeg = std::numbers::pi_v<float> / 180;
-// Unit vector towards the key light: high, from the camera's left, so the tent's
-// two flanks get different light and its shadow falls beside it.
-const Vec3f kLight = Vec3f(-0.55f, -0.25f, 0.8f).normalized();
+
+// Unit vector from azimuth and elevation, degrees.
+Vec3f direction(float azimuth_deg, float elevation_deg) {
+  const float a = azimuth_deg * kDeg, e = elevation_deg * kDeg;
+  return Vec3f(std::cos(e) * std::cos(a), std::cos(e) * std::sin(a), std::sin(e));
+}
 
 Mat4f look_at(const Vec3f& eye, const Vec3f& target, const Vec3f& up) {
   const Vec3f f = (target - eye).normalized();
@@ -344,8 +347,10 @@ void Camera::move(float forward, float right) {
   target += forward * f + right * f.cross(Vec3f::UnitZ());
 }
 
-Camera frame_box(const Vec3f& lo, const Vec3f& hi, float aspect) {
+Camera frame_box(const Vec3f& lo, const Vec3f& hi, float aspect, const Camera& view) {
   Camera c;
+  c.yaw_deg = view.yaw_deg;
+  c.pitch_deg = view.pitch_deg;
   c.target = (lo + hi) / 2;
   // The nearest distance from which every corner of the box is in the picture,
   // with a small border.
@@ -362,6 +367,28 @@ Camera frame_box(const Vec3f& lo, const Vec3f& hi, float aspect) {
         {d, r.dot(back) + std::abs(r.dot(right)) / tx, r.dot(back) + std::abs(r.dot(up)) / ty});
   }
   c.distance = d;
+  return c;
+}
+
+Camera scene_view(const Params& p) {
+  Camera c;
+  if (p.cloth.orientation == "vertical") {
+    c.yaw_deg = -75;  // the cloth spans x and z: nearly face on, a little from the side
+    c.pitch_deg = 12;
+    return c;
+  }
+  for (const auto& [name, h] : p.handles) {  // the first pulling handle, by name
+    if (h.type != "force") continue;
+    const float du = static_cast<float>((h.at[0] - 0.5) * p.cloth.size[0]),
+                dv = static_cast<float>((h.at[1] - 0.5) * p.cloth.size[1]);
+    if (std::hypot(du, dv) > 0.25f * static_cast<float>(std::max(p.cloth.size[0], p.cloth.size[1]))) {
+      // From the far side, turned 30 degrees: the flap a corner or edge lifts
+      // faces the camera; from the default side it was a thin sliver.
+      c.yaw_deg = std::atan2(-dv, -du) / kDeg - 30;
+      c.pitch_deg = 28;
+    }
+    break;
+  }
   return c;
 }
 
@@ -388,11 +415,36 @@ Camera frame_scene(const Params& p, float aspect) {
     lo = lo.cwiseMin(b - Vec3f::Constant(r));
     hi = hi.cwiseMax(b + Vec3f::Constant(r));
   }
-  return frame_box(lo, hi, aspect);
+  return frame_box(lo, hi, aspect, scene_view(p));
+}
+
+void content_box(const Params& p, const std::vector<Vec3f>& cloth, Vec3f& lo, Vec3f& hi) {
+  lo = Vec3f::Constant(1e30f), hi = Vec3f::Constant(-1e30f);
+  for (const auto& x : cloth) lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
+  if (lo.x() > hi.x()) lo = hi = Eigen::Vector3d(p.cloth.center[0], p.cloth.center[1],
+                                                 p.cloth.center[2]).cast<float>();
+  const float size = static_cast<float>(std::max(p.cloth.size[0], p.cloth.size[1]));
+  const float table = static_cast<float>(p.table.height);
+  if (p.table.enabled && lo.z() - table < size * 0.5f) lo.z() = std::min(lo.z(), table);
+  if (p.ball.enabled) {
+    const Vec3f b =
+        Eigen::Vector3d(p.ball.center[0], p.ball.center[1], p.ball.center[2]).cast<float>();
+    const float r = static_cast<float>(p.ball.radius);
+    lo = lo.cwiseMin(b - Vec3f::Constant(r));
+    hi = hi.cwiseMax(b + Vec3f::Constant(r));
+  }
 }
 
 Stage stage_from(const Params& p) {
   Stage s;
+  // The key light from the camera's left, set with the view so that it stays put
+  // as one orbits. Over a flat cloth: high and well to the side, so the tent's two
+  // flanks get different light and its shadow falls beside it. A hanging cloth
+  // faces the camera: the light comes from nearer the camera and lower, or the
+  // side we see would be the dark one.
+  const Camera view = scene_view(p);
+  s.light = p.cloth.orientation == "vertical" ? direction(view.yaw_deg - 45, 35)
+                                              : direction(view.yaw_deg - 95, 53);
   s.table = p.table.enabled;
   s.table_center = {static_cast<float>(p.cloth.center[0]), static_cast<float>(p.cloth.center[1])};
   s.table_half = static_cast<float>(std::max(p.cloth.size[0], p.cloth.size[1]) * 2);
@@ -403,10 +455,12 @@ Stage stage_from(const Params& p) {
   if (s.table) {
     s.ground_z = static_cast<float>(p.table.height);
   } else {  // no table: the grid a little below the lowest thing in the scene
+    // (a hanging cloth's lower edge is half its height below its centre; a little
+    // more below it, as much as it stretches and swings, or a big empty floor shows).
     float low = static_cast<float>(p.cloth.center[2]);
-    if (p.cloth.orientation == "vertical") low -= static_cast<float>(p.cloth.size[1]);
+    if (p.cloth.orientation == "vertical") low -= static_cast<float>(p.cloth.size[1]) * 0.75f;
     if (s.ball) low = std::min(low, s.ball_center.z() - s.ball_radius);
-    s.ground_z = low - 0.1f;
+    s.ground_z = low - (p.cloth.orientation == "vertical" ? 0.0f : 0.1f);
   }
   return s;
 }
@@ -554,7 +608,7 @@ void Renderer::draw(const ClothMesh& cloth, const Stage& stage, const Camera& ca
   const float radius = (hi - lo).norm() / 2 + 0.02f;
   const float reach = 20;  // receivers far below the casters still get their shadow
   const Mat4f light_view_proj = ortho(radius, 0.0f, 2 * radius + reach) *
-                                look_at(center + kLight * (radius + 0.01f), center, Vec3f::UnitZ());
+                                look_at(center + stage.light * (radius + 0.01f), center, Vec3f::UnitZ());
 
   GLint target_fbo = 0;
   glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &target_fbo);
@@ -596,7 +650,7 @@ void Renderer::draw(const ClothMesh& cloth, const Stage& stage, const Camera& ca
     glUseProgram(p);
     set(p, "u_view_proj", view_proj);
     set(p, "u_eye", cam.eye());
-    set(p, "u_light", kLight);
+    set(p, "u_light", stage.light);
     if (shadows && opt.shadows) {
       set(p, "u_light_view_proj", light_view_proj);
       set(p, "u_shadow_map", 0);
@@ -632,7 +686,7 @@ void Renderer::draw(const ClothMesh& cloth, const Stage& stage, const Camera& ca
   // without shadow lookups. Both pushed back a little: the cloth lies within a
   // millimetre of the table.
   const Eigen::Vector2f shift =
-      -kLight.head<2>() / kLight.z() * std::max(0.0f, hi.z() - stage.ground_z);
+      -stage.light.head<2>() / stage.light.z() * std::max(0.0f, hi.z() - stage.ground_z);
   const Eigen::Vector2f a =
       lo.head<2>().cwiseMin(lo.head<2>() + shift) - Eigen::Vector2f::Constant(0.02f);
   const Eigen::Vector2f b =

@@ -35,14 +35,23 @@ struct Camera {
   void move(float forward, float right);
 };
 
-// A 3/4 view from above that frames the box [lo, hi] in an image of this aspect.
-Camera frame_box(const Vec3f& lo, const Vec3f& hi, float aspect);
-// Frames the cloth at rest, room left above it for a tent (or a fall).
+// Frames the box [lo, hi] in an image of this aspect, seen from view's direction
+// (its yaw and pitch; by default a 3/4 view from above).
+Camera frame_box(const Vec3f& lo, const Vec3f& hi, float aspect, const Camera& view = {});
+// The direction a scene is best seen from: a hanging cloth face on, nearly level;
+// a cloth pulled by a corner or an edge from across it, so that the lifted part
+// shows its face, not its edge; anything else the default 3/4 view.
+Camera scene_view(const Params& p);
+// Frames the cloth at rest, room left above it for a tent (or a fall), from scene_view.
 Camera frame_scene(const Params& p, float aspect);
+// The box of what a picture must show: the cloth as it is now, the ball, and the
+// table's height when the cloth is near it.
+void content_box(const Params& p, const std::vector<Vec3f>& cloth, Vec3f& lo, Vec3f& hi);
 
 // Everything drawn besides the cloth, from the scene's parameters.
 struct Stage {
-  float ground_z = 0;  // the ground grid; the table top when there is a table
+  Vec3f light{0, 0, 1};  // unit vector towards the key light, set from scene_view
+  float ground_z = 0;    // the ground grid; the table top when there is a table
   bool table = false;
   Eigen::Vector2f table_center{0, 0};
   float table_half = 0.6f;  // half-width of the table top (as in obstacles.obj)

@@ -42,10 +42,7 @@ void blit(Image& dst, const Image& src, int x, int y) {
   }
 }
 
-namespace {
-
-// Blends colour c over the rectangle [x0, x1) x [y0, y1) with opacity a.
-void fill(Image& img, int x0, int y0, int x1, int y1, const std::uint8_t c[3], float a) {
+void fill_rect(Image& img, int x0, int y0, int x1, int y1, const std::uint8_t c[3], float a) {
   x0 = std::max(x0, 0), y0 = std::max(y0, 0);
   x1 = std::min(x1, img.width), y1 = std::min(y1, img.height);
   for (int y = y0; y < y1; ++y)
@@ -55,10 +52,10 @@ void fill(Image& img, int x0, int y0, int x1, int y1, const std::uint8_t c[3], f
     }
 }
 
-}  // namespace
+namespace {
 
-void draw_label(Image& img, int x, int y, const std::string& text, int scale) {
-  // stb_easy_font knows printable ASCII only; the sweep's labels may hold ω.
+// stb_easy_font knows printable ASCII only; the sweep's labels may hold ω.
+std::vector<char> to_ascii(const std::string& text) {
   std::string ascii;
   for (std::size_t i = 0; i < text.size(); ++i) {
     const auto c = static_cast<unsigned char>(text[i]);
@@ -72,9 +69,22 @@ void draw_label(Image& img, int x, int y, const std::string& text, int scale) {
   }
   std::vector<char> buf(ascii.begin(), ascii.end());
   buf.push_back('\0');
+  return buf;
+}
+
+}  // namespace
+
+void label_size(const std::string& text, int scale, int& w, int& h) {
+  std::vector<char> buf = to_ascii(text);
+  w = stb_easy_font_width(buf.data()) * scale + 4 * scale;
+  h = stb_easy_font_height(buf.data()) * scale + 4 * scale;
+}
+
+void draw_label(Image& img, int x, int y, const std::string& text, int scale) {
+  std::vector<char> buf = to_ascii(text);
   const int pad = 2 * scale;
   const std::uint8_t black[3] = {0, 0, 0}, white[3] = {255, 255, 255};
-  fill(img, x, y, x + stb_easy_font_width(buf.data()) * scale + 2 * pad,
+  fill_rect(img, x, y, x + stb_easy_font_width(buf.data()) * scale + 2 * pad,
        y + stb_easy_font_height(buf.data()) * scale + 2 * pad, black, 0.55f);
 
   std::vector<char> quads(64 * 1024);
@@ -89,7 +99,7 @@ void draw_label(Image& img, int x, int y, const std::string& text, int scale) {
   for (int q = 0; q < n; ++q) {
     // Each quad is an axis-aligned rectangle: corners 0 and 2 are opposite.
     const Vertex &a = v[4 * q], &b = v[4 * q + 2];
-    fill(img, x + pad + static_cast<int>(a.x * scale), y + pad + static_cast<int>(a.y * scale),
+    fill_rect(img, x + pad + static_cast<int>(a.x * scale), y + pad + static_cast<int>(a.y * scale),
          x + pad + static_cast<int>(b.x * scale), y + pad + static_cast<int>(b.y * scale), white,
          1.0f);
   }

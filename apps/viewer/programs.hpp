@@ -25,6 +25,7 @@ struct RenderOptions {
   double fps = 0;  // 0: the scene's run.fps
   bool video = false, quiet = false;
   ColorBy color = ColorBy::Fabric;
+  float color_range = 0;  // > 0: the top of the colour scale (cloth_mesh's range)
 };
 // Exit code: 0 ok, 1 error (no GL, cannot write, ffmpeg failed), 3 the run blew up.
 int render_frames(const RenderOptions& o);

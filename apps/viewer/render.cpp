@@ -10,6 +10,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <deque>
 #include <fstream>
 #include <sstream>
 
@@ -94,6 +95,61 @@ fs::path last_frame(const fs::path& dir) {
   return best;
 }
 
+// The render's camera follows the cloth. Each frame frames a box holding what
+// it shows (content_box), widened towards where that was in the second before
+// and will be in the second after by a margin that grows with the time between
+// (half the scene's size per second): the camera moves ahead of the cloth, at a bounded
+// speed, and never cuts it off. A short running mean smooths the turns. The
+// frames' boxes alone decide it, so the same scene gives the same pictures.
+class FollowCamera {
+ public:
+  static constexpr double kWindow = 1.0, kBlur = 0.25;  // s of simulated time
+
+  FollowCamera(float aspect, const Camera& view) : aspect_(aspect), view_(view) {}
+
+  void add(double t, const Vec3f& lo, const Vec3f& hi) {
+    if (time_.empty()) rate_ = std::max(0.05f, 0.5f * (hi - lo).norm());  // m per s
+    time_.push_back(t), lo_.push_back(lo), hi_.push_back(hi);
+  }
+  double time(std::size_t f) const { return time_[f]; }
+  // How far past a frame's time frames must have been added before at() for it.
+  static constexpr double reach() { return kWindow + kBlur; }
+
+  Camera at(std::size_t f) const {
+    Vec3f lo = Vec3f::Zero(), hi = Vec3f::Zero();
+    int count = 0;
+    for (std::size_t s : near(f, kBlur)) {
+      Vec3f a = lo_[s], b = hi_[s];
+      for (std::size_t j : near(s, kWindow)) {
+        const float m = rate_ * static_cast<float>(std::abs(time_[j] - time_[s]));
+        a = a.cwiseMin(lo_[j] + Vec3f::Constant(m));
+        b = b.cwiseMax(hi_[j] - Vec3f::Constant(m));
+      }
+      lo += a, hi += b, ++count;
+    }
+    // The mean may stray inside the frame's own box (by rate * kBlur / 2 at most):
+    // that box is always kept whole.
+    lo = (lo / count).cwiseMin(lo_[f]);
+    hi = (hi / count).cwiseMax(hi_[f]);
+    const Vec3f pad = Vec3f::Constant(rate_ * 0.1f);  // a little floor around the cloth
+    return frame_box(lo - pad, hi + pad, aspect_, view_);
+  }
+
+ private:
+  // The frames within dt of frame f's time.
+  std::vector<std::size_t> near(std::size_t f, double dt) const {
+    std::vector<std::size_t> v;
+    for (std::size_t j = 0; j < time_.size(); ++j)
+      if (std::abs(time_[j] - time_[f]) <= dt + 1e-9) v.push_back(j);
+    return v;
+  }
+
+  float aspect_, rate_ = 1;
+  Camera view_;  // its direction
+  std::vector<double> time_;
+  std::vector<Vec3f> lo_, hi_;
+};
+
 }  // namespace
 
 int render_frames(const RenderOptions& o) {
@@ -113,41 +169,56 @@ int render_frames(const RenderOptions& o) {
     }
 
     Simulation sim(p);
-    const Camera cam = frame_scene(p, static_cast<float>(o.width) / o.height);
     const Stage stage = stage_from(p);
     DrawOptions opt;
     opt.fabric = o.color == ColorBy::Fabric;
     opt.wetness = static_cast<float>(p.cloth.humidity);
     const long long frames = last_frame_index(p.run.duration, fps);
     const bool progress = !o.quiet && isatty(STDERR_FILENO);
-    ClothMesh mesh;
+    FollowCamera follow(static_cast<float>(o.width) / o.height, scene_view(p));
+    // Frames wait here, simulated, until the camera has seen far enough ahead.
+    std::deque<std::pair<long long, ClothMesh>> pending;
     float scale = 0;
+    Legend legend;
     double draw_ms = 0, png_ms = 0;
     long long written = 0;
-    for (long long f = 0; f <= frames; ++f) {
-      const bool ok = sim.advance_to(frame_time(f, p.run.duration, fps));
-      cloth_mesh(sim, o.color, scale, mesh);
-      auto t0 = Clock::now();
-      target.bind();
-      renderer.draw(mesh, stage, cam, o.width, o.height, opt);
-      const Image img = target.read();
-      if (f > 0 || frames == 0) draw_ms += ms_since(t0);  // frame 0 also compiles the shaders
-      t0 = Clock::now();
-      char name[32];
-      std::snprintf(name, sizeof name, "frame_%05lld.png", f);
-      if (!write_png(o.out / name, img)) {
-        std::fprintf(stderr, "wetcloth: error: cannot write %s\n", (o.out / name).c_str());
-        return 1;
+    bool ok = true;
+    for (long long f = 0; f <= frames && ok; ++f) {
+      const double t = frame_time(f, p.run.duration, fps);
+      ok = sim.advance_to(t);
+      ClothMesh mesh;
+      legend = cloth_mesh(sim, o.color, scale, mesh, o.color_range);
+      Vec3f lo, hi;
+      content_box(p, mesh.position, lo, hi);
+      follow.add(t, lo, hi);
+      pending.emplace_back(f, std::move(mesh));
+      while (!pending.empty() &&
+             (!ok || f == frames || follow.time(pending.front().first) + follow.reach() <= t)) {
+        const long long g = pending.front().first;
+        auto t0 = Clock::now();
+        target.bind();
+        renderer.draw(pending.front().second, stage, follow.at(g), o.width, o.height, opt);
+        Image img = target.read();
+        if (o.color != ColorBy::Fabric) draw_key(img, legend);  // the scale is fixed: any frame's
+        if (g > 0 || frames == 0) draw_ms += ms_since(t0);  // frame 0 also compiles the shaders
+        pending.pop_front();
+        t0 = Clock::now();
+        char name[32];
+        std::snprintf(name, sizeof name, "frame_%05lld.png", g);
+        if (!write_png(o.out / name, img)) {
+          std::fprintf(stderr, "wetcloth: error: cannot write %s\n", (o.out / name).c_str());
+          return 1;
+        }
+        png_ms += ms_since(t0);
+        ++written;
+        if (progress) std::fprintf(stderr, "\rframe %lld/%lld", g + 1, frames + 1);
       }
-      png_ms += ms_since(t0);
-      ++written;
-      if (progress) std::fprintf(stderr, "\rframe %lld/%lld", f + 1, frames + 1);
-      if (!ok) {
-        if (progress) std::fprintf(stderr, "\n");
-        std::fprintf(stderr, "wetcloth: %s\nframes so far: %s\n", sim.blow_up_reason().c_str(),
-                     o.out.c_str());
-        return 3;
-      }
+    }
+    if (!ok) {
+      if (progress) std::fprintf(stderr, "\n");
+      std::fprintf(stderr, "wetcloth: %s\nframes so far: %s\n", sim.blow_up_reason().c_str(),
+                   o.out.c_str());
+      return 3;
     }
     if (progress) std::fprintf(stderr, "\n");
 
@@ -165,9 +236,12 @@ int render_frames(const RenderOptions& o) {
       }
     }
     if (!o.quiet)
-      std::printf("%s: %lld frames, %dx%d, in %s%s (%.1f ms per frame to draw, %.1f ms to write)\n",
-                  p.name.c_str(), written, o.width, o.height, o.out.c_str(),
+      std::printf("%s: %lld frame%s, %dx%d, in %s%s (%.1f ms per frame to draw, %.1f ms to write)\n",
+                  p.name.c_str(), written, written == 1 ? "" : "s", o.width, o.height, o.out.c_str(),
                   o.video ? " + video.mp4" : "", draw_ms / std::max(1LL, frames), png_ms / written);
+    if (!o.quiet && o.color != ColorBy::Fabric && !legend.binary)
+      std::printf("colour: %s, %s to %s\n", legend.title.c_str(), key_number(legend.lo).c_str(),
+                  key_number(legend.hi).c_str());
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "wetcloth: error: %s\n", e.what());
@@ -212,7 +286,8 @@ bool render_contact_sheet(const std::vector<std::pair<std::string, fs::path>>& c
     tiles.push_back(std::move(t));
   }
   // One camera for every tile, so that the tiles compare.
-  const Camera cam = frame_box(lo, hi, static_cast<float>(tile_w) / tile_h);
+  const Camera cam =
+      frame_box(lo, hi, static_cast<float>(tile_w) / tile_h, scene_view(tiles.front().params));
 
   // A row for a few cases, a grid for many.
   const int n = static_cast<int>(tiles.size());

@@ -216,6 +216,7 @@ class Viewer {
   void advance(double wall_dt) {
     const auto t0 = Clock::now();
     const double dt = params_.integrator.dt;
+    const long long steps = sim_->state().steps;
     if (blow_up_.empty()) {
       if (step_once_) {
         sim_->step();
@@ -234,7 +235,9 @@ class Viewer {
       if (!blow_up_.empty()) paused_ = true;
     }
     step_once_ = false;
-    physics_ms_ = ms_since(t0);
+    // Frames that step nothing (paused, or the screenshot's last few) keep the last
+    // figure: the panel would read 0 ms.
+    if (sim_->state().steps != steps) physics_ms_ = ms_since(t0);
   }
 
   // --- mouse and keys ---------------------------------------------------------------
@@ -410,13 +413,23 @@ class Viewer {
 
   // --- the panel ------------------------------------------------------------------------
 
-  void plot(const char* label, const History& h, const char* format) {
+  // A scrolling plot whose scale spans at least min_span: noise around a steady
+  // value stays a flat line instead of being stretched into spikes.
+  void plot(const char* label, const History& h, const char* format, float min_span) {
     std::vector<float> v(h.value.begin(), h.value.end());
     char overlay[64] = "";
     if (!v.empty()) std::snprintf(overlay, sizeof overlay, format, v.back());
+    float lo = FLT_MAX, hi = -FLT_MAX;
+    for (float x : v)
+      if (std::isfinite(x)) lo = std::min(lo, x), hi = std::max(hi, x);
+    if (lo > hi) lo = hi = 0;
+    if (hi - lo < min_span) {
+      const float mid = (lo + hi) / 2;
+      lo = mid - min_span / 2, hi = mid + min_span / 2;
+    }
     ImGui::Text("%s", label);
     ImGui::PlotLines((std::string("##") + label).c_str(), v.data(), static_cast<int>(v.size()), 0,
-                     overlay, FLT_MAX, FLT_MAX, ImVec2(ImGui::GetContentRegionAvail().x, 45));
+                     overlay, lo, hi, ImVec2(ImGui::GetContentRegionAvail().x, 45));
   }
 
   // The plots' samples, on the simulation's clock so that they do not depend on the frame rate.
@@ -425,7 +438,7 @@ class Viewer {
     if (s.time < next_sample_) return;
     next_sample_ = s.time + kSampleInterval;
     const Metrics m = sim_->metrics();
-    pressure_.add(s.time, m.inner_pressure_pa - params_.air.p_atm);
+    pressure_.add(s.time, params_.air.p_atm - m.inner_pressure_pa);  // the deficit, as the sweep plots it
     contact_.add(s.time, m.contact_area_m2 * 1e4);
     height_.add(s.time, m.handle_height_m * 1e2);
   }
@@ -457,11 +470,10 @@ class Viewer {
                         ImGui::GetColorU32(ImVec4(c.x(), c.y(), c.z(), 1)));
     }
     ImGui::Dummy(ImVec2(w, h));
-    ImGui::Text("%.3g", legend_.lo);
-    char hi[32];
-    std::snprintf(hi, sizeof hi, "%.3g", legend_.hi);
-    ImGui::SameLine(std::max(0.0f, w - ImGui::CalcTextSize(hi).x));
-    ImGui::Text("%s", hi);
+    ImGui::Text("%s", key_number(legend_.lo).c_str());
+    const std::string hi = key_number(legend_.hi);
+    ImGui::SameLine(std::max(0.0f, w - ImGui::CalcTextSize(hi.c_str()).x));
+    ImGui::Text("%s", hi.c_str());
   }
 
   bool combo(const char* label, std::string& value, const std::vector<std::string>& choices) {
@@ -566,10 +578,12 @@ class Viewer {
     ImGui::Checkbox("anti-alias", &antialias_);
 
     ImGui::Separator();
-    ImGui::TextDisabled("last %.2f s of simulated time", height_.span());
-    plot("inner pressure - P_atm, Pa", pressure_, "%.1f Pa");
-    plot("contact area, cm\xC2\xB2", contact_, "%.1f cm\xC2\xB2");
-    plot("handle height, cm", height_, "%.2f cm");
+    ImGui::TextDisabled("last %.2f s of simulated time", pressure_.span());
+    // At least 5 % of the breakthrough deficit: a vented or open cloth's 0 Pa stays flat.
+    plot("pressure deficit P_atm - p, Pa", pressure_, "%.1f Pa",
+         std::max(10.0f, 0.05f * static_cast<float>(params_.air.breakthrough_pressure)));
+    plot("contact area, cm\xC2\xB2", contact_, "%.1f cm\xC2\xB2", 1.0f);
+    if (!params_.handles.empty()) plot("handle height, cm", height_, "%.2f cm", 1.0f);
 
     if (ImGui::CollapsingHeader("mouse and keys")) {
       ImGui::TextWrapped(

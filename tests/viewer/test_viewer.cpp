@@ -166,6 +166,23 @@ TEST(Render, BadInputExitsWithTwoAndWritesNothing) {
       2);
   EXPECT_EQ(run_cli("render pull-straight --humidity 7 --out '" + out.string() + "' 2>/dev/null"),
             2);
+  EXPECT_EQ(run_cli("render pull-straight --fps 0 --out '" + out.string() + "' 2>/dev/null"), 2);
+  EXPECT_FALSE(fs::exists(out));
+}
+
+TEST(Render, OutputsAreCheckedBeforeTheSimulation) {
+  // A folder that cannot be made, a screenshot into one, and --video without
+  // ffmpeg: bad input (2), found before simulating, nothing left behind.
+  EXPECT_EQ(run_cli("render hang --duration 0.05 --out /proc/nope 2>/dev/null"), 2);
+  EXPECT_EQ(run_cli("view hang --screenshot-after 0.05 /proc/nope/x.png 2>/dev/null"), 2);
+  const fs::path out = kOut / "no-ffmpeg";
+  fs::remove_all(out);
+  const std::string cmd = "PATH=/nonexistent '" + kCli.string() +
+                          "' render hang --duration 0.05 --video --out '" + out.string() +
+                          "' 2>/dev/null";
+  const int status = std::system(cmd.c_str());
+  ASSERT_TRUE(WIFEXITED(status));
+  EXPECT_EQ(WEXITSTATUS(status), 2);
   EXPECT_FALSE(fs::exists(out));
 }
 

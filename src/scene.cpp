@@ -7,6 +7,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <sstream>
 #define TOML_HEADER_ONLY 1
@@ -521,8 +522,12 @@ Params parse_scene(const std::string& text, const std::string& source,
 }
 
 Params load_scene(const std::string& scene, const std::vector<std::string>& overrides) {
+  // A file, not a folder: a run's output folder named after a built-in scene
+  // (`--out hang`) opens as a stream too, and read as an empty scene.
+  std::error_code ec;
   std::ifstream probe(scene);
-  if (probe.good()) return parse_scene(read_file(scene), scene, overrides);
+  if (probe.good() && !std::filesystem::is_directory(scene, ec))
+    return parse_scene(read_file(scene), scene, overrides);
   for (const auto& b : builtin_scenes())
     if (b.name == scene) return parse_scene(b.text, "scenes/" + b.name + ".toml", overrides);
   if (scene.find('/') != std::string::npos || scene.find(".toml") != std::string::npos)

@@ -64,6 +64,11 @@ expect_bad handletype "pull-corner.toml with --set 'handle.pull.type=\"move\"': 
 "$W" 2>"$T/err"; code=$?
 [ $code -eq 2 ] && grep -q "Subcommands:" "$T/err" && ok "no command: exit 2, the help" ||
   bad "no command: exit $code, $(cat "$T/err")"
+# A folder named like a built-in scene (a run's --out) does not hide the scene.
+mkdir -p "$T/hang"
+(cd "$T" && "$W" check hang 2>&1) | grep -q '^name = "hang"' && ok "a folder named hang does not hide the scene" ||
+  bad "folder hides the scene: $(cd "$T" && "$W" check hang 2>&1 | head -3)"
+rmdir "$T/hang"
 # An empty --out (an unset variable) is a mistake, not the default folder.
 for cmd in "run hang" "sweep hang --humidity 0.5" "converge hang" "bench"; do
   (cd "$T" && "$W" $cmd --out "" 2>"$T/err" >/dev/null); code=$?

@@ -358,17 +358,23 @@ toml::table parse_override(const std::string& text) {
   }
 }
 
-// Checks that combine keys. An error names the scene, and the overrides of
-// the same section (cloth, handle, ...) as the key it reports: one of them
-// may have set it.
+// Checks that combine keys. An error names the scene, with the line of the
+// key it reports where the scene sets it, and the overrides that may have set
+// what it says: those of the key's section (cloth, handle, ...) and those of
+// any key the message names.
 void check_consistency(const Params& p, const std::string& source,
-                       const std::vector<std::string>& overrides) {
+                       const std::vector<std::string>& overrides, const toml::table& scene) {
   auto bad = [&](const std::string& key, const std::string& msg) {
     const std::string section = key.substr(0, key.find('.'));
     std::string sets;
-    for (const auto& o : overrides)
-      if (o.substr(0, o.find('.')) == section) sets += (sets.empty() ? " with --set '" : "', '") + o;
-    throw SceneError(source + (sets.empty() ? "" : sets + "'") + ": " + key + ": " + msg);
+    for (const auto& o : overrides) {
+      const std::string set_key = o.substr(0, o.find('='));
+      if (o.substr(0, o.find('.')) == section || msg.find(set_key) != std::string::npos)
+        sets += (sets.empty() ? " with --set '" : "', '") + o;
+    }
+    std::string line;
+    if (const toml::node* n = scene.at_path(key).node(); n && source != kInCode) line = ":" + std::to_string(n->source().begin.line);
+    throw SceneError(source + line + (sets.empty() ? "" : sets + "'") + ": " + key + ": " + msg);
   };
   if (p.contact.surface == "ball" && !p.ball.enabled)
     bad("contact.surface", "is 'ball' but ball.enabled is false");
@@ -517,7 +523,7 @@ Params parse_scene(const std::string& text, const std::string& source,
   apply_table(root, "", p, true);
   // Overrides are applied on top, each keeping its own source for messages.
   for (const auto& o : overrides) apply_table(parse_override(o), "", p, false);
-  check_consistency(p, source, overrides);
+  check_consistency(p, source, overrides, root);
   return p;
 }
 

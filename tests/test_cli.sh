@@ -46,10 +46,13 @@ expect_bad section    "section.toml:1: cloth: expected a table, [cloth]" "$T/sec
 # Options CLI11 rejects are bad input too (its own codes are 100 and up).
 expect_bad notanumber "--humidity: not a number: abc" hang --humidity abc
 expect_bad option     "--frobnicate"                    hang --frobnicate
-expect_bad inside     "drop-table.toml with --set 'cloth.tilt=20': cloth.center: the cloth starts 1.3 mm inside the table" \
+expect_bad inside     "drop-table.toml:5 with --set 'cloth.tilt=20': cloth.center: the cloth starts 1.3 mm inside the table" \
   drop-table --set cloth.tilt=20
-expect_bad handletype "pull-corner.toml with --set 'handle.pull.type=\"move\"': handle.pull.force: applies to force handles only" \
+expect_bad handletype "pull-corner.toml:14 with --set 'handle.pull.type=\"move\"': handle.pull.force: applies to force handles only" \
   pull-corner --set 'handle.pull.type="move"'
+# An override the message names is named, though of another section.
+expect_bad surface    "drop-table.toml with --set 'table.enabled=false': contact.surface: is 'table' but table.enabled is false" \
+  drop-table --set table.enabled=false
 # An --out that cannot be made, or that is a file: bad input, named, the file untouched.
 "$W" run hang --out /proc/wetcloth-out --quiet 2>"$T/err"; code=$?
 [ $code -eq 2 ] && grep -qF -- "--out /proc/wetcloth-out: cannot make it" "$T/err" &&

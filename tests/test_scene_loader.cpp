@@ -73,7 +73,7 @@ TEST(SceneLoader, HandleKeysMustFitTheType) {
     EXPECT_NE(e.find(what), std::string::npos) << text << " -> " << e;
   };
   expect("[handle.p]\ntype = \"pin\"\nforce = [0, 0, 1]\n",
-         "handle.p.force: applies to force handles only (this one is pin)");
+         "bad.toml:3: handle.p.force: applies to force handles only (this one is pin)");
   expect("[handle.m]\ntype = \"move\"\nmax_height = 0.1\n",
          "handle.m.max_height: applies to force handles only");
   expect("[handle.p]\ntype = \"pin\"\nmax_travel = 0.1\n",

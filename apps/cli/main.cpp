@@ -84,9 +84,11 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
     // --help and --version end here with 0; a bad option or value is bad
-    // input like any other (CLI11's own codes are 100 and up).
-    const int code = app.exit(e);
-    return code == 0 ? 0 : cli::kBadInput;
+    // input like any other (CLI11's own codes are 100 and up), said as the
+    // loader says it.
+    if (e.get_exit_code() == 0) return app.exit(e);
+    std::fprintf(stderr, "wetcloth: error: %s\nRun with --help for more information.\n", e.what());
+    return cli::kBadInput;
   }
 
   try {

@@ -154,7 +154,10 @@ std::vector<ParamDef> make_defs() {
       field("self_collision.k", "N/m", 0, 1e7, "repulsion stiffness k_t", P(self_collision.k)),
       field("self_collision.damping", "N·s/m", 0, 1e3, "damping k_f of colliding particles",
             P(self_collision.damping)),
-      field("integrator.type", "", 1, 0, "time integrator", P(integrator.type),
+      field("integrator.type", "", 1, 0,
+            "time integrator: symplectic-euler (small steps), implicit-euler (large steps), "
+            "explicit-euler (the blog's forward Euler: it gains energy every step, for comparison)",
+            P(integrator.type),
             {"explicit-euler", "symplectic-euler", "implicit-euler"}),
       field("integrator.dt", "s", 1e-9, 1, "time step", P(integrator.dt)),
       field("integrator.threads", "", 0, 1024,

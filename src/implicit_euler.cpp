@@ -398,11 +398,11 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
   // Converged when no particle's velocity is off by more than the tolerance,
   // taken as M⁻¹ r: the velocity error of a motion the springs do not resist
   // (the cloth sliding or falling as a whole), and more than that of one they
-  // do. The preconditioned residual P⁻¹ r is smaller by up to 1 + h² k / m
-  // (about 13 at 1/240 s): a hanging cloth or one on an incline stopped at
-  // the first iteration, and did not move. (A norm over the whole cloth would
-  // let the adhesion and weight of thousands of particles drown out the few
-  // the hand pulls.)
+  // do. The preconditioned residual z = P r (P: the inverse diagonal blocks)
+  // is smaller by up to 1 + h² k / m (about 13 at 1/240 s): a hanging cloth
+  // or one on an incline stopped at the first iteration, and did not move.
+  // (A norm over the whole cloth would let the adhesion and weight of
+  // thousands of particles drown out the few the hand pulls.)
   auto [rz, worst] = precondition(m, w);
   each_block([&](int a0, int a1) {
     for (int k = 0; k < 3; ++k) std::copy(z.c[k] + a0, z.c[k] + a1, p.c[k] + a0);

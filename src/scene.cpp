@@ -305,6 +305,13 @@ void apply_table(const toml::table& t, const std::string& prefix, Params& p, boo
         const std::string hkey = "handle." + std::string(name.str());
         const auto* ht = h.as_table();
         if (!ht) fail(h, hkey, "expected a table");
+        // The name is part of keys (handle.NAME.force, --set, scene.toml): a bare key.
+        const std::string_view nm = name.str();
+        if (nm.empty() || !std::all_of(nm.begin(), nm.end(), [](unsigned char c) {
+              return std::isalnum(c) || c == '_' || c == '-';
+            }))
+          fail(h, hkey, "a handle's name is letters, digits, _ and - (it is part of keys such as "
+                        "handle.NAME.force)");
         if (!new_handles && !p.handles.count(std::string(name.str()))) {
           std::string names;
           for (const auto& [n, unused] : p.handles) names += (names.empty() ? "" : ", ") + n;
@@ -371,8 +378,11 @@ void check_consistency(const Params& p, const std::string& source,
     const std::string section = key.substr(0, key.find('.'));
     std::string sets;
     for (const auto& o : overrides) {
-      const std::string set_key = o.substr(0, o.find('='));
-      if (o.substr(0, o.find('.')) == section || msg.find(set_key) != std::string::npos)
+      std::string set_key = o.substr(0, o.find('='));  // `key = value` may have spaces
+      set_key.erase(set_key.find_last_not_of(" \t") + 1);
+      set_key.erase(0, set_key.find_first_not_of(" \t"));
+      const bool named = !set_key.empty() && msg.find(set_key) != std::string::npos;
+      if (o.substr(0, o.find('.')) == section || named)
         sets += (sets.empty() ? " with --set '" : "', '") + o;
     }
     std::string line;

@@ -146,7 +146,12 @@ void Simulation::reset() {
   compute_normals(model_, state_.x, ws_.normal);
 }
 
-void Simulation::set_humidity(double omega) { wetcloth::set_humidity(model_, omega); }
+void Simulation::set_humidity(double omega) {
+  if (!(omega >= 0 && omega <= 1))  // as check_params would say it
+    throw SceneError("Params: cloth.humidity: value " + format_value(omega) +
+                     " is out of range [0, 1]");
+  wetcloth::set_humidity(model_, omega);
+}
 
 void Simulation::set_params(const Params& p) {
   check_params(p);

@@ -72,6 +72,13 @@ mkdir -p "$T/hang"
 (cd "$T" && "$W" check hang 2>&1) | grep -q '^name = "hang"' && ok "a folder named hang does not hide the scene" ||
   bad "folder hides the scene: $(cd "$T" && "$W" check hang 2>&1 | head -3)"
 rmdir "$T/hang"
+# A --grid that scales a scene past a range (a handle's patch, in grid steps):
+# named, before anything runs (sweep's worker threads used to abort the process).
+printf '[cloth]\nresolution = [11, 11]\n[handle.p]\nat = [0.5, 0.5]\npatch = 200\n' > "$T/big.toml"
+"$W" sweep "$T/big.toml" --grid 101 --humidity 0.5 --out "$T/bigsweep" 2>"$T/err" >/dev/null; code=$?
+[ $code -eq 2 ] && grep -qF -- "--grid 101: handle.p.patch: value 2000.0 is out of range" "$T/err" &&
+  [ ! -e "$T/bigsweep" ] && ok "--grid past a range: exit 2, named, nothing written" ||
+  bad "--grid past a range: exit $code, $(cat "$T/err")"
 # An empty --out (an unset variable) is a mistake, not the default folder.
 for cmd in "run hang" "sweep hang --humidity 0.5" "converge hang" "bench"; do
   (cd "$T" && "$W" $cmd --out "" 2>"$T/err" >/dev/null); code=$?
@@ -91,8 +98,8 @@ for f in metrics.csv scene.toml summary.json obstacles.obj frames/frame_00000.ob
   [ -s "$T/a/$f" ] && ok "wrote $f" || bad "missing $f"
 done
 head -1 "$T/a/metrics.csv" | grep -q "time_s,handle_height_m" && ok "metrics header" || bad "metrics header"
-grep -q '"threads": 0,' "$T/a/summary.json" &&
-  ok "summary.json: threads a number (0: chosen as it ran)" ||
+grep -q '"threads": 0,' "$T/a/summary.json" && grep -q '"threads_used": 1' "$T/a/summary.json" &&
+  ok "summary.json: threads a number (0: chosen as it ran), the count used beside it" ||
   bad "summary.json threads: $(grep -A3 threads "$T/a/summary.json")"
 [ "$(wc -l < "$T/a/metrics.csv")" -eq 5 ] && ok "one row per frame" || bad "rows: $(wc -l < "$T/a/metrics.csv")"
 ls "$T/a" "$T/a/frames" | grep -q '\.tmp$' && bad "temporary files left" || ok "no temporary files"

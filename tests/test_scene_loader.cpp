@@ -181,4 +181,13 @@ TEST(SceneLoader, ParamsMadeInCodeAreChecked) {
   p = sim.model().params;
   p.air.model = "leaky";
   EXPECT_THROW(sim.set_params(p), SceneError);
+  EXPECT_THROW(sim.set_humidity(1.5), SceneError);
+  EXPECT_NO_THROW(sim.set_humidity(1.0));
+}
+
+// A handle's name is part of its keys (and of scene.toml): a bare key.
+TEST(SceneLoader, HandleNamesAreBareKeys) {
+  EXPECT_NE(error_of("[handle.\"my pull\"]\ntype = \"pin\"\n").find("bad.toml:1: handle.my pull: a handle's name is letters"),
+            std::string::npos);
+  EXPECT_EQ(error_of("[handle.pull-2]\ntype = \"pin\"\n"), "");
 }

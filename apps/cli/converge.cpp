@@ -206,18 +206,19 @@ std::function<int()> add_converge_command(CLI::App& app) {
       bool any_untrusted = false;
       for (std::size_t q = 0; q < at.size(); ++q) {
         const double v = values[k - 1][at[q]];
+        // A finite limit of too low an order (a nan one says so itself).
+        const bool untrusted = !same[q] && !trusted(q) && std::isfinite(fits[q].limit);
+        any_untrusted = any_untrusted || untrusted;
         char cell[64];
         std::snprintf(cell, sizeof cell, "%.*g%s", kDigits,
-                      same[q] ? (v == 0 ? 0.0 : v) : fits[q].limit,
-                      same[q] || trusted(q) || std::isnan(fits[q].limit) ? "" : " ?");
-        any_untrusted = any_untrusted || std::string(cell).ends_with(" ?");
+                      same[q] ? (v == 0 ? 0.0 : v) : fits[q].limit, untrusted ? " ?" : "");
         std::printf("  %-24s", cell);
       }
       std::printf("\n");
       if (any_untrusted)
         std::printf(
-            "(?: an order under %.1f: the differences shrink too slowly with the step to trust "
-            "the limit; the spread of the values is the better error bar)\n",
+            "(?: an order under %.1f, or a limit of 0: the differences shrink too slowly with the "
+            "step to trust the limit; the spread of the values is the better error bar)\n",
             kLeastOrder);
       if (any_same)
         std::printf(

@@ -69,7 +69,7 @@ int main(int argc, char** argv) {
       names += (names.empty() ? "" : ", ") + sub->get_name();
     }
     if (!known) {
-      std::fprintf(stderr, "wetcloth: unknown %s '%s'%s (the commands: %s; wetcloth --help)\n",
+      std::fprintf(stderr, "wetcloth: error: unknown %s '%s'%s (the commands: %s; wetcloth --help)\n",
                    first[0] == '-' ? "option" : "command", first.c_str(),
                    first[0] == '-' ? " before the command" : "", names.c_str());
       return cli::kBadInput;

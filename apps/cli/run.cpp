@@ -65,6 +65,11 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress) {
   auto wall = [&] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   };
+  // Time to 5 cm is a pulled handle's: a pin (measured when there are only
+  // pins) sits at its height from the start.
+  const Model& model = sim.model();
+  const bool pulled = model.measured_handle >= 0 &&
+                      model.handles[model.measured_handle].type != HandleType::Pin;
   for (long long f = 0; f <= frames; ++f) {
     const double t = frame_time(f, p.run.duration, p.run.fps);
     const bool ok = sim.advance_to(t);
@@ -76,7 +81,7 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress) {
       std::snprintf(name, sizeof name, "frame_%05lld.obj", f);
       write_file_atomic(out / "frames" / name, cloth_obj(sim.model(), sim.state()));
     }
-    if (r.time_to_5cm_s < 0 && m.handle_height_m >= 0.05) r.time_to_5cm_s = m.time_s;
+    if (pulled && r.time_to_5cm_s < 0 && m.handle_height_m >= 0.05) r.time_to_5cm_s = m.time_s;
     if (progress) print_progress(sim.state().time, p.run.duration, wall());
     if (!ok) {
       r.code = kBlowUp;
@@ -101,12 +106,14 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress) {
   s["steps"] = r.steps;
   s["substeps"] = sim.workspace().substeps;  // more than steps where implicit Euler halved some
   s["particles"] = sim.model().n;
-  // The count asked for (0: chosen as it ran, integrator.threads = 0), always
-  // a number; how the choice went, beside it.
+  // The count asked for (0: chosen as it ran), always a number; beside it how
+  // the choice went, or the count used (at most one thread per 1024 particles).
   s["threads"] = p.integrator.threads;
   if (const auto& c = sim.thread_choice(); c.automatic)
     s["thread_choice"] = {
         {"most", c.most}, {"steps_on_1", c.steps_on_one}, {"steps_on_most", c.steps_on_most}};
+  else
+    s["threads_used"] = sim.model().threads;
   s["simulated_seconds"] = sim.state().time;
   s["wall_seconds"] = r.wall_seconds;
   s["realtime_factor"] = r.wall_seconds > 0 ? sim.state().time / r.wall_seconds : 0.0;
@@ -131,7 +138,12 @@ std::vector<RunResult> run_all(const std::vector<std::pair<Params, fs::path>>& r
   std::mutex lock;
   auto worker = [&] {
     for (std::size_t i; (i = next++) < runs.size();) {
-      results[i] = run_scene(runs[i].first, runs[i].second, false);
+      try {  // an exception must not end the process from a worker thread
+        results[i] = run_scene(runs[i].first, runs[i].second, false);
+      } catch (const std::exception& e) {
+        results[i].code = dynamic_cast<const SceneError*>(&e) ? kBadInput : kError;
+        results[i].message = e.what();
+      }
       std::lock_guard<std::mutex> hold(lock);
       done(i, results[i]);
     }

@@ -35,6 +35,15 @@ inline Params load_on_grid(const std::string& scene, const std::vector<std::stri
     throw SceneError(option + ": " + e.what());
   }
   if (overrides_key(sets, "integrator.dt")) p.integrator.dt = dt;
+  // What the scaling made of the scene (a handle's patch in grid steps) is
+  // checked here, so that the error names the option before anything runs.
+  try {
+    check_params(p);
+  } catch (const SceneError& e) {
+    std::string what = e.what();
+    if (what.rfind("Params: ", 0) == 0) what = what.substr(8);
+    throw SceneError(option + " " + std::to_string(*grid) + ": " + what);
+  }
   return p;
 }
 
@@ -56,14 +65,14 @@ inline CLI::Validator in_range_of(const std::string& key) {
       def->range_text());
 }
 
-// Throws SceneError (bad input) when `out`, or the nearest part of it that
-// exists, is not a folder: checked before anything runs or is written.
 // An --out that is empty (an unset shell variable) is a mistake, not "the default".
 inline CLI::Validator a_path() {
   return CLI::Validator(
       [](std::string& text) -> std::string { return text.empty() ? "an empty path" : ""; }, "");
 }
 
+// Throws SceneError (bad input) when `out`, or the nearest part of it that
+// exists, is not a folder: checked before anything runs or is written.
 inline void check_output_folder(const std::filesystem::path& out, const std::string& option = "--out") {
   namespace fs = std::filesystem;
   for (fs::path at = out; !at.empty() && at != at.parent_path(); at = at.parent_path()) {

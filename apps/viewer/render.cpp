@@ -136,11 +136,12 @@ class FollowCamera {
   }
 
  private:
-  // The frames within dt of frame f's time.
+  // The frames within dt of frame f's time (the times are in order).
   std::vector<std::size_t> near(std::size_t f, double dt) const {
+    const auto first = std::lower_bound(time_.begin(), time_.end(), time_[f] - dt - 1e-9);
+    const auto end = std::upper_bound(time_.begin(), time_.end(), time_[f] + dt + 1e-9);
     std::vector<std::size_t> v;
-    for (std::size_t j = 0; j < time_.size(); ++j)
-      if (std::abs(time_[j] - time_[f]) <= dt + 1e-9) v.push_back(j);
+    for (auto it = first; it != end; ++it) v.push_back(static_cast<std::size_t>(it - time_.begin()));
     return v;
   }
 
@@ -177,9 +178,15 @@ int render_frames(const RenderOptions& o) {
     const bool progress = !o.quiet && isatty(STDERR_FILENO);
     FollowCamera follow(static_cast<float>(o.width) / o.height, scene_view(p));
     // Frames wait here, simulated, until the camera has seen far enough ahead.
-    std::deque<std::pair<long long, ClothMesh>> pending;
+    struct Pending {
+      long long frame;
+      ClothMesh mesh;
+      Legend legend;  // its own: the adhesion scale may follow the frames
+    };
+    std::deque<Pending> pending;
     float scale = 0;
-    Legend legend;
+    Legend legend;  // the last frame's, for the summary
+    Vec3f lo = Vec3f::Zero(), hi = Vec3f::Zero();
     double draw_ms = 0, png_ms = 0;
     long long written = 0;
     bool ok = true;
@@ -188,18 +195,19 @@ int render_frames(const RenderOptions& o) {
       ok = sim.advance_to(t);
       ClothMesh mesh;
       legend = cloth_mesh(sim, o.color, scale, mesh, o.color_range);
-      Vec3f lo, hi;
-      content_box(p, mesh.position, lo, hi);
+      // A frame that blew up keeps the box of the one before: its flung
+      // particles would zoom out every frame the camera looks ahead from.
+      if (ok || f == 0) content_box(p, mesh.position, lo, hi);
       follow.add(t, lo, hi);
-      pending.emplace_back(f, std::move(mesh));
+      pending.push_back({f, std::move(mesh), legend});
       while (!pending.empty() &&
-             (!ok || f == frames || follow.time(pending.front().first) + follow.reach() <= t)) {
-        const long long g = pending.front().first;
+             (!ok || f == frames || follow.time(pending.front().frame) + follow.reach() <= t)) {
+        const long long g = pending.front().frame;
         auto t0 = Clock::now();
         target.bind();
-        renderer.draw(pending.front().second, stage, follow.at(g), o.width, o.height, opt);
+        renderer.draw(pending.front().mesh, stage, follow.at(g), o.width, o.height, opt);
         Image img = target.read();
-        if (o.color != ColorBy::Fabric) draw_key(img, legend);  // the scale is fixed: any frame's
+        if (o.color != ColorBy::Fabric) draw_key(img, pending.front().legend);
         if (g > 0 || frames == 0) draw_ms += ms_since(t0);  // frame 0 also compiles the shaders
         pending.pop_front();
         t0 = Clock::now();

@@ -532,7 +532,7 @@ class Viewer {
       ImGui::EndCombo();
     }
     float humidity = static_cast<float>(params_.cloth.humidity);
-    if (ImGui::SliderFloat("humidity", &humidity, 0, 1, "%.2f")) {
+    if (ImGui::SliderFloat("humidity", &humidity, 0, 1, "%.2f", ImGuiSliderFlags_AlwaysClamp)) {
       params_.cloth.humidity = humidity;
       sim_->set_humidity(humidity);  // live: mass, permeability, adhesion follow
     }
@@ -583,7 +583,10 @@ class Viewer {
     plot("pressure deficit P_atm - p, Pa", pressure_, "%.1f Pa",
          std::max(10.0f, 0.05f * static_cast<float>(params_.air.breakthrough_pressure)));
     plot("contact area, cm\xC2\xB2", contact_, "%.1f cm\xC2\xB2", 1.0f);
-    if (!params_.handles.empty()) plot("handle height, cm", height_, "%.2f cm", 1.0f);
+    // A pin (measured when there are only pins) holds one height: nothing to plot.
+    const Model& model = sim_->model();
+    if (model.measured_handle >= 0 && model.handles[model.measured_handle].type != HandleType::Pin)
+      plot("handle height, cm", height_, "%.2f cm", 1.0f);
 
     if (ImGui::CollapsingHeader("mouse and keys")) {
       ImGui::TextWrapped(

@@ -61,7 +61,7 @@ std::string to_toml(const Params& p);
 
 // The checks a scene file gets (ranges, choices, keys that combine), on
 // Params made in code; Simulation's constructor and set_params run it. Throws
-// SceneError naming the key: "Params: cloth.humidity: value 3 is out of range [0, 1]".
+// SceneError naming the key: "Params: cloth.humidity: value 3.0 is out of range [0, 1]".
 void check_params(const Params& p);
 
 // Markdown table of every parameter (the README's table).

@@ -113,7 +113,7 @@ struct Model {
   std::vector<Vec3> rest_position;
   std::vector<double> area, mass, inv_mass;
   std::vector<std::uint8_t> on_border;  // on the cloth's border
-  std::vector<std::uint8_t> driven;     // pinned or moved: dynamics never moves it
+  std::vector<std::uint8_t> driven;     // pinned or moved from t = 0: dynamics never moves it
   std::vector<std::uint8_t> in_wind;    // inside the wind region
   SpringSet structural, shear, bending;
   std::array<StencilEdge, 8> stencil;  // the same springs, by offset (forces/springs.cpp)
@@ -268,6 +268,7 @@ std::vector<double> metrics_values(const Metrics& m);
 
 class Simulation {
  public:
+  // Throws SceneError on parameters a scene file could not give (check_params).
   explicit Simulation(const Params& p);
 
   // One time step of MODEL.md section 8. Implicit Euler may take it in
@@ -276,8 +277,10 @@ class Simulation {
   // Advances to time t; returns false (and stops) if the run blew up.
   bool advance_to(double t);
   void reset();
+  // Live: mass, permeability and adhesion follow. Throws SceneError outside [0, 1].
   void set_humidity(double omega);
   // New parameters, live: the state is kept when the grid is the same size.
+  // Throws SceneError on parameters a scene file could not give (check_params).
   void set_params(const Params& p);
 
   // Non-empty when the state holds NaN or a runaway speed; names what to look at.

@@ -105,15 +105,20 @@ void apply_handle_constraints(const Model& m, State& s, Workspace& w) {
 }
 
 void hold_stopped_handles(const Model& m, State& s) {
-  for (const Handle& h : m.handles)
-    for (std::size_t e = 0; e < h.particles.size(); ++e) {
-      const int k = h.particles[e];
-      if (!s.held[k]) continue;
-      if (h.type == HandleType::Force) {
-        s.x[k] = s.held_at[k];
-        s.v[k].setZero();
-      } else {
-        put_on_path(h, s, e);
+  // Force handles first: a particle a late pin or move handle shares with one
+  // follows the path, whatever the handles' names.
+  for (const bool forces : {true, false})
+    for (const Handle& h : m.handles) {
+      if ((h.type == HandleType::Force) != forces) continue;
+      for (std::size_t e = 0; e < h.particles.size(); ++e) {
+        const int k = h.particles[e];
+        if (!s.held[k]) continue;
+        if (forces) {
+          s.x[k] = s.held_at[k];
+          s.v[k].setZero();
+        } else {
+          put_on_path(h, s, e);
+        }
       }
     }
 }

@@ -392,6 +392,23 @@ Camera scene_view(const Params& p) {
   return c;
 }
 
+namespace {
+// Widens a box round the cloth to the obstacles in view: the table when the
+// cloth is within half its size of it (not under a hanging flag), the ball.
+void add_obstacles(const Params& p, Vec3f& lo, Vec3f& hi) {
+  const float size = static_cast<float>(std::max(p.cloth.size[0], p.cloth.size[1]));
+  const float table = static_cast<float>(p.table.height);
+  if (p.table.enabled && lo.z() - table < size * 0.5f) lo.z() = std::min(lo.z(), table);
+  if (p.ball.enabled) {
+    const Vec3f b =
+        Eigen::Vector3d(p.ball.center[0], p.ball.center[1], p.ball.center[2]).cast<float>();
+    const float r = static_cast<float>(p.ball.radius);
+    lo = lo.cwiseMin(b - Vec3f::Constant(r));
+    hi = hi.cwiseMax(b + Vec3f::Constant(r));
+  }
+}
+}  // namespace
+
 Camera frame_scene(const Params& p, float aspect) {
   const Vec3f center =
       Eigen::Vector3d(p.cloth.center[0], p.cloth.center[1], p.cloth.center[2]).cast<float>();
@@ -405,16 +422,7 @@ Camera frame_scene(const Params& p, float aspect) {
   // Room above a flat cloth for the tent a pulling handle raises.
   const float lift = std::max(su, sv) * 0.4f;
   if (p.cloth.orientation != "vertical") hi.z() += lift;
-  // The table, when the cloth lies on it or falls onto it soon (not under a hanging flag).
-  const float table = static_cast<float>(p.table.height);
-  if (p.table.enabled && lo.z() - table < std::max(su, sv) * 0.5f) lo.z() = std::min(lo.z(), table);
-  if (p.ball.enabled) {
-    const Vec3f b =
-        Eigen::Vector3d(p.ball.center[0], p.ball.center[1], p.ball.center[2]).cast<float>();
-    const float r = static_cast<float>(p.ball.radius);
-    lo = lo.cwiseMin(b - Vec3f::Constant(r));
-    hi = hi.cwiseMax(b + Vec3f::Constant(r));
-  }
+  add_obstacles(p, lo, hi);
   return frame_box(lo, hi, aspect, scene_view(p));
 }
 
@@ -423,16 +431,7 @@ void content_box(const Params& p, const std::vector<Vec3f>& cloth, Vec3f& lo, Ve
   for (const auto& x : cloth) lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
   if (lo.x() > hi.x()) lo = hi = Eigen::Vector3d(p.cloth.center[0], p.cloth.center[1],
                                                  p.cloth.center[2]).cast<float>();
-  const float size = static_cast<float>(std::max(p.cloth.size[0], p.cloth.size[1]));
-  const float table = static_cast<float>(p.table.height);
-  if (p.table.enabled && lo.z() - table < size * 0.5f) lo.z() = std::min(lo.z(), table);
-  if (p.ball.enabled) {
-    const Vec3f b =
-        Eigen::Vector3d(p.ball.center[0], p.ball.center[1], p.ball.center[2]).cast<float>();
-    const float r = static_cast<float>(p.ball.radius);
-    lo = lo.cwiseMin(b - Vec3f::Constant(r));
-    hi = hi.cwiseMax(b + Vec3f::Constant(r));
-  }
+  add_obstacles(p, lo, hi);
 }
 
 Stage stage_from(const Params& p) {

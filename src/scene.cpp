@@ -76,8 +76,9 @@ std::vector<ParamDef> make_defs() {
       field("cloth.resolution", "particles", 2, 2001, "grid nu × nv", P(cloth.resolution)),
       field("cloth.size", "m", 1e-4, 100, "width (u) and height (v) of the cloth", P(cloth.size)),
       field("cloth.center", "m", -inf, inf, "centre of the cloth at t = 0", P(cloth.center)),
-      field("cloth.orientation", "", 1, 0, "horizontal: in the xy plane; vertical: in the xz plane, v down",
-            P(cloth.orientation), {"horizontal", "vertical"}),
+      field("cloth.orientation", "", 1, 0,
+            "horizontal: in the xy plane; vertical: in the xz plane, v down", P(cloth.orientation),
+            {"horizontal", "vertical"}),
       field("cloth.tilt", "°", -90, 90,
             "then turned about the x axis through its centre: tilted by 20, a falling cloth "
             "lands edge first (with air.model = \"exchange\" the wedge of air under it leaks "
@@ -85,7 +86,8 @@ std::vector<ParamDef> make_defs() {
             P(cloth.tilt)),
       field("cloth.humidity", "1", 0, 1, "water saturation by weight ω = (w − w0)/(w100 − w0)",
             P(cloth.humidity)),
-      field("cloth.areal_density", "kg/m²", 1e-6, 100, "dry areal density ρ_A", P(cloth.areal_density)),
+      field("cloth.areal_density", "kg/m²", 1e-6, 100, "dry areal density ρ_A",
+            P(cloth.areal_density)),
       field("cloth.water_ratio", "1", 0, 100, "water held at ω = 1, per unit dry mass (r_w)",
             P(cloth.water_ratio)),
       field("springs.structural_k", "N/m", 0, 1e7, "structural stiffness", P(springs.structural_k)),
@@ -94,7 +96,8 @@ std::vector<ParamDef> make_defs() {
       field("springs.shear_k", "N/m", 0, 1e7, "shear stiffness", P(springs.shear_k)),
       field("springs.shear_damping", "N·s/m", 0, 1e3, "shear damping", P(springs.shear_damping)),
       field("springs.bending_k", "N/m", 0, 1e7, "bending stiffness", P(springs.bending_k)),
-      field("springs.bending_damping", "N·s/m", 0, 1e3, "bending damping", P(springs.bending_damping)),
+      field("springs.bending_damping", "N·s/m", 0, 1e3, "bending damping",
+            P(springs.bending_damping)),
       field("forces.gravity", "m/s²", -1e3, 1e3, "gravitational acceleration", P(forces.gravity)),
       field("forces.viscous_damping", "N·s/m³", 0, 1e4, "viscous damping −c A_i v_i, per unit area",
             P(forces.viscous_damping)),
@@ -103,7 +106,8 @@ std::vector<ParamDef> make_defs() {
             P(wind.k)),
       field("wind.region_min", "1", 0, 1, "(u, v) corner of the region the wind blows on",
             P(wind.region_min)),
-      field("wind.region_max", "1", 0, 1, "opposite (u, v) corner of that region", P(wind.region_max)),
+      field("wind.region_max", "1", 0, 1, "opposite (u, v) corner of that region",
+            P(wind.region_max)),
       field("strain_limit.enabled", "", 0, 0, "shorten over-stretched springs (Provot)",
             P(strain_limit.enabled)),
       field("strain_limit.tau", "1", 0, 10, "allowed stretch τ_c", P(strain_limit.tau)),
@@ -116,8 +120,8 @@ std::vector<ParamDef> make_defs() {
       field("ball.radius", "m", 1e-4, 100, "radius of the ball", P(ball.radius)),
       field("contact.surface", "", 1, 0, "the surface the cloth sticks to and traps air against",
             P(contact.surface), {"table", "ball", "none"}),
-      field("contact.bridge_height", "m", 0, 1, "liquid-bridge threshold h_th: closer is in contact",
-            P(contact.bridge_height)),
+      field("contact.bridge_height", "m", 0, 1,
+            "liquid-bridge threshold h_th: closer is in contact", P(contact.bridge_height)),
       field("adhesion.enabled", "", 0, 0, "liquid-bridge adhesion (eq. 13)", P(adhesion.enabled)),
       field("adhesion.surface_tension", "N/m", 0, 1, "surface tension γ of the liquid",
             P(adhesion.surface_tension)),
@@ -125,7 +129,8 @@ std::vector<ParamDef> make_defs() {
             P(adhesion.theta_a_deg)),
       field("adhesion.theta_b_deg", "°", 0, 90, "contact angle θb on the surface (glass 14)",
             P(adhesion.theta_b_deg)),
-      field("adhesion.film_height", "m", 1e-7, 1, "liquid-bridge height h", P(adhesion.film_height)),
+      field("adhesion.film_height", "m", 1e-7, 1, "liquid-bridge height h",
+            P(adhesion.film_height)),
       field("friction.mu", "1", 0, 10, "Coulomb friction coefficient μ", P(friction.mu)),
       field("friction.normal", "", 1, 0,
             "normal force for friction: contact (adhesion + load) or adhesion (the paper's)",
@@ -139,26 +144,27 @@ std::vector<ParamDef> make_defs() {
       field("air.breakthrough_pressure", "Pa", 0, 1e7,
             "deficit at which air breaks through the wet pores P_b", P(air.breakthrough_pressure)),
       field("air.band", "m", 0, 10, "ball: air counted within this distance of it", P(air.band)),
-      field("air.film", "m", 0, 0.01, "air film a resting cloth keeps in its weave (sets sealed air)",
-            P(air.film)),
-      field("air.force_direction", "", 1, 0,
-            "direction of the pressure force (eq. 3): surface normal (conservative) or cloth normal",
-            P(air.force_direction), {"surface", "cloth"}),
+      field("air.film", "m", 0, 0.01,
+            "air film a resting cloth keeps in its weave (sets sealed air)", P(air.film)),
+      field(
+          "air.force_direction", "", 1, 0,
+          "direction of the pressure force (eq. 3): surface normal (conservative) or cloth normal",
+          P(air.force_direction), {"surface", "cloth"}),
       field("air.paper_update_rule", "", 0, 0, "update the air only when its volume grew (paper)",
             P(air.paper_update_rule)),
       field("air.paper_threshold", "m³", 0, 1, "growth per step that triggers that update",
             P(air.paper_threshold)),
-      field("self_collision.enabled", "", 0, 0, "repulsion between non-neighbouring particles (eq. 15)",
-            P(self_collision.enabled)),
-      field("self_collision.distance", "m", 1e-6, 1, "repulsion distance d_t", P(self_collision.distance)),
+      field("self_collision.enabled", "", 0, 0,
+            "repulsion between non-neighbouring particles (eq. 15)", P(self_collision.enabled)),
+      field("self_collision.distance", "m", 1e-6, 1, "repulsion distance d_t",
+            P(self_collision.distance)),
       field("self_collision.k", "N/m", 0, 1e7, "repulsion stiffness k_t", P(self_collision.k)),
       field("self_collision.damping", "N·s/m", 0, 1e3, "damping k_f of colliding particles",
             P(self_collision.damping)),
       field("integrator.type", "", 1, 0,
             "time integrator: symplectic-euler (small steps), implicit-euler (large steps), "
             "explicit-euler (the blog's forward Euler: it gains energy every step, for comparison)",
-            P(integrator.type),
-            {"explicit-euler", "symplectic-euler", "implicit-euler"}),
+            P(integrator.type), {"explicit-euler", "symplectic-euler", "implicit-euler"}),
       field("integrator.dt", "s", 1e-9, 1, "time step", P(integrator.dt)),
       field("integrator.threads", "", 0, 1024,
             "threads of the step (0: all cores, or one where that is faster, timed as it runs; "
@@ -168,19 +174,22 @@ std::vector<ParamDef> make_defs() {
             "implicit-euler: conjugate gradients stop when no velocity is off by more",
             P(integrator.cg_tolerance)),
       field("integrator.cg_max_iterations", "", 1, 100000,
-            "implicit-euler: most conjugate-gradient iterations per solve", P(integrator.cg_max_iterations)),
-      field("integrator.max_step_strain", "1", 1e-3, 10,
-            "implicit-euler: a step is halved when a spring changes by more than this times its rest "
-            "length in it, and doubled only when none changed by half as much",
-            P(integrator.max_step_strain)),
-      field("integrator.max_speed", "m/s", 1e-3, 1e6, "speed taken as a blow-up", P(integrator.max_speed)),
+            "implicit-euler: most conjugate-gradient iterations per solve",
+            P(integrator.cg_max_iterations)),
+      field(
+          "integrator.max_step_strain", "1", 1e-3, 10,
+          "implicit-euler: a step is halved when a spring changes by more than this times its rest "
+          "length in it, and doubled only when none changed by half as much",
+          P(integrator.max_step_strain)),
+      field("integrator.max_speed", "m/s", 1e-3, 1e6, "speed taken as a blow-up",
+            P(integrator.max_speed)),
       field("run.duration", "s", 0, 1e6, "simulated time", P(run.duration)),
       field("run.fps", "1/s", 1e-3, 1e5, "output frames per simulated second", P(run.fps)),
       field("run.meshes", "", 0, 0, "write frames/frame_NNNNN.obj", P(run.meshes)),
       handle_field("type", "", 1, 0, "force: constant force; move: driven at a velocity; pin: held",
                    H(type), {"force", "move", "pin"}),
-      handle_field("at", "1", 0, 1, "(u, v) of the handle on the cloth: its centre, or with span one end",
-                   H(at)),
+      handle_field("at", "1", 0, 1,
+                   "(u, v) of the handle on the cloth: its centre, or with span one end", H(at)),
       handle_field("span", "1", -1, 1,
                    "the handle takes every particle from at to at + span, e.g. [1, 0] from a "
                    "corner along an edge (each widened by patch)",
@@ -310,8 +319,9 @@ void apply_table(const toml::table& t, const std::string& prefix, Params& p, boo
         if (nm.empty() || !std::all_of(nm.begin(), nm.end(), [](unsigned char c) {
               return std::isalnum(c) || c == '_' || c == '-';
             }))
-          fail(h, hkey, "a handle's name is letters, digits, _ and - (it is part of keys such as "
-                        "handle.NAME.force)");
+          fail(h, hkey,
+               "a handle's name is letters, digits, _ and - (it is part of keys such as "
+               "handle.NAME.force)");
         if (!new_handles && !p.handles.count(std::string(name.str()))) {
           std::string names;
           for (const auto& [n, unused] : p.handles) names += (names.empty() ? "" : ", ") + n;
@@ -386,7 +396,8 @@ void check_consistency(const Params& p, const std::string& source,
         sets += (sets.empty() ? " with --set '" : "', '") + o;
     }
     std::string line;
-    if (const toml::node* n = scene.at_path(key).node(); n && source != kInCode) line = ":" + std::to_string(n->source().begin.line);
+    if (const toml::node* n = scene.at_path(key).node(); n && source != kInCode)
+      line = ":" + std::to_string(n->source().begin.line);
     throw SceneError(source + line + (sets.empty() ? "" : sets + "'") + ": " + key + ": " + msg);
   };
   if (p.contact.surface == "ball" && !p.ball.enabled)

@@ -187,7 +187,8 @@ TEST(SceneLoader, ParamsMadeInCodeAreChecked) {
 
 // A handle's name is part of its keys (and of scene.toml): a bare key.
 TEST(SceneLoader, HandleNamesAreBareKeys) {
-  EXPECT_NE(error_of("[handle.\"my pull\"]\ntype = \"pin\"\n").find("bad.toml:1: handle.my pull: a handle's name is letters"),
+  EXPECT_NE(error_of("[handle.\"my pull\"]\ntype = \"pin\"\n")
+                .find("bad.toml:1: handle.my pull: a handle's name is letters"),
             std::string::npos);
   EXPECT_EQ(error_of("[handle.pull-2]\ntype = \"pin\"\n"), "");
 }

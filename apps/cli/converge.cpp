@@ -173,7 +173,8 @@ std::function<int()> add_converge_command(CLI::App& app) {
 
     std::printf("\nfinal values at t = %s s",
                 format_time(cases.front().result.final.time_s).c_str());
-    if (ratio > 0) std::printf("; in brackets, the error against the limit as dt -> 0, where trusted");
+    if (ratio > 0)
+      std::printf("; in brackets, the error against the limit as dt -> 0, where trusted");
     std::printf("\n%-14s", "dt s");
     for (const char* name : kShown) std::printf("  %-24s", name);
     std::printf("\n");

@@ -33,7 +33,8 @@ int main(int argc, char** argv) {
   bool quiet = false;
   auto* run = app.add_subcommand("run", "run a scene and write its results into a folder");
   run_opts.add_to(run);
-  run->add_option("--out", out_dir, "output folder (default out/<scene name>)")->check(cli::a_path());
+  run->add_option("--out", out_dir, "output folder (default out/<scene name>)")
+      ->check(cli::a_path());
   run->add_flag("--quiet", quiet, "no progress bar");
   run->footer(
       "Writes DIR/metrics.csv (one row per frame, SI units in the header), DIR/frames/*.obj,\n"
@@ -69,7 +70,8 @@ int main(int argc, char** argv) {
       names += (names.empty() ? "" : ", ") + sub->get_name();
     }
     if (!known) {
-      std::fprintf(stderr, "wetcloth: error: unknown %s '%s'%s (the commands: %s; wetcloth --help)\n",
+      std::fprintf(stderr,
+                   "wetcloth: error: unknown %s '%s'%s (the commands: %s; wetcloth --help)\n",
                    first[0] == '-' ? "option" : "command", first.c_str(),
                    first[0] == '-' ? " before the command" : "", names.c_str());
       return cli::kBadInput;

@@ -68,8 +68,8 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress) {
   // Time to 5 cm is a pulled handle's: a pin (measured when there are only
   // pins) sits at its height from the start.
   const Model& model = sim.model();
-  const bool pulled = model.measured_handle >= 0 &&
-                      model.handles[model.measured_handle].type != HandleType::Pin;
+  const bool pulled =
+      model.measured_handle >= 0 && model.handles[model.measured_handle].type != HandleType::Pin;
   for (long long f = 0; f <= frames; ++f) {
     const double t = frame_time(f, p.run.duration, p.run.fps);
     const bool ok = sim.advance_to(t);
@@ -94,7 +94,8 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress) {
   r.final = table.rows().back();
   r.peak_deficit_pa = sim.state().peak_deficit;
   for (const Metrics& row : table.rows())
-    r.frame_peak_deficit_pa = std::max(r.frame_peak_deficit_pa, p.air.p_atm - row.inner_pressure_pa);
+    r.frame_peak_deficit_pa =
+        std::max(r.frame_peak_deficit_pa, p.air.p_atm - row.inner_pressure_pa);
   r.steps = sim.state().steps;
   r.wall_seconds = wall();
 

@@ -65,13 +65,15 @@ fs::path plot_script() {
 }
 
 std::string sweep_csv(const std::vector<Case>& cases) {
-  std::string o = "case,air_model,humidity,status,peak_deficit_pa,frame_peak_deficit_pa,time_to_5cm_s";
+  std::string o =
+      "case,air_model,humidity,status,peak_deficit_pa,frame_peak_deficit_pa,time_to_5cm_s";
   for (const auto& c : metrics_columns()) o += "," + c;
   o += "\n";
   for (const auto& c : cases) {
     o += c.name + "," + c.air_model + "," + format_number(c.humidity) + "," +
          (c.result.code == kOk ? "ok" : "blew_up") + "," + format_number(c.result.peak_deficit_pa) +
-         "," + format_number(c.result.frame_peak_deficit_pa) + "," + format_number(c.result.time_to_5cm_s);
+         "," + format_number(c.result.frame_peak_deficit_pa) + "," +
+         format_number(c.result.time_to_5cm_s);
     for (double v : metrics_values(c.result.final)) o += "," + format_number(v);
     o += "\n";
   }
@@ -160,9 +162,9 @@ std::function<int()> add_sweep_command(CLI::App& app) {
         std::printf(
             "%-22s %s  handle %.4f m  contact %.5f m²  peak deficit (any step) %.1f Pa, "
             "over frames %.1f Pa  (%.1f s wall)\n",
-            c.name.c_str(), c.result.code == kOk ? "ok     " : "BLEW UP", c.result.final.handle_height_m,
-            c.result.final.contact_area_m2, c.result.peak_deficit_pa, c.result.frame_peak_deficit_pa,
-            c.result.wall_seconds);
+            c.name.c_str(), c.result.code == kOk ? "ok     " : "BLEW UP",
+            c.result.final.handle_height_m, c.result.final.contact_area_m2,
+            c.result.peak_deficit_pa, c.result.frame_peak_deficit_pa, c.result.wall_seconds);
       }
       std::fflush(stdout);
     });

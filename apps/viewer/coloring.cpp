@@ -30,8 +30,7 @@ float follow(float scale, float current_max, float floor) {
 
 }  // namespace
 
-Legend cloth_mesh(const Simulation& sim, ColorBy mode, float& scale, ClothMesh& mesh,
-                  float range) {
+Legend cloth_mesh(const Simulation& sim, ColorBy mode, float& scale, ClothMesh& mesh, float range) {
   const Model& m = sim.model();
   const State& s = sim.state();
   const Workspace& w = sim.workspace();
@@ -80,9 +79,10 @@ Legend cloth_mesh(const Simulation& sim, ColorBy mode, float& scale, ClothMesh& 
         strain[sp.a[k]] = std::max(strain[sp.a[k]], e);
         strain[sp.b[k]] = std::max(strain[sp.b[k]], e);
       }
-      const float hi = range > 0                     ? range
-                       : m.params.strain_limit.tau > 0 ? static_cast<float>(m.params.strain_limit.tau)
-                                                       : 0.1f;
+      const float hi = range > 0 ? range
+                       : m.params.strain_limit.tau > 0
+                           ? static_cast<float>(m.params.strain_limit.tau)
+                           : 0.1f;
       legend = {"stretch of structural springs", 0, hi, false, false};
       for (int i = 0; i < n; ++i) mesh.color[i] = colormap(strain[i] / hi, false);
       break;
@@ -91,13 +91,14 @@ Legend cloth_mesh(const Simulation& sim, ColorBy mode, float& scale, ClothMesh& 
       const int na = std::min(n, static_cast<int>(w.adhesion.size()));
       // An inner particle in contact holds adhesion_pressure * its area; the
       // border's share of the edge term comes on top, so the scale goes to twice that.
-      const double cell = m.params.cloth.size[0] / std::max(1, m.nu - 1) *
-                          m.params.cloth.size[1] / std::max(1, m.nv - 1);
+      const double cell = m.params.cloth.size[0] / std::max(1, m.nu - 1) * m.params.cloth.size[1] /
+                          std::max(1, m.nv - 1);
       float top = range > 0 ? range : static_cast<float>(2 * adhesion_pressure(m.params) * cell);
       if (!(top > 0)) {
         float peak = 0;
         for (int i = 0; i < na; ++i)
-          if (std::isfinite(w.adhesion[i])) peak = std::max(peak, static_cast<float>(w.adhesion[i]));
+          if (std::isfinite(w.adhesion[i]))
+            peak = std::max(peak, static_cast<float>(w.adhesion[i]));
         top = scale = follow(scale, peak, 1e-9f);
       }
       legend = {"adhesion force per particle, N", 0, top, false, false};
@@ -119,7 +120,8 @@ void draw_key(Image& img, const Legend& legend) {
   const int s = std::max(1, img.height / 400);  // font pixels per unit
   const int margin = 8 * s, bar_w = std::min(180 * s, img.width / 3), bar_h = 10 * s;
   auto rgb = [](const Vec3f& c, std::uint8_t out[3]) {
-    for (int k = 0; k < 3; ++k) out[k] = static_cast<std::uint8_t>(std::clamp(c[k], 0.0f, 1.0f) * 255 + 0.5f);
+    for (int k = 0; k < 3; ++k)
+      out[k] = static_cast<std::uint8_t>(std::clamp(c[k], 0.0f, 1.0f) * 255 + 0.5f);
   };
   int tw = 0, th = 0;
   label_size(legend.title, s, tw, th);

@@ -111,8 +111,8 @@ struct Commands {
       std::error_code ec;
       if (fs::is_directory(o.screenshot_file, ec))
         throw SceneError("--screenshot-after: " + shot.second + " is a folder, not a PNG file");
-      const fs::path dir = o.screenshot_file.has_parent_path() ? o.screenshot_file.parent_path()
-                                                                : fs::path(".");
+      const fs::path dir =
+          o.screenshot_file.has_parent_path() ? o.screenshot_file.parent_path() : fs::path(".");
       const bool made = check_writable_folder(dir, "--screenshot-after");
       const int code = run_viewer(o);
       if (made && code != 0) fs::remove(dir, ec);  // only if still empty: nothing left behind
@@ -180,10 +180,11 @@ std::function<std::optional<int>()> add_commands(CLI::App& app) {
       ->check(CLI::IsMember(colors))
       ->capture_default_str();
   c->render
-      ->add_option("--color-range", c->color_range,
-                   "top of the colour scale: pressure +-MAX Pa (default air.breakthrough_pressure), "
-                   "strain 0 to MAX (default strain_limit.tau), adhesion 0 to MAX N (default twice "
-                   "an inner particle's share)")
+      ->add_option(
+          "--color-range", c->color_range,
+          "top of the colour scale: pressure +-MAX Pa (default air.breakthrough_pressure), "
+          "strain 0 to MAX (default strain_limit.tau), adhesion 0 to MAX N (default twice "
+          "an inner particle's share)")
       ->check(kPositive);
   c->render->add_flag("--quiet", c->quiet, "no progress, no summary");
   c->render->footer(

@@ -381,7 +381,8 @@ Camera scene_view(const Params& p) {
     if (h.type != "force") continue;
     const float du = static_cast<float>((h.at[0] - 0.5) * p.cloth.size[0]),
                 dv = static_cast<float>((h.at[1] - 0.5) * p.cloth.size[1]);
-    if (std::hypot(du, dv) > 0.25f * static_cast<float>(std::max(p.cloth.size[0], p.cloth.size[1]))) {
+    if (std::hypot(du, dv) >
+        0.25f * static_cast<float>(std::max(p.cloth.size[0], p.cloth.size[1]))) {
       // From the far side, turned 30 degrees: the flap a corner or edge lifts
       // faces the camera; from the default side it was a thin sliver.
       c.yaw_deg = std::atan2(-dv, -du) / kDeg - 30;
@@ -429,8 +430,9 @@ Camera frame_scene(const Params& p, float aspect) {
 void content_box(const Params& p, const std::vector<Vec3f>& cloth, Vec3f& lo, Vec3f& hi) {
   lo = Vec3f::Constant(1e30f), hi = Vec3f::Constant(-1e30f);
   for (const auto& x : cloth) lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
-  if (lo.x() > hi.x()) lo = hi = Eigen::Vector3d(p.cloth.center[0], p.cloth.center[1],
-                                                 p.cloth.center[2]).cast<float>();
+  if (lo.x() > hi.x())
+    lo = hi =
+        Eigen::Vector3d(p.cloth.center[0], p.cloth.center[1], p.cloth.center[2]).cast<float>();
   add_obstacles(p, lo, hi);
 }
 
@@ -606,8 +608,9 @@ void Renderer::draw(const ClothMesh& cloth, const Stage& stage, const Camera& ca
   const Vec3f center = (lo + hi) / 2;
   const float radius = (hi - lo).norm() / 2 + 0.02f;
   const float reach = 20;  // receivers far below the casters still get their shadow
-  const Mat4f light_view_proj = ortho(radius, 0.0f, 2 * radius + reach) *
-                                look_at(center + stage.light * (radius + 0.01f), center, Vec3f::UnitZ());
+  const Mat4f light_view_proj =
+      ortho(radius, 0.0f, 2 * radius + reach) *
+      look_at(center + stage.light * (radius + 0.01f), center, Vec3f::UnitZ());
 
   GLint target_fbo = 0;
   glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &target_fbo);

@@ -85,7 +85,7 @@ void draw_label(Image& img, int x, int y, const std::string& text, int scale) {
   const int pad = 2 * scale;
   const std::uint8_t black[3] = {0, 0, 0}, white[3] = {255, 255, 255};
   fill_rect(img, x, y, x + stb_easy_font_width(buf.data()) * scale + 2 * pad,
-       y + stb_easy_font_height(buf.data()) * scale + 2 * pad, black, 0.55f);
+            y + stb_easy_font_height(buf.data()) * scale + 2 * pad, black, 0.55f);
 
   std::vector<char> quads(64 * 1024);
   unsigned char color[4] = {255, 255, 255, 255};
@@ -100,8 +100,8 @@ void draw_label(Image& img, int x, int y, const std::string& text, int scale) {
     // Each quad is an axis-aligned rectangle: corners 0 and 2 are opposite.
     const Vertex &a = v[4 * q], &b = v[4 * q + 2];
     fill_rect(img, x + pad + static_cast<int>(a.x * scale), y + pad + static_cast<int>(a.y * scale),
-         x + pad + static_cast<int>(b.x * scale), y + pad + static_cast<int>(b.y * scale), white,
-         1.0f);
+              x + pad + static_cast<int>(b.x * scale), y + pad + static_cast<int>(b.y * scale),
+              white, 1.0f);
   }
 }
 

@@ -141,7 +141,8 @@ class FollowCamera {
     const auto first = std::lower_bound(time_.begin(), time_.end(), time_[f] - dt - 1e-9);
     const auto end = std::upper_bound(time_.begin(), time_.end(), time_[f] + dt + 1e-9);
     std::vector<std::size_t> v;
-    for (auto it = first; it != end; ++it) v.push_back(static_cast<std::size_t>(it - time_.begin()));
+    for (auto it = first; it != end; ++it)
+      v.push_back(static_cast<std::size_t>(it - time_.begin()));
     return v;
   }
 
@@ -244,9 +245,10 @@ int render_frames(const RenderOptions& o) {
       }
     }
     if (!o.quiet)
-      std::printf("%s: %lld frame%s, %dx%d, in %s%s (%.1f ms per frame to draw, %.1f ms to write)\n",
-                  p.name.c_str(), written, written == 1 ? "" : "s", o.width, o.height, o.out.c_str(),
-                  o.video ? " + video.mp4" : "", draw_ms / std::max(1LL, frames), png_ms / written);
+      std::printf(
+          "%s: %lld frame%s, %dx%d, in %s%s (%.1f ms per frame to draw, %.1f ms to write)\n",
+          p.name.c_str(), written, written == 1 ? "" : "s", o.width, o.height, o.out.c_str(),
+          o.video ? " + video.mp4" : "", draw_ms / std::max(1LL, frames), png_ms / written);
     if (!o.quiet && o.color != ColorBy::Fabric && !legend.binary)
       std::printf("colour: %s, %s to %s\n", legend.title.c_str(), key_number(legend.lo).c_str(),
                   key_number(legend.hi).c_str());

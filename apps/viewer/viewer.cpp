@@ -438,7 +438,8 @@ class Viewer {
     if (s.time < next_sample_) return;
     next_sample_ = s.time + kSampleInterval;
     const Metrics m = sim_->metrics();
-    pressure_.add(s.time, params_.air.p_atm - m.inner_pressure_pa);  // the deficit, as the sweep plots it
+    pressure_.add(s.time,
+                  params_.air.p_atm - m.inner_pressure_pa);  // the deficit, as the sweep plots it
     contact_.add(s.time, m.contact_area_m2 * 1e4);
     height_.add(s.time, m.handle_height_m * 1e2);
   }

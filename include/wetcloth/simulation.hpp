@@ -125,7 +125,7 @@ struct Model {
   std::vector<double> chequer;
   std::vector<Handle> handles;
   int measured_handle = -1;  // the one the metrics follow: the first that is not a pin, else the
-                            // first pin (-1: no handle)
+                             // first pin (-1: no handle)
   SurfaceKind contact_surface = SurfaceKind::None;
   int index(int i, int j) const { return j * nu + i; }
 };
@@ -143,7 +143,7 @@ struct State {
   std::vector<std::uint8_t> contact;  // 1: within h_th of the contact surface
   std::vector<std::uint8_t> held;     // 1: held by its handle: where a capped force handle
                                       // stopped, on a late pin's or move handle's path
-  std::vector<Vec3> held_at;             // where it was taken (a late handle's path starts there)
+  std::vector<Vec3> held_at;          // where it was taken (a late handle's path starts there)
   double air_atm_volume = 0;            // trapped air at atmospheric pressure V_atm, m³
   double air_volume = 0;                // V_sum, m³
   double inner_pressure = 0;            // P_in, Pa (mean over pockets for `vented`)

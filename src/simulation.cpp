@@ -147,9 +147,9 @@ void Simulation::reset() {
 }
 
 void Simulation::set_humidity(double omega) {
-  if (!(omega >= 0 && omega <= 1))  // as check_params would say it
-    throw SceneError("Params: cloth.humidity: value " + format_value(omega) +
-                     " is out of range [0, 1]");
+  Params p = model_.params;  // checked as set_params would check it (a slider's rate: cheap)
+  p.cloth.humidity = omega;
+  check_params(p);
   wetcloth::set_humidity(model_, omega);
 }
 

@@ -67,9 +67,7 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress) {
   };
   // Time to 5 cm is a pulled handle's: a pin (measured when there are only
   // pins) sits at its height from the start.
-  const Model& model = sim.model();
-  const bool pulled =
-      model.measured_handle >= 0 && model.handles[model.measured_handle].type != HandleType::Pin;
+  const bool pulled = sim.model().measures_a_pull();
   for (long long f = 0; f <= frames; ++f) {
     const double t = frame_time(f, p.run.duration, p.run.fps);
     const bool ok = sim.advance_to(t);

@@ -585,9 +585,7 @@ class Viewer {
          std::max(10.0f, 0.05f * static_cast<float>(params_.air.breakthrough_pressure)));
     plot("contact area, cm\xC2\xB2", contact_, "%.1f cm\xC2\xB2", 1.0f);
     // A pin (measured when there are only pins) holds one height: nothing to plot.
-    const Model& model = sim_->model();
-    if (model.measured_handle >= 0 && model.handles[model.measured_handle].type != HandleType::Pin)
-      plot("handle height, cm", height_, "%.2f cm", 1.0f);
+    if (sim_->model().measures_a_pull()) plot("handle height, cm", height_, "%.2f cm", 1.0f);
 
     if (ImGui::CollapsingHeader("mouse and keys")) {
       ImGui::TextWrapped(

@@ -128,6 +128,10 @@ struct Model {
                              // first pin (-1: no handle)
   SurfaceKind contact_surface = SurfaceKind::None;
   int index(int i, int j) const { return j * nu + i; }
+  // Whether the metrics follow a handle that pulls or drives (not a pin).
+  bool measures_a_pull() const {
+    return measured_handle >= 0 && handles[measured_handle].type != HandleType::Pin;
+  }
 };
 
 Model build_model(const Params& p);

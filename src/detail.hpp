@@ -202,6 +202,16 @@ void hold_stopped_handles(const Model& m, State& s);
 // friction.cpp: eq. 14 on particles in contact.
 void apply_friction(const Model& m, State& s, const Workspace& w,
                     const std::vector<std::uint8_t>& touched, double dt);
+// The self-collision candidate pairs (a Verlet list in w.candidates), found again
+// where particles moved from their anchors.
+void refresh_collision_candidates(const Model& m, const State& s, Workspace& w);
+// xpbd.cpp: one substep's constraint projections, contact and friction.
+void xpbd_begin_substep(const Model& m, const State& s, Workspace& w);
+// One sweep over the springs; limit_only: over the strain limit alone.
+void project_springs(const Model& m, State& s, Workspace& w, double h, bool limit_only = false);
+void project_self_collision(const Model& m, State& s, Workspace& w, double h);
+void collide_with_friction(const Model& m, State& s, Workspace& w,
+                           std::vector<std::uint8_t>& touched, double h);
 // strain_limit.cpp: Provot's correction in adaptive order.
 void update_strain_order(const Model& m, State& s, Workspace& w);
 void limit_strain(const Model& m, State& s, Workspace& w, double dt);

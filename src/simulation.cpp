@@ -220,7 +220,9 @@ void Simulation::take_step() {
   const double dt = m.params.integrator.dt;
   const std::string& integrator = m.params.integrator.type;
 
-  if (integrator == "implicit-euler") {
+  if (integrator == "xpbd") {
+    xpbd_step();
+  } else if (integrator == "implicit-euler") {
     // Baraff & Witkin's step control (their section 5.5): a substep whose
     // springs change too much for their linearisation is taken again at half
     // the size. Where they double the size after every substep that held, the
@@ -279,6 +281,75 @@ void Simulation::take_step() {
     finish_step(dt);
   }
   ++s.steps;
+}
+
+int xpbd_substeps(const Params& p) {
+  if (p.integrator.substeps > 0) return static_cast<int>(p.integrator.substeps);
+  const long long longer = std::max(p.cloth.resolution[0], p.cloth.resolution[1]);
+  return static_cast<int>(10 + std::max(0LL, (longer - 101 + 9) / 10));
+}
+
+// XPBD in substeps (xpbd.cpp): per substep the external forces move the
+// particles, the constraints are projected once, then contact and friction;
+// the air and the contact state follow every substep (the air is stiff: a
+// tent's pressure answers its volume within a millisecond). The rig's force is
+// the mean over the substeps.
+void Simulation::xpbd_step() {
+  const Model& m = model_;
+  State& s = state_;
+  Workspace& w = ws_;
+  const double dt = m.params.integrator.dt, c = m.params.forces.viscous_damping;
+  const int substeps = xpbd_substeps(m.params);
+  const double h = dt / substeps, inv_h2 = 1.0 / (h * h);
+  Vec3 rig = Vec3::Zero();
+  for (int k = 0; k < substeps; ++k) {
+    for_each_particle(m, [&](int i) { put(w.force[i], Vec3::Zero()); });
+    compute_normals(m, s.x.column(0), w.normal, w.quad_normals);
+    add_gravity(m, w.force);
+    add_wind(m, s, w, w.force);
+    add_air_pressure(m, s, w);
+    add_adhesion(m, s, w);
+    add_handle_forces(m, s, w);
+    // v += h F / m, the viscous drag on each particle's own velocity implicit.
+    for_each_particle_block(m, [&](int first, int end) {
+      for (int q = 0; q < 3; ++q) {
+        const double* __restrict f = w.force.column(q);
+        double* __restrict v = s.v.column(q);
+#pragma GCC ivdep
+        for (int i = first; i < end; ++i) {
+          const double hm = h * m.inv_mass[i];
+          v[i] += hm / (1 + hm * c * m.area[i]) * f[i];
+        }
+      }
+    });
+    w.x_prev = s.x;
+    move_at_new_velocities(h);  // the air term implicit, then x += h v
+    s.time = (static_cast<double>(s.steps) + static_cast<double>(k + 1) / substeps) * dt;
+    apply_handle_constraints(m, s, w);
+    xpbd_begin_substep(m, s, w);
+    project_springs(m, s, w, h);
+    // The strain limit's further passes (MODEL.md section 2's 1-3): one sweep
+    // carries a stretch only a grid step or two from a pulled patch.
+    if (m.params.strain_limit.enabled)
+      for (long long pass = 1; pass < m.params.strain_limit.passes; ++pass)
+        project_springs(m, s, w, h, true);
+    project_self_collision(m, s, w, h);
+    collide_with_friction(m, s, w, touched_, h);
+    // The paper's damping -k_f v of colliding particles, implicit.
+    const double k_f = m.params.self_collision.damping;
+    for (const int q : w.colliding_particles)
+      s.v[q] *= 1.0 / (1.0 + h * k_f * m.inv_mass[q]);
+    hold_stopped_handles(m, s);
+    // The rig holds its patch against the external forces (apply_handle_constraints)
+    // and the constraints' pull: J / h² on each particle it holds.
+    w.handle_force -= inv_h2 * w.reaction_impulse;
+    rig += w.handle_force;
+    update_contact(m, s, w);
+    update_air(m, s, w, h);
+    ++w.substeps;
+  }
+  w.handle_force = rig / substeps;
+  s.time = static_cast<double>(s.steps + 1) * dt;
 }
 
 // 2. Integrate by backward Euler over dt / 2^k, halving while the springs
@@ -386,7 +457,7 @@ std::string Simulation::blow_up_reason() const {
   // Within the explicit limit, a force handle that alone would have driven
   // its patch past max_speed by now is the likelier cause than the step: a
   // single particle of a few mg takes 1 N as 1e5 m/s².
-  const bool explicit_step = p.integrator.type != "implicit-euler";
+  const bool explicit_step = p.integrator.type != "implicit-euler" && p.integrator.type != "xpbd";
   const char* lead = " Likely cause: ";
   if (p.integrator.type == "explicit-euler" && p.integrator.dt <= limit) {
     // Forward Euler grows every oscillation a little each step, whatever the
@@ -408,6 +479,20 @@ std::string Simulation::blow_up_reason() const {
       << h.particles.size() << (h.particles.size() == 1 ? " particle" : " particles") << " (" << a
       << " m/s²). Lower it, or spread it over a larger handle." << h.name << ".patch.";
     lead = " Or: ";
+  }
+  if (p.integrator.type == "xpbd") {
+    o << lead << "integrator.dt = " << p.integrator.dt << " s in " << xpbd_substeps(p)
+      << " substeps (integrator.substeps = " << p.integrator.substeps
+      << ") is too coarse for a force this large: raise integrator.substeps, or look at the "
+         "handles' forces (handle.*.force), the trapped air (air.model) and self_collision.k.";
+    return o.str();
+  }
+  if (p.integrator.type == "xpbd") {
+    o << lead << "integrator.dt = " << p.integrator.dt << " s in " << xpbd_substeps(p)
+      << " substeps (integrator.substeps = " << p.integrator.substeps
+      << ") is too coarse for a force this large: raise integrator.substeps, or look at the "
+         "handles' forces (handle.*.force), the trapped air (air.model) and self_collision.k.";
+    return o.str();
   }
   if (!explicit_step) {
     o << lead << "integrator.max_step_strain = " << p.integrator.max_step_strain

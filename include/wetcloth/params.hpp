@@ -114,8 +114,9 @@ struct Params {
   } self_collision;
 
   struct Integrator {
-    std::string type = "symplectic-euler";  // explicit-euler | symplectic-euler | implicit-euler
-    double dt = 5e-5;         // s
+    std::string type = "symplectic-euler";  // symplectic-euler | xpbd | implicit-euler | explicit-euler
+    double dt = 5e-5;         // s (xpbd: 1/240 s in substeps)
+    long long substeps = 0;   // xpbd: substeps a step (0: 10, and one per 10 particles past 101 along the longer side)
     double max_speed = 50;    // m/s; faster means the run has blown up
     long long threads = 1;    // threads of the step; 0: chosen as it runs (the CLI's default)
     double cg_tolerance = 1e-4;          // implicit-euler: largest velocity error, m/s

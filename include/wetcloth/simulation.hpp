@@ -135,6 +135,10 @@ struct Model {
 };
 
 Model build_model(const Params& p);
+// XPBD's substeps a step: integrator.substeps, or when 0 10, and one more per
+// 10 particles past 101 along the longer side (a stretch must cross the cloth
+// in a step's sweeps).
+int xpbd_substeps(const Params& p);
 // Where grid particle (i, j) starts: cloth.center, orientation and tilt.
 Vec3 cloth_start_position(const Params& p, int i, int j);
 // Humidity drives mass (section 1), permeability (eq. 5) and adhesion (eq. 13).
@@ -254,6 +258,14 @@ struct Workspace {
   Vec3Array v_start, acceleration;
   int halvings = 0;
   long long substeps = 0, solves = 0;
+  // XPBD (xpbd.cpp): positions at the start of the substep, before contact;
+  // the inverse masses the constraints see; a class's corrections (x, y, z
+  // columns) and where along a row each class is; the particles the measured
+  // handle holds and the constraints' impulse on them over the substep.
+  Vec3Array x_prev, x_before_collide;
+  std::vector<double> free_inv_mass, correction, class_gate;
+  std::vector<int> reaction_particles;
+  Vec3 reaction_impulse = Vec3::Zero();
   // Interactive grab (viewer).
   int grab_particle = -1;
   Vec3 grab_target = Vec3::Zero();
@@ -275,8 +287,9 @@ class Simulation {
   // Throws SceneError on parameters a scene file could not give (check_params).
   explicit Simulation(const Params& p);
 
-  // One time step of MODEL.md section 8. Implicit Euler may take it in
-  // substeps of dt / 2^k (Baraff & Witkin's step control).
+  // One time step of MODEL.md section 8. XPBD takes it in substeps
+  // (xpbd_substeps); implicit Euler may take it in substeps of dt / 2^k
+  // (Baraff & Witkin's step control).
   void step();
   // Advances to time t; returns false (and stops) if the run blew up.
   bool advance_to(double t);
@@ -326,6 +339,7 @@ class Simulation {
   ThreadChoice threads_;
 
   void take_step();
+  void xpbd_step();
   void start_thread_choice();
   void accumulate_forces(bool implicit);
   double implicit_substep(double dt, int& halvings, double& strain);

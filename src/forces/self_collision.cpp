@@ -45,10 +45,9 @@ double farthest(const Model& m, const AnchorGap& gap) {
 
 }  // namespace
 
-void add_self_collision(const Model& m, const State& s, Workspace& w, bool with_damping) {
+void refresh_collision_candidates(const Model& m, const State& s, Workspace& w) {
   const auto& p = m.params.self_collision;
-  if (!p.enabled) return;
-  const double dt_dist = p.distance, k = p.k;
+  const double dt_dist = p.distance;
   // Candidate pairs (a Verlet list): every pair whose anchors, the positions
   // where each particle was last searched from, are within R = d_t + margin.
   // While no particle is farther than margin/2 from its anchor, no pair off
@@ -175,6 +174,13 @@ void add_self_collision(const Model& m, const State& s, Workspace& w, bool with_
                w.candidates_merged.begin());
     list.swap(w.candidates_merged);
   }
+}
+
+void add_self_collision(const Model& m, const State& s, Workspace& w, bool with_damping) {
+  const auto& p = m.params.self_collision;
+  if (!p.enabled) return;
+  const double dt_dist = p.distance, k = p.k;
+  refresh_collision_candidates(m, s, w);
   // Flags of colliding particles: last step's cleared through last step's
   // pairs, not over the whole cloth.
   auto& colliding = w.colliding;

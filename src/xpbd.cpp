@@ -1,0 +1,282 @@
+// The large-step default integrator (MODEL.md section 8): small-step XPBD
+// (Macklin et al. 2019, "Small Steps in Physics Simulation"). A step of Δt is
+// taken in substeps of h; each substep moves every particle by its external
+// forces (gravity, wind, air, adhesion, handles), then projects the springs
+// once, as compliant distance constraints with their damping (XPBD, Macklin
+// et al. 2016, eq. 26), the strain limit as an inequality constraint folded
+// into the same projection, and self-collision as compliant one-sided
+// constraints; contact and friction follow, and the velocities are the
+// positions' change over h.
+//
+// One Gauss-Seidel sweep: the springs of one stencil offset split into two
+// classes (by the parity of i, or of j for the offsets along j), and no two
+// springs of a class share a particle, so a class is projected at once:
+// every correction from the same positions, then applied. The order of the
+// classes is fixed, so the result is the same on any number of threads.
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+#include "detail.hpp"
+
+namespace wetcloth::detail {
+
+// Inverse masses the constraints see: pinned, driven and held particles are
+// infinitely heavy.
+void xpbd_begin_substep(const Model& m, const State& s, Workspace& w) {
+  w.free_inv_mass.resize(m.n);
+  for_each_particle(m, [&](int i) {
+    w.free_inv_mass[i] = m.driven[i] || s.held[i] ? 0.0 : m.inv_mass[i];
+  });
+  // The measured handle's particles while it holds them (a move or pin
+  // handle, a force handle stopped at its cap): the constraints' impulses on
+  // them are part of the rig's force.
+  w.reaction_particles.clear();
+  w.reaction_impulse.setZero();
+  if (m.measured_handle >= 0) {
+    const Handle& h = m.handles[m.measured_handle];
+    if (h.type != HandleType::Force || s.held[h.particles[0]]) w.reaction_particles = h.particles;
+  }
+}
+
+namespace {
+
+// One row's springs of one offset: a = (i, j) for i in [lo, lo + count), b = a + off.
+struct SpringRow {
+  const double *x, *y, *z, *px, *py, *pz, *inv;
+  int off;
+};
+
+// Each spring's correction Δλ n, times gate[k] (1 in the class, 0 outside),
+// from the same positions. One square root and one division a spring: with
+// D = (1 + γ) w + α̃ and q = 1 / (D w |d|), 1/|d| = D w q, Δλ/|d| = -(C + γ ċ) w q
+// and the strain limit's (l_max - |d|) / (w |d|) = (l_max - |d|) D q.
+enum class Projection { Spring, SpringLimited, LimitOnly };
+
+template <Projection kind>
+void spring_corrections(const SpringRow& r, const double* __restrict gate, int count, double rest,
+                        double max_len, double alpha, double gamma, double* __restrict cx,
+                        double* __restrict cy, double* __restrict cz) {
+  const double *__restrict x = r.x, *__restrict y = r.y, *__restrict z = r.z;
+  const double *__restrict px = r.px, *__restrict py = r.py, *__restrict pz = r.pz;
+  const double* __restrict inv = r.inv;
+  const int off = r.off;
+#pragma omp simd
+  for (int k = 0; k < count; ++k) {
+    const double dx = x[k + off] - x[k], dy = y[k + off] - y[k], dz = z[k + off] - z[k];
+    const double len = std::sqrt(dx * dx + dy * dy + dz * dz);
+    const double ws = inv[k] + inv[k + off];
+    const bool on = (gate[k] != 0) & (len > 0) & (ws > 0);
+    const double d = (1 + gamma) * ws + alpha;
+    const double q = 1.0 / (on ? d * ws * len : 1.0);
+    const double inv_len = d * ws * q;
+    // The spring's change of length over the substep so far (h dC/dt).
+    const double rate = ((dx - (px[k + off] - px[k])) * dx + (dy - (py[k + off] - py[k])) * dy +
+                         (dz - (pz[k + off] - pz[k])) * dz) *
+                        inv_len;
+    // XPBD's Δλ with damping (Macklin et al. 2016, eq. 26), one iteration: λ = 0.
+    double f = kind == Projection::LimitOnly ? 0.0 : -((len - rest) + gamma * rate) * ws * q;
+    if constexpr (kind != Projection::Spring) {
+      // No longer than (1 + τ_c) l0 after the projection (MODEL.md section 2): a
+      // hard constraint, split by inverse mass as the spring's own.
+      const double limit = (max_len - len) * d * q;
+      f = f < limit ? f : limit;
+    }
+    f = on ? f : 0.0;
+    cx[k] = f * dx;
+    cy[k] = f * dy;
+    cz[k] = f * dz;
+  }
+}
+
+// x += sign w c over one row's ends, component by component.
+void apply_corrections(int count, double sign, std::array<double*, 3> x,
+                       const double* __restrict inv, const double* const c[3]) {
+  for (int q = 0; q < 3; ++q) {
+    double* __restrict xq = x[q];
+    const double* __restrict cq = c[q];
+#pragma omp simd
+    for (int k = 0; k < count; ++k) xq[k] += sign * inv[k] * cq[k];
+  }
+}
+
+}  // namespace
+
+void project_springs(const Model& m, State& s, Workspace& w, double h, bool limit_only) {
+  const int nu = m.nu, nv = m.nv, n = m.n;
+  const double tau = m.params.strain_limit.enabled ? m.params.strain_limit.tau : -1.0;
+  w.correction.resize(3 * std::size_t(n));
+  double* const cx = w.correction.data();
+  double* const cy = cx + n;
+  double* const cz = cy + n;
+  double *const X = s.x.column(0), *const Y = s.x.column(1), *const Z = s.x.column(2);
+  const double *const PX = w.x_prev.column(0), *const PY = w.x_prev.column(1),
+               *const PZ = w.x_prev.column(2);
+  const double* const inv = w.free_inv_mass.data();
+  w.class_gate.resize(5 * std::size_t(nu));
+  for (int g = 0; g < 5; ++g)
+    for (int i = 0; i < nu; ++i)
+      w.class_gate[g * nu + i] = g == 4 || ((i >> (g / 2)) & 1) == g % 2 ? 1.0 : 0.0;
+  for (int e = 0; e < 8; ++e) {
+    const StencilEdge& st = m.stencil[e];
+    if (st.k <= 0 || (limit_only && (e >= 4 || tau < 0))) continue;
+    const int di = st.di, dj = st.dj, off = di + dj * nu;
+    const int lo = std::max(0, -di), hi = std::min(nu, nu - di), rows = nv - dj;
+    if (rows <= 0 || hi <= lo) continue;
+    // XPBD's compliance α̃ = 1/(k h²) and damping γ = α̃ β̃ / h with β̃ = h² k_d.
+    const double alpha = 1.0 / (st.k * h * h), gamma = st.damping / (st.k * h);
+    const double rest = st.rest;
+    // The strain limit (structural and shear, the first four offsets).
+    const double max_len = e < 4 && tau >= 0 ? (1.0 + tau) * rest : 1e30;
+    // The classes: two springs of an offset share a particle only when one
+    // starts where the other ends, a whole offset apart; so an offset across
+    // rows is split by the row's parity (by pairs of rows for a reach of 2), and
+    // one along a row by i's.
+    const bool by_row = dj != 0;
+    const int shift = (by_row ? dj : std::abs(di)) == 2 ? 1 : 0;
+    const auto in_class = [&](int j, int c) { return !by_row || ((j >> shift) & 1) == c; };
+    for (int c = 0; c < 2; ++c) {
+      // Every correction of the class, from the same positions.
+      parallel_for(m, rows, [&](int j) {
+        if (!in_class(j, c)) return;
+        const int a0 = j * nu + lo;
+        const SpringRow r{X + a0, Y + a0, Z + a0, PX + a0, PY + a0, PZ + a0, inv + a0, off};
+        // The class along the row: 1 where i's parity (after the shift) is c.
+        const double* gate = w.class_gate.data() + (by_row ? 4 : 2 * shift + c) * nu + lo;
+        (limit_only          ? spring_corrections<Projection::LimitOnly>
+         : max_len < 1e30 ? spring_corrections<Projection::SpringLimited>
+                          : spring_corrections<Projection::Spring>)(
+            r, gate, hi - lo, rest, max_len, alpha, gamma,
+                           cx + a0, cy + a0, cz + a0);
+      });
+      // The impulses on the particles a handle holds (their reaction force).
+      const auto edge_at = [&](int a) {
+        return a >= 0 && a % nu >= lo && a % nu < hi && a / nu < rows && in_class(a / nu, c) &&
+               (by_row || w.class_gate[(2 * shift + c) * nu + a % nu] != 0);
+      };
+      for (const int k : w.reaction_particles) {
+        if (edge_at(k)) w.reaction_impulse -= Vec3(cx[k], cy[k], cz[k]);
+        if (edge_at(k - off)) w.reaction_impulse += Vec3(cx[k - off], cy[k - off], cz[k - off]);
+      }
+      // Applied: a moves by -w_a Δλ n, b by +w_b Δλ n.
+      parallel_for(m, rows, [&](int j) {
+        if (!in_class(j, c)) return;
+        const int a0 = j * nu + lo, count = hi - lo;
+        const double* cor[3] = {cx + a0, cy + a0, cz + a0};
+        apply_corrections(count, -1.0, {X + a0, Y + a0, Z + a0}, inv + a0, cor);
+        apply_corrections(count, 1.0, {X + a0 + off, Y + a0 + off, Z + a0 + off}, inv + a0 + off,
+                          cor);
+      });
+    }
+  }
+}
+
+// Self-collision (eq. 15) as a one-sided compliant constraint |x_i - x_j| >= d_t
+// with the stiffness k_t, in the candidates' sorted order.
+void project_self_collision(const Model& m, State& s, Workspace& w, double h) {
+  const auto& p = m.params.self_collision;
+  if (!p.enabled || p.k <= 0) return;
+  refresh_collision_candidates(m, s, w);
+  const double alpha = 1.0 / (p.k * h * h), d_t = p.distance;
+  for (const int q : w.colliding_particles) w.colliding[q] = 0;
+  w.colliding_particles.clear();
+  for (const auto& [i, j] : w.candidates) {
+    const Vec3 d = s.x[i] - s.x[j];
+    const double len2 = d.squaredNorm();
+    if (len2 >= d_t * d_t || len2 == 0) continue;
+    const double len = std::sqrt(len2);
+    const double wi = w.free_inv_mass[i], wj = w.free_inv_mass[j];
+    const double lambda = (d_t - len) / (wi + wj + alpha);
+    const Vec3 corr = (lambda / len) * d;
+    add(s.x[i], wi * corr);
+    sub(s.x[j], wj * corr);
+    for (const int k : w.reaction_particles) {
+      if (k == i) w.reaction_impulse += corr;
+      if (k == j) w.reaction_impulse -= corr;
+    }
+    for (const int q : {i, j})
+      if (!w.colliding[q]) {
+        w.colliding[q] = 1;
+        w.colliding_particles.push_back(q);
+      }
+  }
+}
+
+// Contact with the surfaces, then Coulomb friction (eq. 14) on the velocity the
+// substep ends with. The normal load is what the surface had to push back: the
+// projection's depth, m d / h² (it holds the adhesion that pulled the particle
+// in, its weight and the springs pressing it), and at least the adhesion of a
+// contact particle resting just above the surface (`contact`); the adhesion
+// alone (`adhesion`, the paper's).
+void collide_with_friction(const Model& m, State& s, Workspace& w,
+                           std::vector<std::uint8_t>& touched, double h) {
+  w.x_before_collide = s.x;
+  collide(m, s, &touched);
+  const double inv_h = 1.0 / h;
+  for_each_particle_block(m, [&](int first, int end) {
+    for (int k = 0; k < 3; ++k) {
+      const double *__restrict x = s.x.column(k), *__restrict p = w.x_prev.column(k);
+      double* __restrict v = s.v.column(k);
+#pragma omp simd
+      for (int i = first; i < end; ++i) v[i] = (x[i] - p[i]) * inv_h;
+    }
+  });
+  const double mu = m.params.friction.mu;
+  if (mu == 0) return;
+  const bool with_load = m.params.friction.normal == "contact";
+  const auto surface = static_cast<std::uint8_t>(m.contact_surface);
+  // Per particle, from its flags: 0 no friction, 1 friction from its load,
+  // 2 friction from its load and its adhesion (on the contact surface).
+  const auto kind = [&](int i) {
+    if (m.driven[i] || s.held[i]) return 0.0;
+    const bool on_surface = s.contact[i] && surface != 0;
+    if (touched[i] == 0 && !on_surface) return 0.0;
+    return on_surface && (touched[i] == 0 || touched[i] == surface) ? 2.0 : 1.0;
+  };
+  const double load_scale = with_load ? inv_h * inv_h : 0.0, dv_scale = mu * h;
+  for_each_particle_block(m, [&](int first, int end) {
+    double *__restrict xx = s.x.column(0), *__restrict xy = s.x.column(1),
+                       *__restrict xz = s.x.column(2);
+    double *__restrict vx = s.v.column(0), *__restrict vy = s.v.column(1),
+                       *__restrict vz = s.v.column(2);
+    const double *__restrict bx = w.x_before_collide.column(0),
+                             *__restrict by = w.x_before_collide.column(1),
+                             *__restrict bz = w.x_before_collide.column(2);
+    const double *__restrict nx = w.surface_normal.column(0),
+                             *__restrict ny = w.surface_normal.column(1),
+                             *__restrict nz = w.surface_normal.column(2);
+    const double *__restrict adhesion = w.adhesion.data(), *__restrict mass = m.mass.data(),
+                             *__restrict inv_mass = m.inv_mass.data();
+    for_each_chunk(first, end, kind, [&](int i0, int count, const double* how) {
+#pragma omp simd
+      for (int k = 0; k < count; ++k) {
+        const int i = i0 + k;
+        // The surface's push: its depth and direction (the contact surface's
+        // normal where it did not push).
+        const double px = xx[i] - bx[i], py = xy[i] - by[i], pz = xz[i] - bz[i];
+        const double pushed = std::sqrt(px * px + py * py + pz * pz);
+        const double inv_p = pushed > 0 ? 1.0 / pushed : 0.0;
+        const double ux = pushed > 0 ? px * inv_p : nx[i], uy = pushed > 0 ? py * inv_p : ny[i],
+                     uz = pushed > 0 ? pz * inv_p : nz[i];
+        const double ad = how[k] > 1.5 ? adhesion[i] : 0.0;
+        const double pressing = mass[i] * pushed * load_scale;
+        const double load = ad > pressing ? ad : pressing;
+        const double vn = vx[i] * ux + vy[i] * uy + vz[i] * uz;
+        const double tx = vx[i] - vn * ux, ty = vy[i] - vn * uy, tz = vz[i] - vn * uz;
+        const double speed = std::sqrt(tx * tx + ty * ty + tz * tz);
+        const double dv = dv_scale * load * inv_mass[i];
+        const bool on = (how[k] > 0.5) & (load > 0) & (speed > 0);
+        const double factor = on ? (dv < speed ? dv : speed) / speed : 0.0;
+        const double sx = tx * factor, sy = ty * factor, sz = tz * factor;
+        vx[i] -= sx;
+        vy[i] -= sy;
+        vz[i] -= sz;
+        xx[i] -= h * sx;
+        xy[i] -= h * sy;
+        xz[i] -= h * sz;
+      }
+    });
+  });
+}
+
+}  // namespace wetcloth::detail

@@ -22,8 +22,8 @@ namespace wetcloth::cli {
 // such thing or leaves it off by default: trapped air, adhesion,
 // self-collision, wind, damping, strain limiting. Every setting of Bullet's
 // is its default but the collision margin (1 mm, not 0.25 m) and the bending
-// links a cloth needs (generateBendingConstraints(2): every node tied to
-// those two links away).
+// links a cloth needs: those of generateBendingConstraints(2), every node tied
+// to those two links away (made without its n × n matrix: bullet_peer.cpp).
 class BulletCloth {
  public:
   BulletCloth(const Model& m, double dt);

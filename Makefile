@@ -31,7 +31,7 @@ validate: build
 # The micro-benchmarks; then, in a build with Bullet (libbullet-dev found when
 # configured), our step beside Bullet's btSoftBody on the same cloth, taking
 # turns in one process (`wetcloth bench --peer bullet`): the bench's scene and a
-# plain hanging cloth, at 51 x 51 and 201 x 201 (about a minute on 2 cores).
+# plain hanging cloth, at 51 x 51 and 201 x 201 (3 minutes on the 2 cores, busy).
 PEER = $(BUILD)/wetcloth bench --peer bullet
 bench: build
 	$(BUILD)/wetcloth_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only=true

@@ -4,7 +4,7 @@ set -euo pipefail
 pkgs=(
   cmake g++ make pkg-config
   libeigen3-dev libtomlplusplus-dev libcli11-dev nlohmann-json3-dev libstb-dev
-  libgtest-dev libgmock-dev libbenchmark-dev
+  libgtest-dev libgmock-dev libbenchmark-dev libbullet-dev
   python3 python3-matplotlib
   libglfw3-dev libimgui-dev libepoxy-dev libegl-dev libgl1-mesa-dri xvfb xauth ffmpeg
 )

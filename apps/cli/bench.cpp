@@ -16,6 +16,9 @@
 
 #include "run.hpp"
 #include "scene_options.hpp"
+#ifdef WETCLOTH_BULLET
+#include "bullet_peer.hpp"
+#endif
 #include "wetcloth/output.hpp"
 #include "wetcloth/scene.hpp"
 
@@ -35,7 +38,8 @@ struct Options {
   std::string integrator;
   int repetitions = 5;
   std::vector<std::string> sets;
-  std::string out = "out/bench.json";
+  std::string out;   // default out/bench.json, with a peer out/bench_<peer>.json
+  std::string peer;  // "bullet": time the same cloth in Bullet beside ours
 };
 
 struct Grid {
@@ -142,18 +146,35 @@ json measure_in_child(const Grid& g, int repetitions) {
   return r;
 }
 
+int run_peer(const Options& o, const std::vector<Grid>& grids, unsigned threads,
+             const fs::path& out);
+
 int run_bench(const Options& o) {
+#ifndef WETCLOTH_BULLET
+  if (o.peer == "bullet") {
+    std::fprintf(stderr,
+                 "wetcloth: error: --peer bullet: this wetcloth was built without Bullet "
+                 "(libbullet-dev was not found when the build was configured); install it "
+                 "(make deps) and configure again\n");
+    return kError;
+  }
+#endif
   // Every input is checked, and every grid's scene loaded, before anything runs.
   if (o.repetitions < 1) throw SceneError("--repetitions: must be at least 1");
   if (!(o.duration > 0)) throw SceneError("--duration: must be positive");
-  const fs::path out(o.out);
-  if (fs::is_directory(out)) throw SceneError("--out " + o.out + ": is a folder; give a file name");
+  const std::string out_name = !o.out.empty()   ? o.out
+                               : o.peer.empty() ? "out/bench.json"
+                                                : "out/bench_" + o.peer + ".json";
+  const fs::path out(out_name);
+  if (fs::is_directory(out))
+    throw SceneError("--out " + out_name + ": is a folder; give a file name");
   check_output_folder(out.parent_path(), "--out");
   // All the cores by default, as a fixed count: a bench times a number of
   // threads, not the choice integrator.threads = 0 makes as it runs (which
-  // --threads 0 times).
+  // --threads 0 times). Beside a peer, one thread, as Bullet's soft bodies
+  // step on one.
   const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
-  const unsigned threads = o.threads.value_or(cores);
+  const unsigned threads = o.threads.value_or(o.peer.empty() ? cores : 1);
   std::vector<Grid> grids;
   for (long long size : o.grids) {
     std::vector<std::string> sets;
@@ -169,6 +190,7 @@ int run_bench(const Options& o) {
                        format_number(grid.params.integrator.dt) + " s)");
     grids.push_back(std::move(grid));
   }
+  if (!o.peer.empty()) return run_peer(o, grids, threads, out);
 
   const Params& p0 = grids.front().params;
   const double dt = p0.integrator.dt;
@@ -240,9 +262,171 @@ int run_bench(const Options& o) {
   }
   if (out.has_parent_path()) fs::create_directories(out.parent_path());
   write_file_atomic(out, doc.dump(2) + "\n");
-  std::printf("\nmedians over %d repetitions; results in %s\n", o.repetitions, o.out.c_str());
+  std::printf("\nmedians over %d repetitions; results in %s\n", o.repetitions, out_name.c_str());
   return kOk;
 }
+
+#ifdef WETCLOTH_BULLET
+// Our cloth's mean height and highest point, m.
+std::pair<double, double> heights(const Simulation& sim) {
+  const double* z = sim.state().x.column(2);
+  const int n = sim.model().n;
+  double sum = 0, top = z[0];
+  for (int k = 0; k < n; ++k) {
+    sum += z[k];
+    top = std::max(top, z[k]);
+  }
+  return {sum / n, top};
+}
+
+// `bench --peer bullet`: per grid, rounds of ours (the scene, as run_bench
+// times it) and Bullet's btSoftBody on the same cloth made plain
+// (bullet_peer.hpp), each from t = 0 in a fresh world, one untimed step, then
+// the same simulated time; the two take turns going first. The ratio is the
+// median of each round's ratio of real-time factors.
+int run_peer(const Options& o, const std::vector<Grid>& grids, unsigned threads,
+             const fs::path& out) {
+  constexpr double kPeerDt = 1.0 / 600.0;
+  const long long peer_steps = std::llround(o.duration / kPeerDt);
+  if (peer_steps < 1)
+    throw SceneError("--duration " + format_number(o.duration) +
+                     " s is shorter than one of Bullet's steps (1/600 s)");
+  const Params& p0 = grids.front().params;
+  const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
+  const std::string cpu = cpu_model(), version = bullet_version();
+  std::printf(
+      "wetcloth %s bench --peer bullet: ours and Bullet %s's btSoftBody on the same cloth, "
+      "in turn in this process, %d rounds of %g s simulated\n"
+      "ours:   scene %s, integrator %s, %u thread%s, dt %g s (first grid)\n"
+      "Bullet: the scene's cloth, plain (dry mass, gravity, table, ball, handles; no air, "
+      "adhesion, self-collision, wind or damping), dt 1/600 s, Bullet's defaults otherwise, "
+      "one thread\nmachine: %u cores, %s\n\n",
+      WETCLOTH_VERSION, version.c_str(), o.repetitions, o.duration, p0.name.c_str(),
+      p0.integrator.type.c_str(), threads, threads == 1 ? "" : "s", p0.integrator.dt, cores,
+      cpu.c_str());
+  std::printf(
+      "       ------------------- ours -------------------   ------------- Bullet --------------\n"
+      " grid  particles  springs  dt µs   µs/step  real-time ×    "
+      "links  dt µs  µs/step  real-time ×  ours/Bullet\n");
+  std::fflush(stdout);
+
+  json doc = {{"version", WETCLOTH_VERSION},
+              {"scene", p0.name},
+              {"integrator", p0.integrator.type},
+              {"dt_s", p0.integrator.dt},
+              {"threads", threads},
+              {"duration_s", o.duration},
+              {"repetitions", o.repetitions},
+              {"machine", {{"cores", cores}, {"cpu", cpu}}},
+              {"peer", {{"name", "bullet"}, {"version", version}, {"dt_s", kPeerDt}}},
+              {"grids", json::array()}};
+  std::vector<std::string> lines;
+  for (const Grid& g : grids) {
+    const Model model = build_model(g.params);
+    const double dt = g.params.integrator.dt;
+    std::vector<double> ours_wall, peer_wall, ratio;
+    std::pair<double, double> ours_end, peer_end;
+    int links = 0, faces = 0;
+    double peer_mass = 0, ours_time = 0, peer_time = 0;
+    for (int round = 0; round < o.repetitions; ++round) {
+      for (int turn = 0; turn < 2; ++turn) {
+        if ((turn == 0) == (round % 2 == 0)) {
+          Simulation sim(g.params);
+          sim.step();
+          const auto start = std::chrono::steady_clock::now();
+          for (long long k = 0; k < g.steps; ++k) sim.step();
+          ours_wall.push_back(
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+          if (const std::string why = sim.blow_up_reason(); !why.empty()) {
+            std::fprintf(stderr, "wetcloth: grid %lld: %s\nnothing written\n", g.size, why.c_str());
+            return kBlowUp;
+          }
+          ours_end = heights(sim);
+          ours_time = sim.state().time;
+        } else {
+          BulletCloth peer(model, kPeerDt);
+          peer.step();
+          const auto start = std::chrono::steady_clock::now();
+          for (long long k = 0; k < peer_steps; ++k) peer.step();
+          peer_wall.push_back(
+              std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+          if (!peer.finite()) {
+            std::fprintf(stderr, "wetcloth: grid %lld: Bullet's cloth blew up\nnothing written\n",
+                         g.size);
+            return kBlowUp;
+          }
+          peer_end = {peer.mean_z(), peer.max_z()};
+          links = peer.links();
+          faces = peer.faces();
+          peer_mass = peer.mass();
+          peer_time = peer.time();
+        }
+      }
+      ratio.push_back((g.steps * dt / ours_wall.back()) /
+                      (peer_steps * kPeerDt / peer_wall.back()));
+    }
+    const auto real_time = [](const std::vector<double>& walls, double simulated) {
+      std::vector<double> r;
+      for (double w : walls) r.push_back(simulated / w);
+      return median(r);
+    };
+    const double ours_rt = real_time(ours_wall, g.steps * dt);
+    const double peer_rt = real_time(peer_wall, peer_steps * kPeerDt);
+    const double ours_us = 1e6 * median(ours_wall) / g.steps;
+    const double peer_us = 1e6 * median(peer_wall) / peer_steps;
+    const double ratio_median = median(ratio);
+    const long long springs = model.structural.size() + model.shear.size() + model.bending.size();
+    double area = 0;
+    for (double a : model.area) area += a;
+    std::printf("%5lld  %9d  %7lld  %5.2f  %8.1f  %11.4f  %7d  %5.0f  %7.1f  %11.4f  %11.3f\n",
+                g.size, model.n, springs, 1e6 * dt, ours_us, ours_rt, links, 1e6 * kPeerDt, peer_us,
+                peer_rt, ratio_median);
+    std::fflush(stdout);
+    char line[512];
+    std::snprintf(line, sizeof line,
+                  "grid %lld: ours/Bullet real-time factor %.3f (ours %.4f x real time, Bullet "
+                  "%.4f x; median of %d rounds)\n"
+                  "  at the end (ours at %.4g s, Bullet at %.4g s): mean height ours %.4f m, "
+                  "Bullet %.4f m; highest ours %.4f m, Bullet %.4f m\n",
+                  g.size, ratio_median, ours_rt, peer_rt, o.repetitions, ours_time, peer_time,
+                  ours_end.first, peer_end.first, ours_end.second, peer_end.second);
+    lines.push_back(line);
+    doc["grids"].push_back(
+        {{"grid", g.size},
+         {"ours",
+          {{"particles", model.n},
+           {"springs", springs},
+           {"dry_mass_kg", g.params.cloth.areal_density * area},
+           {"dt_s", dt},
+           {"steps", g.steps},
+           {"wall_s", ours_wall},
+           {"median", {{"us_per_step", ours_us}, {"realtime_factor", ours_rt}}},
+           {"end", {{"mean_z_m", ours_end.first}, {"max_z_m", ours_end.second}}}}},
+         {"bullet",
+          {{"nodes", model.n},
+           {"links", links},
+           {"faces", faces},
+           {"mass_kg", peer_mass},
+           {"dt_s", kPeerDt},
+           {"steps", peer_steps},
+           {"wall_s", peer_wall},
+           {"median", {{"us_per_step", peer_us}, {"realtime_factor", peer_rt}}},
+           {"end", {{"mean_z_m", peer_end.first}, {"max_z_m", peer_end.second}}}}},
+         {"ratio_per_round", ratio},
+         {"ratio_median", ratio_median}});
+  }
+  std::printf("\n");
+  for (const std::string& line : lines) std::fputs(line.c_str(), stdout);
+  if (out.has_parent_path()) fs::create_directories(out.parent_path());
+  write_file_atomic(out, doc.dump(2) + "\n");
+  std::printf("ratio: our real-time factor over Bullet's; results in %s\n", out.c_str());
+  return kOk;
+}
+#else
+int run_peer(const Options&, const std::vector<Grid>&, unsigned, const fs::path&) {
+  return kError;  // not reached: run_bench said so first
+}
+#endif
 
 }  // namespace
 
@@ -264,14 +448,24 @@ std::function<int()> add_bench_command(CLI::App& app) {
       ->capture_default_str();
   cmd->add_option("--set", o->sets, "override a parameter, KEY=VALUE (repeatable)")
       ->allow_extra_args(false);
-  cmd->add_option("--out", o->out, "the results as JSON")->capture_default_str()->check(a_path());
+  cmd->add_option("--out", o->out,
+                  "the results as JSON (default out/bench.json; with --peer, out/bench_PEER.json)")
+      ->check(a_path());
+  cmd->add_option("--peer", o->peer,
+                  "time the same cloth in another simulator beside ours, in turn in this process, "
+                  "and print the ratio of real-time factors: bullet (Bullet's btSoftBody; "
+                  "only in a build that found libbullet-dev)")
+      ->check(CLI::IsMember({"bullet"}));
   cmd->footer(
       "Each grid runs in a process of its own (its peak memory is its own); each repetition "
       "builds\n"
       "the simulation afresh, takes one untimed step, then times round(duration / dt) steps.\n"
       "Writes FILE (every repetition's wall time, the medians, the machine).\n"
-      "Exit codes: 0 ok, 2 bad input (nothing written), 3 the simulation blew up (nothing "
-      "written).");
+      "--peer bullet: per grid, rounds of ours and of Bullet's btSoftBody on the same cloth,\n"
+      "plain (no air, adhesion, self-collision), at dt 1/600 s and Bullet's defaults, taking\n"
+      "turns; ours on one thread unless --threads; no memory column.\n"
+      "Exit codes: 0 ok, 1 --peer bullet in a build without Bullet, 2 bad input (nothing\n"
+      "written), 3 the simulation blew up (nothing written).");
   return [cmd, o]() -> int { return *cmd ? run_bench(*o) : -1; };
 }
 

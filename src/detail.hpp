@@ -202,7 +202,9 @@ void hold_stopped_handles(const Model& m, State& s);
 // friction.cpp: eq. 14 on particles in contact.
 void apply_friction(const Model& m, State& s, const Workspace& w,
                     const std::vector<std::uint8_t>& touched, double dt);
-// strain_limit.cpp: Provot's correction in adaptive order.
+// strain_limit.cpp: Provot's correction in adaptive order, split by inverse
+// mass (it conserves momentum); the force it takes to hold pinned, driven and
+// held particles against it in w.strain_reaction.
 void update_strain_order(const Model& m, State& s, Workspace& w);
 void limit_strain(const Model& m, State& s, Workspace& w, double dt);
 

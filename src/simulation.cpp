@@ -341,6 +341,7 @@ void Simulation::finish_step(double h) {
   apply_friction(m, s, w, touched_, h);
   if (m.params.strain_limit.enabled) {
     limit_strain(m, s, w, h);
+    add_strain_limit_reaction(m, s, w);
     // On the table alone only the particles strain limiting moved can be
     // inside: collide put the others on it (z - (z - H) is exactly H when H is
     // 0 or z within a factor 2 of it, as a step's motion keeps it). A ball's

@@ -278,6 +278,10 @@ struct Metrics {
   double contact_area_m2 = 0, lifted_area_m2 = 0, base_diagonal_m = 0, outer_diagonal_m = 0;
   double inner_pressure_pa = 0, trapped_air_m3 = 0, air_volume_m3 = 0;
   double kinetic_energy_j = 0, max_strain = 0, wrinkle_rad = 0, centroid_x_m = 0, centroid_y_m = 0;
+  // The lifted cloth's pull on the cloth in contact, away from the surface: its
+  // springs' elastic forces on the contact particles (at a peel front, what
+  // their adhesion holds; negative where the lifted cloth presses them down).
+  double front_pull_n = 0;
 };
 std::vector<std::string> metrics_columns();
 std::vector<double> metrics_values(const Metrics& m);

@@ -196,6 +196,9 @@ double step_strain(const Model& m, const State& s, double h);
 constexpr int kMostHalvings = 10;
 // handles.cpp: pins, driven particles, height caps; records the rig's force.
 void apply_handle_constraints(const Model& m, State& s, Workspace& w);
+// After limit_strain: the force it took to hold the measured handle's particles
+// against the limiter's corrections joins the handle's recorded force.
+void add_strain_limit_reaction(const Model& m, const State& s, Workspace& w);
 // Keeps held particles where their handle has them: a force handle's where it
 // stopped, a late pin's or move handle's on its path.
 void hold_stopped_handles(const Model& m, State& s);
@@ -212,7 +215,9 @@ void project_springs(const Model& m, State& s, Workspace& w, double h, bool limi
 void project_self_collision(const Model& m, State& s, Workspace& w, double h);
 void collide_with_friction(const Model& m, State& s, Workspace& w,
                            std::vector<std::uint8_t>& touched, double h);
-// strain_limit.cpp: Provot's correction in adaptive order.
+// strain_limit.cpp: Provot's correction in adaptive order, split by inverse
+// mass (it conserves momentum); the force it takes to hold pinned, driven and
+// held particles against it in w.strain_reaction.
 void update_strain_order(const Model& m, State& s, Workspace& w);
 void limit_strain(const Model& m, State& s, Workspace& w, double dt);
 

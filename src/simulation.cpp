@@ -412,6 +412,7 @@ void Simulation::finish_step(double h) {
   apply_friction(m, s, w, touched_, h);
   if (m.params.strain_limit.enabled) {
     limit_strain(m, s, w, h);
+    add_strain_limit_reaction(m, s, w);
     // On the table alone only the particles strain limiting moved can be
     // inside: collide put the others on it (z - (z - H) is exactly H when H is
     // 0 or z within a factor 2 of it, as a step's motion keeps it). A ball's
@@ -607,6 +608,23 @@ Metrics Simulation::metrics() const {
   }
   r.wrinkle_rad = count ? sum / count : 0.0;
   if (m.contact_surface == SurfaceKind::None) r.wrinkle_rad = 0;
+  // The pull across the contact region's edge: the springs from lifted
+  // particles to particles in contact, their elastic force on the latter along
+  // the surface normal (the springs between two contact particles cancel). A
+  // peel rig's force is the lifted part's weight and suction plus this.
+  if (m.contact_surface != SurfaceKind::None)
+    for (int k = 0; k < m.n; ++k) {
+      if (!s.contact[k]) continue;
+      const int i = k % m.nu, j = k / m.nu;
+      for (const StencilEdge& e : m.stencil)
+        for (const int sign : {1, -1}) {
+          const int o = grid_neighbour(m, i, j, sign * e.di, sign * e.dj);
+          if (o < 0 || s.contact[o]) continue;
+          const Vec3 d = s.x[o] - s.x[k];
+          const double len = d.norm();
+          if (len > 0) r.front_pull_n += e.k * (len - e.rest) / len * d.dot(ws_.surface_normal[k]);
+        }
+    }
   return r;
 }
 
@@ -616,7 +634,7 @@ std::vector<std::string> metrics_columns() {
           "base_diagonal_m", "outer_diagonal_m", "inner_pressure_pa",
           "trapped_air_m3",  "air_volume_m3",    "kinetic_energy_j",
           "max_strain",      "wrinkle_rad",      "centroid_x_m",
-          "centroid_y_m"};
+          "centroid_y_m",    "front_pull_n"};
 }
 
 std::vector<double> metrics_values(const Metrics& r) {
@@ -625,7 +643,7 @@ std::vector<double> metrics_values(const Metrics& r) {
           r.base_diagonal_m, r.outer_diagonal_m, r.inner_pressure_pa,
           r.trapped_air_m3,  r.air_volume_m3,    r.kinetic_energy_j,
           r.max_strain,      r.wrinkle_rad,      r.centroid_x_m,
-          r.centroid_y_m};
+          r.centroid_y_m,    r.front_pull_n};
 }
 
 }  // namespace wetcloth

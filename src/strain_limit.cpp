@@ -1,6 +1,8 @@
 // Strain limiting (MODEL.md section 2; Provot 1995, adaptive order after Dochev &
 // Vassilev 2003): over-stretched structural and shear springs are shortened back
-// to (1 + τ_c) l0, starting from the particles that move first.
+// to (1 + τ_c) l0, visited outwards from the particles that move first. Each
+// correction is an internal force: it is split between the spring's ends in
+// inverse proportion to their masses, so it conserves momentum.
 #include <algorithm>
 #include <cstring>
 #include <functional>
@@ -45,7 +47,6 @@ void order_springs(const Model& m, const State& s, Workspace& w) {
   for (const SpringSet* set : {&m.structural, &m.shear})
     for (std::size_t k = 0; k < set->size(); ++k) {
       const int a = set->a[k], b = set->b[k];
-      const int da = s.source_distance[a], db = s.source_distance[b];
       // Its stencil slot: the lower end and the forward offset, one of the first four.
       int di = b % m.nu - a % m.nu, dj = b / m.nu - a / m.nu, lower = a;
       if (dj < 0 || (dj == 0 && di < 0)) {
@@ -55,8 +56,7 @@ void order_springs(const Model& m, const State& s, Workspace& w) {
       }
       int e = 0;
       while (m.stencil[e].di != di || m.stencil[e].dj != dj) ++e;
-      w.strain_springs.push_back({a, b, stretch * m.stencil[e].rest,
-                                  da == db ? 0 : (da < db ? -1 : 1), kStrainOffsets * lower + e});
+      w.strain_springs.push_back({a, b, stretch * m.stencil[e].rest, kStrainOffsets * lower + e});
     }
   auto level = [&](const Workspace::StrainSpring& e) {
     return std::min(s.source_distance[e.a], s.source_distance[e.b]);
@@ -105,11 +105,22 @@ void update_strain_order(const Model& m, State& s, Workspace& w) {
 
 // Springs are corrected level by level in the adaptive order; within a level
 // (springs at the same distance from the source) every correction is computed
-// from the same positions and averaged per particle, so that the result does
-// not depend on the order of springs within a level, and a symmetric cloth
-// stays symmetric.
+// from the same positions and applied at the end of the level, so that the
+// result does not depend on the order of springs within a level, and a
+// symmetric cloth stays symmetric.
+//
+// A correction moves the spring's ends by wa corr and -wb corr, with wa, wb =
+// 1/m_a, 1/m_b over their sum: Σ m Δx = 0. Pinned, driven and held particles
+// weigh infinitely (the other end takes it all), and the force the correction
+// would take to hold them is recorded for their handle (w.strain_reaction).
+// Where several springs of a level move one particle, each of them is scaled
+// by 1 / (the most springs moving either of its ends), computed before any is
+// applied: a relaxation both ends share, so that momentum stays conserved (an
+// average per particle would scale each end of a spring differently).
 void limit_strain(const Model& m, State& s, Workspace& w, double dt) {
   const auto& p = m.params.strain_limit;
+  for (const int k : w.strain_reacting) put(w.strain_reaction[k], Vec3::Zero());
+  w.strain_reacting.clear();
   if (!p.enabled) return;
   update_strain_order(m, s, w);
   // Where each particle the limiter moves started: its velocity follows at the end.
@@ -118,6 +129,8 @@ void limit_strain(const Model& m, State& s, Workspace& w, double dt) {
   w.strain_changed.clear();
   w.strain_delta.resize(m.n, Vec3::Zero());  // zero between levels
   w.strain_count.resize(m.n, 0);
+  w.strain_reaction.resize(m.n, Vec3::Zero());  // zero but for strain_reacting
+  w.strain_corrections.clear();
   const auto& springs = w.strain_springs;
   w.strain_stretched.resize(kStrainOffsets * std::size_t(m.n));
   w.strain_queued.resize(springs.size(), 0);  // zero between passes
@@ -127,6 +140,7 @@ void limit_strain(const Model& m, State& s, Workspace& w, double dt) {
     const double l = (1.0 + p.tau) * m.stencil[e].rest;
     max_len2[e] = l * l;
   }
+  const double inv_dt2 = 1.0 / (dt * dt);
   const auto level_end = [&](int l) { return w.strain_levels[l + 1]; };
   auto& heap = w.strain_heap;        // springs to look at, a min-heap of their order
   auto& touched = w.strain_touched;  // particles with a correction in this level
@@ -147,15 +161,33 @@ void limit_strain(const Model& m, State& s, Workspace& w, double dt) {
         if (order >= level_end(l)) queue(order);
       }
   };
-  // End of level l: each particle moves by the mean of its corrections.
+  // The force on a pinned, driven or held particle k from holding it against a
+  // correction: f, minus the momentum the free end gained over dt².
+  auto react = [&](int k, const Vec3& f) {
+    if (w.strain_reaction[k] == Vec3::Zero()) w.strain_reacting.push_back(k);
+    add(w.strain_reaction[k], f);
+  };
+  // End of level l: each correction, relaxed by the most corrections that move
+  // either of its ends, then every moved particle by the sum of its shares.
   auto finish_level = [&](int l) {
+    for (const auto& c : w.strain_corrections) {
+      const int most =
+          std::max(c.wa > 0 ? w.strain_count[c.a] : 0, c.wb > 0 ? w.strain_count[c.b] : 0);
+      const Vec3 step = c.corr / static_cast<double>(most);
+      if (c.wa > 0) add(w.strain_delta[c.a], c.wa * step);
+      if (c.wb > 0) sub(w.strain_delta[c.b], c.wb * step);
+      // One end held: it takes minus the momentum the other gained.
+      if (c.wa == 0) react(c.a, (m.mass[c.b] * inv_dt2) * step);
+      if (c.wb == 0) react(c.b, -(m.mass[c.a] * inv_dt2) * step);
+    }
+    w.strain_corrections.clear();
     for (const int k : touched) {
       if (!w.strain_saved[k]) {
         w.strain_saved[k] = 1;
         put(w.x_before[k], s.x[k]);
         w.strain_changed.push_back(k);
       }
-      add(s.x[k], w.strain_delta[k] / w.strain_count[k]);
+      add(s.x[k], w.strain_delta[k]);
       put(w.strain_delta[k], Vec3::Zero());
       w.strain_count[k] = 0;
     }
@@ -224,7 +256,12 @@ void limit_strain(const Model& m, State& s, Workspace& w, double dt) {
     w.strain_moved.clear();
     w.strain_over.clear();
     bool corrected = false;  // a pass that corrects nothing ends the passes
-    for (int l = 0; !heap.empty();) {
+    for (int l = 0;;) {
+      if (heap.empty()) {  // the last level's corrections may queue more springs
+        if (touched.empty()) break;
+        finish_level(l);
+        continue;
+      }
       const int e = heap.front();
       if (e >= level_end(l)) {
         if (!touched.empty()) {
@@ -240,32 +277,17 @@ void limit_strain(const Model& m, State& s, Workspace& w, double dt) {
       const Vec3 d = s.x[sp.b] - s.x[sp.a];
       const double len2 = d.squaredNorm();
       if (len2 <= sp.max_len * sp.max_len) continue;
+      // Shares by inverse mass; a pinned, driven or held end weighs infinitely.
+      const double inv_a = fixed(sp.a) ? 0.0 : m.inv_mass[sp.a];
+      const double inv_b = fixed(sp.b) ? 0.0 : m.inv_mass[sp.b];
+      if (inv_a + inv_b == 0) continue;  // both held: nothing can move
       corrected = true;
       w.strain_over.push_back(e);
-      // The end farther from the source moves; both halves when neither is
-      // nearer; pinned and driven particles never move.
-      double wa = sp.nearer == 0 ? 0.5 : (sp.nearer < 0 ? 0.0 : 1.0);
-      double wb = 1.0 - wa;
-      const bool fixed_a = fixed(sp.a), fixed_b = fixed(sp.b);
-      if (fixed_a) {
-        wa = 0;
-        wb = fixed_b ? 0 : 1;
-      }
-      if (fixed_b) {
-        wb = 0;
-        wa = fixed_a ? 0 : 1;
-      }
+      const double wa = inv_a / (inv_a + inv_b), wb = inv_b / (inv_a + inv_b);
       const double len = std::sqrt(len2);
-      const Vec3 corr = d * ((len - sp.max_len) / len);
-      if (wa > 0) {
-        if (w.strain_count[sp.a]++ == 0) touched.push_back(sp.a);
-        add(w.strain_delta[sp.a], wa * corr);
-      }
-      if (wb > 0) {
-        if (w.strain_count[sp.b]++ == 0) touched.push_back(sp.b);
-        sub(w.strain_delta[sp.b], wb * corr);
-      }
-      if (heap.empty() && !touched.empty()) finish_level(l);
+      w.strain_corrections.push_back({sp.a, sp.b, wa, wb, d * ((len - sp.max_len) / len)});
+      if (wa > 0 && w.strain_count[sp.a]++ == 0) touched.push_back(sp.a);
+      if (wb > 0 && w.strain_count[sp.b]++ == 0) touched.push_back(sp.b);
     }
     if (!corrected) break;
   }

@@ -93,6 +93,26 @@ add_case "$T/runs/implicit-drape-ball" omega_0.7000000 0.7 exchange ok 500 1
 new_sweep "$TWO"
 add_case "$TWO" exchange_omega_1.00 1 exchange ok 600
 add_case "$TWO" sealed_omega_1.00 1 sealed ok 5000
+# Laws the model keeps: a free cloth pulled by 1 N along x that travels as
+# a = F/M (M = 0.12 × 1.7 × 0.09 kg) over steps of 5e-5 s: x = a t (t + Δt) / 2;
+# and a peel rig whose force is 1 % over the load of what it lifts, (ρ g + ΔP)
+# A + front pull, once more than its 3 × 3 patch (9 × 6 mm × 6 mm) is lifted.
+FREE="$T/runs/free-cloth"; mkdir -p "$FREE"
+echo "time_s,centroid_x_m,centroid_y_m,max_strain" >"$FREE/metrics.csv"
+awk 'BEGIN { a = 1 / (0.12 * 1.7 * 0.09); for (i = 0; i <= 2; i++) { t = 0.05 * i
+  printf "%.17g,%.17g,0,0.1\n", t, a * t * (t + 5e-5) / 2 } }' >>"$FREE/metrics.csv"
+printf '[cloth]\nsize = [0.3, 0.3]\nhumidity = 0.7\nareal_density = 0.12\nwater_ratio = 1.0\n\n[integrator]\ndt = 5e-05\n\n[handle.pull]\ntype = "force"\nforce = [1.0, 0.0, 0.0]\n' >"$FREE/scene.toml"
+echo '{"status": "ok"}' >"$FREE/summary.json"
+PEEL="$T/runs/peel-rig"
+new_sweep "$PEEL"
+add_case "$PEEL" omega_0.70 0.7 exchange ok 40 0.7 move
+echo "time_s,handle_force_n,lifted_area_m2,inner_pressure_pa,front_pull_n" >"$PEEL/omega_0.70/metrics.csv"
+awk 'BEGIN { printf "0.1,0.05,0.000324,101285,0.02\n"
+  for (i = 1; i <= 4; i++) { A = 0.01 * i; f = 0.1 - 0.02 * i
+    printf "%g,%.17g,%g,101285,%g\n", 0.1 + 0.5 * i, 1.01 * ((0.12 * 1.7 * 9.81 + 40) * A + f), A, f } }' \
+  >>"$PEEL/omega_0.70/metrics.csv"
+printf '[cloth]\nresolution = [51, 51]\nsize = [0.3, 0.3]\nhumidity = 0.7\nareal_density = 0.12\nwater_ratio = 1.0\n\n[forces]\ngravity = [0.0, 0.0, -9.81]\n\n[air]\nmodel = "exchange"\np_atm = 101325.0\n\n[handle.rig]\ntype = "move"\npatch = 1\nvelocity = [0.0, 0.0, 0.02]\n' \
+  >"$PEEL/omega_0.70/scene.toml"
 for b in badnum badcol nometrics badrow; do cp -r "$ONE" "$T/$b"; done
 sed -i '2s/,0.3,ok,/,wet,ok,/' "$T/badnum/sweep.csv"
 sed -i '1s/,base_diagonal_m,/,base_diag,/' "$T/badcol/sweep.csv"
@@ -219,8 +239,12 @@ then ok "implicit ensemble within the explicit spread: INCONCLUSIVE"; else bad "
 if [ -s "$T/val/figures/pull-straight_fig7.png" ] && grep -q '](figures/pull-straight_fig7.png)' "$R" \
    && [ -s "$T/val/figures/air-models_fig8.png" ]; then ok "figures copied and linked"; else bad "figures not copied or linked"; fi
 if grep -q '^| 1.00 | blew up |' "$R"; then ok "sweep table shows the blown-up case"; else bad "sweep table lacks the blown-up case"; fi
-if "$PY" "$REPORT" "$T/nowhere" "$T/val2/report.md" >/dev/null 2>&1 && [ "$(grep -c '| not run |$' "$T/val2/report.md")" -eq 16 ]
-then ok "report on no runs: every claim not run"; else bad "report on no runs"; fi
+if grep -q '^| Strain limiting conserves momentum: .* | 54.466 m/s² over 0.1 s (+0.00%); .* | F/M = 54.466 m/s², within 1 % | \*\*PASS\*\* |' "$R"
+then ok "law: free cloth at F/M: PASS"; else bad "law: free cloth: $(grep '^| Strain limiting' "$R")"; fi
+if grep -q "^| A rig's recorded force .* | grid \[51, 51\]; .* ω=0.7: 1.010 (90th percentile off by 1.0%, 4 frames) | 1, within 5% | \*\*PASS\*\* |" "$R"
+then ok "law: peel rig's force balance: PASS"; else bad "law: peel rig: $(grep "^| A rig's" "$R")"; fi
+if "$PY" "$REPORT" "$T/nowhere" "$T/val2/report.md" >/dev/null 2>&1 && [ "$(grep -c '| not run |$' "$T/val2/report.md")" -eq 18 ]
+then ok "report on no runs: every claim and law not run"; else bad "report on no runs"; fi
 
 # The sweep command's printout, with a program to run (WETCLOTH=build/wetcloth).
 W="${WETCLOTH:-}"

@@ -17,7 +17,11 @@ none); and a table of the paper's claims (docs/model.md section 11), each with t
 paper's statement, our numbers and PASS/FAIL computed from the data, and of
 implicit Euler's agreement with the explicit step (issue 4: the implicit-<scene>
 sweeps against explicit-<scene> and the explicit sweeps' ω = 0.7, each an
-ensemble of ω = 0.7 moved by k·1e-7). Missing
+ensemble of ω = 0.7 moved by k·1e-7); and a table of laws the model keeps
+(docs/model.md sections 2 and 9: a free cloth under a force accelerates at
+F/M, from the single run RUNS_DIR/free-cloth; a rig's force balances the load
+of what it lifts, from the peel-rig sweep), each measured, expected and
+PASS/FAIL. Missing
 data reads "not run"; the script does not fail on it. Needs only the standard
 library (matplotlib only if it has to draw missing figures).
 """
@@ -93,6 +97,7 @@ def load_sweep(folder):
     cases = read_csv(os.path.join(folder, "sweep.csv"))
     for c in cases:
         case_dir = os.path.join(folder, str(c.get("case", "")))
+        c["folder"] = case_dir
         rows = read_csv(os.path.join(case_dir, "metrics.csv"))
         col = lambda k: [r[k] for r in rows if isinstance(r.get(k), float)]
         c["summary"] = read_json(os.path.join(case_dir, "summary.json"))
@@ -354,6 +359,126 @@ CLAIMS = [  # (experiment, the paper reports, the test, evaluate(sweeps) -> (mea
      for scene in AGREEMENT]
 
 
+# ---------------------------------------------------------------- laws the model keeps
+
+def vector(text):
+    """A TOML array of numbers ('[1.0, 0.0, 0.0]') as a list of floats, or None."""
+    values = [number(v) for v in (text or "").strip("[] ").split(",")]
+    return values if values and all(v is not None for v in values) else None
+
+
+def areal_mass(scene):
+    """ρ_A (1 + r_w ω), kg/m², from a resolved scene.toml (docs/model.md section 1)."""
+    cloth = scene.get("cloth", {})
+    rho, ratio, w = (number(cloth.get(k)) for k in ("areal_density", "water_ratio", "humidity"))
+    return rho * (1 + ratio * w) if None not in (rho, ratio, w) else None
+
+
+def measured_handle(scene):
+    """The handle the metrics follow: the first by name that is not a pin ({} if none)."""
+    return next((v for k, v in sorted(scene.items())
+                 if k.startswith("handle.") and v.get("type", "").strip('"') != "pin"), {})
+
+
+def free_cloth(runs):
+    """A free cloth pulled by a constant force: its centroid's acceleration against F/M
+    (strain limiting conserves momentum, docs/model.md section 2)."""
+    folder = os.path.join(runs, "free-cloth")
+    rows = read_csv(os.path.join(folder, "metrics.csv"))
+    scene = read_toml(os.path.join(folder, "scene.toml"))
+    status = read_json(os.path.join(folder, "summary.json")).get("status")
+    handle = measured_handle(scene)
+    force, size = vector(handle.get("force")), vector(scene.get("cloth", {}).get("size"))
+    dt, mass_per_area = number(scene.get("integrator", {}).get("dt")), areal_mass(scene)
+    ok_rows = len(rows) >= 2 and all(isinstance(rows[i].get(k), float) for i in (0, -1)
+                                     for k in ("time_s", "centroid_x_m", "centroid_y_m"))
+    if not (ok_rows and force and size and dt and mass_per_area):
+        return "not run", "—", "not run"
+    t = rows[-1]["time_s"] - rows[0]["time_s"]
+    moved = math.hypot(rows[-1]["centroid_x_m"] - rows[0]["centroid_x_m"],
+                       rows[-1]["centroid_y_m"] - rows[0]["centroid_y_m"])
+    # Symplectic Euler from rest under a constant force: x_n - x_0 = a dt² n (n + 1) / 2.
+    measured = 2 * moved / (t * (t + dt))
+    expected = math.hypot(*force) / (mass_per_area * size[0] * size[1])
+    strain = max((r["max_strain"] for r in rows if isinstance(r.get("max_strain"), float)), default=0.0)
+    text = (f"{measured:.3f} m/s² over {t:g} s ({measured / expected - 1:+.2%}); "
+            f"largest structural strain {strain:.3f} (the limiter holds it at τ_c)")
+    return text, f"F/M = {expected:.3f} m/s², within 1 %", \
+        verdict(abs(measured / expected - 1) < 0.01, "" if status == "ok" else "blew up")
+
+
+def rig_balance(case):
+    """One peel-rig run: per frame once more than the patch is lifted, the recorded
+    force over the load of what the rig lifts, (ρ g + ΔP) A_lifted + front pull.
+    Returns (median ratio, 90th-percentile |ratio - 1|, frames) or None."""
+    scene = case["scene"]
+    rows = read_csv(os.path.join(case["folder"], "metrics.csv"))
+    handle = measured_handle(scene)
+    cloth = scene.get("cloth", {})
+    res, size, gravity = vector(cloth.get("resolution")), vector(cloth.get("size")), \
+        vector(scene.get("forces", {}).get("gravity"))
+    patch, p_atm, mass_per_area = number(handle.get("patch")), \
+        number(scene.get("air", {}).get("p_atm")), areal_mass(scene)
+    if not (rows and res and size and gravity and mass_per_area) or None in (patch, p_atm):
+        return None
+    keys = ("handle_force_n", "lifted_area_m2", "inner_pressure_pa", "front_pull_n")
+    # The rig's patch (2 patch + 1 particles a side, each l × l): lifted alone at first.
+    spacing = (size[0] / (res[0] - 1)) * (size[1] / (res[1] - 1))
+    patch_area = (2 * patch + 1) ** 2 * spacing
+    ratios = []
+    for r in rows:
+        if not all(isinstance(r.get(k), float) for k in keys) or r["lifted_area_m2"] <= patch_area * 1.0001:
+            continue
+        load = (mass_per_area * abs(gravity[2]) + p_atm - r["inner_pressure_pa"]) * r["lifted_area_m2"] \
+            + r["front_pull_n"]
+        if load > 0:
+            ratios.append(r["handle_force_n"] / load)
+    if not ratios:
+        return None
+    ratios.sort()
+    off = sorted(abs(x - 1) for x in ratios)
+    return ratios[len(ratios) // 2], off[len(off) * 9 // 10], len(ratios)
+
+
+def peel_balance(sweeps, tolerance=0.05):
+    """The peel rig's recorded force against the load of what it lifts, at every ω
+    of the peel-rig sweep (docs/model.md sections 2 and 9)."""
+    cases = sweeps.get("peel-rig")
+    if not cases:
+        return "not run", "—", "not run"
+    texts, ok, problems = [], True, []
+    resolution = cases[0]["scene"].get("cloth", {}).get("resolution", "?")
+    for c in sorted(cases, key=lambda c: c.get("humidity") or 0):
+        b = rig_balance(c)
+        if b is None:
+            return (f"not run (no front_pull_n at ω = {c.get('humidity')}: rerun peel-rig)", "—",
+                    "not run")
+        median, p90, frames = b
+        texts.append(f"ω={c.get('humidity'):g}: {median:.3f} (90th percentile off by {p90:.1%}, {frames} frames)")
+        ok &= abs(median - 1) < tolerance
+        if not c["ok"]:
+            problems.append(f"ω={c.get('humidity'):g}")
+    return (f"grid {resolution}; the median frame's recorded force / load: " + "; ".join(texts),
+            f"1, within {tolerance:.0%}",
+            verdict(ok, ("blew up at " + ", ".join(problems)) if problems else ""))
+
+
+LAWS = [  # (law, how it is checked, evaluate(runs, sweeps) -> (measured, expected, verdict))
+    ("Strain limiting conserves momentum: a free cloth pulled by a force accelerates at F/M "
+     "(docs/model.md section 2)",
+     "`free-cloth`: `pull-straight` in free space (no table, gravity, air, adhesion or damping; "
+     "springs of 20 N/m, so that the limiter acts every step), 1 N along x; the centroid's "
+     "acceleration from its travel, 2 Δx / (t (t + Δt))",
+     lambda runs, sweeps: free_cloth(runs)),
+    ("A rig's recorded force balances the load of what it lifts, the strain limiter's impulses "
+     "included (docs/model.md sections 2, 9)",
+     "`peel-rig` sweep: each frame once more than the patch is lifted, the recorded force "
+     "over the lifted cloth's weight + deficit × lifted area (the suction) + the front pull (the "
+     "springs' pull on the cloth still in contact, which its adhesion holds); the median frame",
+     lambda runs, sweeps: peel_balance(sweeps)),
+]
+
+
 # ---------------------------------------------------------------- the report
 
 def machine():
@@ -440,6 +565,9 @@ def report(runs, report_path, command):
                     if c["summary"].get("version")), "?")
     results = [(exp, paper, test, *evaluate(sweeps)) for exp, paper, test, evaluate in CLAIMS]
     count = lambda v: sum(1 for r in results if r[4].startswith(v))
+    laws = [(law, how, *evaluate(runs, sweeps)) for law, how, evaluate in LAWS]
+    laws_kept = sum(1 for l in laws if l[4] == "PASS")
+    laws_broken = sum(1 for l in laws if l[4].startswith("FAIL"))
 
     out = ["# wetcloth validation against the paper", "",
            f"- made by: `{command}`",
@@ -449,11 +577,18 @@ def report(runs, report_path, command):
            f"- runs: `{runs}`", "",
            f"**Claims: {count('PASS')} pass, {count('FAIL')} fail, {count('INCONCLUSIVE')} inconclusive, "
            f"{count('not run')} not run** "
-           "(docs/model.md section 11; details below).", "",
+           "(docs/model.md section 11; details below). "
+           f"**Laws: {laws_kept} kept, {laws_broken} broken, "
+           f"{len(laws) - laws_kept - laws_broken} not run.**", "",
            "## Claims", "",
            md_table(["experiment", "the paper reports", "we test", "we measured", "result"],
                     [[e, p, t, m, f"**{v}**" if v.startswith(("PASS", "FAIL", "INCONCLUSIVE")) else v]
                      for e, p, t, m, v in results]), ""]
+
+    out += ["## Laws the model keeps", "",
+            md_table(["law", "we test", "we measured", "expected", "result"],
+                     [[l, h, m, e, f"**{v}**" if v.startswith(("PASS", "FAIL")) else v]
+                      for l, h, m, e, v in laws]), ""]
 
     cmd_log = os.path.join(runs, "commands.log")
     if os.path.exists(cmd_log):

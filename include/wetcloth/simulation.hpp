@@ -199,17 +199,29 @@ struct Workspace {
   std::vector<double> damping_impulses;  // and its impulses
   std::vector<int> queue;
   // Strain limiting: structural and shear springs in adaptive order, the first
-  // spring of each level (and the end), summed corrections within a level.
+  // spring of each level (and the end); within a level, the corrections found
+  // (each spring's shortening and its ends' shares, by inverse mass), how many
+  // move each particle, and their sums.
   struct StrainSpring {
     int a = 0, b = 0;
     double max_len = 0;  // (1 + τ_c) l0
-    int nearer = 0;      // -1: a is nearer the source, 1: b is, 0: neither
     int slot = 0;        // 4 × lower end + stencil offset: its strain_stretched flag
+  };
+  struct StrainCorrection {
+    int a = 0, b = 0;
+    double wa = 0, wb = 0;     // a moves by wa corr, b by -wb corr (before the relaxation)
+    Vec3 corr = Vec3::Zero();  // (x_b - x_a)(1 - max_len / |x_b - x_a|)
   };
   std::vector<StrainSpring> strain_springs;
   std::vector<int> strain_levels;
+  std::vector<StrainCorrection> strain_corrections;
   std::vector<Vec3> strain_delta;
   std::vector<int> strain_count;
+  // The force the last limit_strain's corrections exerted on each pinned,
+  // driven or held particle (minus the momentum they gave the free ends, over
+  // dt²; zero elsewhere), and those particles: part of a handle's reaction.
+  std::vector<Vec3> strain_reaction;
+  std::vector<int> strain_reacting;
   std::vector<int> strain_index;               // stencil slot -> its place in strain_springs
   std::vector<std::uint8_t> strain_stretched;  // per stencil slot, at the start of a pass
   std::vector<std::uint8_t> strain_queued;     // per spring: in strain_heap
@@ -278,6 +290,10 @@ struct Metrics {
   double contact_area_m2 = 0, lifted_area_m2 = 0, base_diagonal_m = 0, outer_diagonal_m = 0;
   double inner_pressure_pa = 0, trapped_air_m3 = 0, air_volume_m3 = 0;
   double kinetic_energy_j = 0, max_strain = 0, wrinkle_rad = 0, centroid_x_m = 0, centroid_y_m = 0;
+  // The lifted cloth's pull on the cloth in contact, away from the surface: its
+  // springs' elastic forces on the contact particles (at a peel front, what
+  // their adhesion holds; negative where the lifted cloth presses them down).
+  double front_pull_n = 0;
 };
 std::vector<std::string> metrics_columns();
 std::vector<double> metrics_values(const Metrics& m);

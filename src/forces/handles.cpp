@@ -104,6 +104,18 @@ void apply_handle_constraints(const Model& m, State& s, Workspace& w) {
   }
 }
 
+// The measured handle's force also holds its particles against the strain
+// limiter's corrections (MODEL.md section 2): limit_strain recorded, for each
+// pinned, driven or held particle, minus the momentum its corrections gave the
+// free particles, over dt².
+void add_strain_limit_reaction(const Model& m, const State& s, Workspace& w) {
+  if (m.measured_handle < 0 || w.strain_reacting.empty()) return;
+  const Handle& h = m.handles[m.measured_handle];
+  const bool holds = h.type == HandleType::Force ? s.held[h.particles[0]] != 0 : active(h, s);
+  if (!holds) return;  // a force handle that pulls records its own force
+  for (const int k : h.particles) w.handle_force -= w.strain_reaction[k];
+}
+
 void hold_stopped_handles(const Model& m, State& s) {
   // Force handles first: a particle a late pin or move handle shares with one
   // follows the path, whatever the handles' names.

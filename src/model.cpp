@@ -152,12 +152,9 @@ Model build_model(const Params& p) {
   const auto edge = [](int di, int dj, const SpringConstants& c, double rest) {
     return StencilEdge{di, dj, c.k, c.damping, rest};
   };
-  m.stencil = {{edge(1, 0, sp.structural_u, du),
-                edge(0, 1, sp.structural_v, dv),
-                edge(1, 1, sp.shear, diag),
-                edge(-1, 1, sp.shear, diag),
-                edge(2, 0, sp.bending_u, 2 * du),
-                edge(0, 2, sp.bending_v, 2 * dv),
+  m.stencil = {{edge(1, 0, sp.structural_u, du), edge(0, 1, sp.structural_v, dv),
+                edge(1, 1, sp.shear, diag), edge(-1, 1, sp.shear, diag),
+                edge(2, 0, sp.bending_u, 2 * du), edge(0, 2, sp.bending_v, 2 * dv),
                 edge(2, 2, sp.bending_diagonal, 2 * diag),
                 edge(-2, 2, sp.bending_diagonal, 2 * diag)}};
   // At least kParticlesPerThread particles a thread: on a smaller grid a

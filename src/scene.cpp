@@ -79,7 +79,8 @@ ParamDef optional_field(std::string key, std::string unit, double lo, double hi,
   d.optional = true;
   d.default_value = std::numeric_limits<double>::quiet_NaN();
   d.get = [acc](const Params& p, const std::string&) {
-    return ParamValue(acc(const_cast<Params&>(p)).value_or(std::numeric_limits<double>::quiet_NaN()));
+    return ParamValue(
+        acc(const_cast<Params&>(p)).value_or(std::numeric_limits<double>::quiet_NaN()));
   };
   d.set = [acc](Params& p, const std::string&, const ParamValue& v) {
     acc(p) = std::get<double>(v);
@@ -703,9 +704,11 @@ std::string springs_text(const Params& p) {
     return std::string(buf);
   };
   // "200 N/m", or "250 N/m along u, 160 N/m along v" where they differ.
-  const auto values = [&](std::initializer_list<std::pair<double, const char*>> vs, const char* unit) {
+  const auto values = [&](std::initializer_list<std::pair<double, const char*>> vs,
+                          const char* unit) {
     std::string s;
-    const bool same = std::all_of(vs.begin(), vs.end(), [&](const auto& v) { return v.first == vs.begin()->first; });
+    const bool same = std::all_of(vs.begin(), vs.end(),
+                                  [&](const auto& v) { return v.first == vs.begin()->first; });
     for (const auto& [v, where] : vs) {
       s += (s.empty() ? "" : ", ") + num(v) + " " + unit + (same ? "" : std::string(" ") + where);
       if (same) break;
@@ -718,15 +721,20 @@ std::string springs_text(const Params& p) {
   std::ostringstream o;
   o << "# The springs, resolved at a spacing of " << num(r.du * 1000) << " mm (u) x "
     << num(r.dv * 1000) << " mm (v):\n";
-  o << "#   structural: k " << values({{r.structural_u.k, "along u"}, {r.structural_v.k, "along v"}}, "N/m")
-    << " (" << source(p.springs.structural_k, "material.stretch_stiffness") << "); damping "
+  o << "#   structural: k "
+    << values({{r.structural_u.k, "along u"}, {r.structural_v.k, "along v"}}, "N/m") << " ("
+    << source(p.springs.structural_k, "material.stretch_stiffness") << "); damping "
     << values({{r.structural_u.damping, "along u"}, {r.structural_v.damping, "along v"}}, "N·s/m")
     << " (" << source(p.springs.structural_damping, "material.stretch_damping") << ")\n";
-  o << "#   shear: k " << num(r.shear.k) << " N/m (" << source(p.springs.shear_k, "material.shear_stiffness")
-    << "); damping " << num(r.shear.damping) << " N·s/m ("
+  o << "#   shear: k " << num(r.shear.k) << " N/m ("
+    << source(p.springs.shear_k, "material.shear_stiffness") << "); damping "
+    << num(r.shear.damping) << " N·s/m ("
     << source(p.springs.shear_damping, "material.shear_damping") << ")\n";
   o << "#   bending: k "
-    << values({{r.bending_u.k, "along u"}, {r.bending_v.k, "along v"}, {r.bending_diagonal.k, "diagonal"}}, "N/m")
+    << values({{r.bending_u.k, "along u"},
+               {r.bending_v.k, "along v"},
+               {r.bending_diagonal.k, "diagonal"}},
+              "N/m")
     << " (" << source(p.springs.bending_k, "material.bending_rigidity") << "); damping "
     << values({{r.bending_u.damping, "along u"},
                {r.bending_v.damping, "along v"},

@@ -50,7 +50,8 @@ std::vector<Hand> driven(const std::string& scene) {
     Simulation sim(p);
     Hand hand;
     for (int f = 1; f <= frames; ++f) {
-      EXPECT_TRUE(sim.advance_to(f / p.run.fps)) << scene << " ω=" << w << ": " << sim.blow_up_reason();
+      EXPECT_TRUE(sim.advance_to(f / p.run.fps))
+          << scene << " ω=" << w << ": " << sim.blow_up_reason();
       hand.travel_force += sim.metrics().handle_force_n / frames;
     }
     hand.at_stop = sim.metrics();
@@ -75,18 +76,23 @@ TEST(Experiments, CornerPullLiftsLessWithHumidity) {
 // Section 1: a wetter cloth takes more force to drag, and slides less as a whole.
 TEST(Experiments, DraggedCornerTakesMoreForceAndSlidesLessWithHumidity) {
   const auto hands = driven("drag-corner");
-  expect_falling(hands, [](const Hand& h) { return -h.travel_force; }, "minus the hand's force");
+  expect_falling(
+      hands, [](const Hand& h) { return -h.travel_force; }, "minus the hand's force");
   // The cloth starts centred on the origin: the centroid's offset is the slid distance.
-  expect_falling(hands, [](const Hand& h) { return std::hypot(h.at_stop.centroid_x_m, h.at_stop.centroid_y_m); },
-                 "slid distance");
+  expect_falling(
+      hands,
+      [](const Hand& h) { return std::hypot(h.at_stop.centroid_x_m, h.at_stop.centroid_y_m); },
+      "slid distance");
 }
 
 // Fig. 2: a wetter cloth is harder to pull up obliquely: more force for the
 // same travel, and less of it lifted.
 TEST(Experiments, ObliquePullTakesMoreForceAndLiftsLessWithHumidity) {
   const auto hands = driven("pull-oblique");
-  expect_falling(hands, [](const Hand& h) { return -h.travel_force; }, "minus the hand's force");
-  expect_falling(hands, [](const Hand& h) { return h.at_stop.lifted_area_m2; }, "lifted area");
+  expect_falling(
+      hands, [](const Hand& h) { return -h.travel_force; }, "minus the hand's force");
+  expect_falling(
+      hands, [](const Hand& h) { return h.at_stop.lifted_area_m2; }, "lifted area");
 }
 
 TEST(Experiments, SealedAirHoldsALargerDeficitThanExchange) {

@@ -92,15 +92,15 @@ TEST(Cantilever, BendingLengthFromTheDroop) {
 // MODEL.md section 1's check, not met: from 12 to 3 mm spacing the bending
 // length falls from 23.4 to 13.7 mm (18.4 at 6 mm), with k_b = B / l²
 // (before, with 20 N/m at every grid: 28.7, 18.4 and 12.2 mm by this
-// measure; Peirce's formula gives 29.3, 19.8 and 14.6). Provot's bending spring acts on the chord across two segments,
-// which a bend of θ between them shortens by only l θ² / 4: its moment is
-// k_b l² θ³ / 8, cubic in the bend, so no k_b(l) makes the flat cloth's
-// bending stiffness the same on a finer grid, and where k_b grows past the
-// structural k_s the structural springs stretch instead (a bending spring
-// then acts as at most k_s / 2). A bending force linear in the bend (e.g.
-// on x_{i-1} - 2 x_i + x_{i+1}, whose constant B / l² this rule is) was
-// measured in a scratch build at 92.7, 97.0 and 99.3 mm. Run with
-// --gtest_also_run_disabled_tests.
+// measure; Peirce's formula gives 29.3, 19.8 and 14.6). Provot's bending
+// spring acts on the chord across two segments, which a bend of θ between
+// them shortens by only l θ² / 4: its moment is k_b l² θ³ / 8, cubic in the
+// bend, so no k_b(l) makes the flat cloth's bending stiffness the same on a
+// finer grid, and where k_b grows past the structural k_s the structural
+// springs stretch instead (a bending spring then acts as at most k_s / 2).
+// A bending force linear in the bend (on x_{i-1} - 2 x_i + x_{i+1}, whose
+// constant B / l² is) measured 92.7, 97.0 and 99.3 mm in a scratch build
+// (docs/model.md section 12). Run with --gtest_also_run_disabled_tests.
 TEST(Cantilever, DISABLED_BendingLengthIsTheSameAtEveryGrid) {
   const double c26 = cantilever_bending_length(26), c51 = cantilever_bending_length(51),
                c101 = cantilever_bending_length(101);

@@ -23,7 +23,7 @@ TEST(SceneLoader, ReadsValuesAndKeepsDefaults) {
   EXPECT_EQ(p.cloth.humidity, 0.3);
   EXPECT_EQ(p.cloth.resolution[1], 21);
   EXPECT_EQ(p.material.stretch_stiffness, 200);  // MODEL.md default
-  EXPECT_FALSE(p.springs.structural_k);  // unset: from the material
+  EXPECT_FALSE(p.springs.structural_k);          // unset: from the material
 }
 
 // MODEL.md section 1: the springs follow from the material and the spacing,
@@ -51,7 +51,8 @@ TEST(SceneLoader, SpringsFollowTheMaterialAndTheSpacing) {
   }
   // Set directly: the same at every grid.
   const auto set = stencil(at_resolution(
-      load_scene("pull-straight", {"springs.bending_k=20", "springs.structural_damping=0.5"}), 101));
+      load_scene("pull-straight", {"springs.bending_k=20", "springs.structural_damping=0.5"}),
+      101));
   EXPECT_EQ(set[4].k, 20);
   EXPECT_EQ(set[7].k, 20);
   EXPECT_EQ(set[0].damping, 0.5);
@@ -64,7 +65,8 @@ TEST(SceneLoader, SpringsFollowTheMaterialAndTheSpacing) {
   EXPECT_DOUBLE_EQ(r.shear.k, 16);
   EXPECT_DOUBLE_EQ(r.bending_u.k, 7.2e-4 * 0.03 / (0.015 * 0.015 * 0.015));
   EXPECT_DOUBLE_EQ(r.bending_v.k, 7.2e-4 * 0.015 / (0.03 * 0.03 * 0.03));
-  EXPECT_DOUBLE_EQ(r.bending_diagonal.k, 4 * 7.2e-4 * 0.015 * 0.03 / std::pow(0.015 * 0.015 + 0.03 * 0.03, 2));
+  EXPECT_DOUBLE_EQ(r.bending_diagonal.k,
+                   4 * 7.2e-4 * 0.015 * 0.03 / std::pow(0.015 * 0.015 + 0.03 * 0.03, 2));
 }
 
 // Material keys and spring overrides are checked and named like any other;
@@ -73,14 +75,16 @@ TEST(SceneLoader, MaterialAndSpringOverridesAreCheckedAndPrinted) {
   EXPECT_NE(error_of("[material]\n\nbending_rigidity = -1\n")
                 .find("bad.toml:3: material.bending_rigidity: value -1.0 is out of range"),
             std::string::npos);
-  EXPECT_NE(error_of("[springs]\nbending_k = \"stiff\"\n").find("bad.toml:2: springs.bending_k: expected a number"),
+  EXPECT_NE(error_of("[springs]\nbending_k = \"stiff\"\n")
+                .find("bad.toml:2: springs.bending_k: expected a number"),
             std::string::npos);
   const Params p = load_scene("pull-straight", {"springs.shear_k=30"});
   const std::string text = to_toml(p);
   EXPECT_NE(text.find("shear_k = 30.0\n"), std::string::npos) << text;
   EXPECT_NE(text.find("# structural_k: unset, from [material]\n"), std::string::npos) << text;
   EXPECT_NE(text.find("#   shear: k 30 N/m (set in [springs])"), std::string::npos) << text;
-  EXPECT_NE(text.find("#   bending: k 20 N/m (from material.bending_rigidity)"), std::string::npos) << text;
+  EXPECT_NE(text.find("#   bending: k 20 N/m (from material.bending_rigidity)"), std::string::npos)
+      << text;
   const Params q = parse_scene(text, "resolved.toml");
   EXPECT_EQ(q.springs.shear_k, 30.0);
   EXPECT_FALSE(q.springs.structural_k);

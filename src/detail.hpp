@@ -163,6 +163,8 @@ inline int grid_neighbour(const Model& m, int i, int j, int di, int dj) {
 // only the elastic part. Implicit Euler takes the damping into its matrix, the
 // symplectic step takes it with apply_spring_damping, after its velocity
 // update and before the move.
+// The stiffness of explicit_step_limit's chain of springs, N/m.
+double chain_stiffness(const Params& p);
 void add_spring_forces(const Model& m, const State& s, Workspace& w, bool with_damping);
 void apply_spring_damping(const Model& m, State& s, Workspace& w, double h);
 void add_gravity(const Model& m, Vec3Array& f);

@@ -42,15 +42,64 @@ double adhesion_total(const Params& p, double s_now) {
   return adhesion_pressure(p) * s_now + 2.0 * std::sqrt(s_now) * adhesion_edge_tension(p);
 }
 
+ResolvedSprings resolve_springs(const Params& p) {
+  ResolvedSprings r;
+  const auto [nu, nv] = p.cloth.resolution;
+  r.du = p.cloth.size[0] / static_cast<double>(nu - 1);
+  r.dv = p.cloth.size[1] / static_cast<double>(nv - 1);
+  const double du = r.du, dv = r.dv;
+  // Each ratio is exactly 1 on a square grid, so that a 0.3 m cloth of 51 x 51
+  // gets exactly 200/20/20 N/m.
+  const double shear_ratio = 2 * du * dv / (du * du + dv * dv);
+  const auto& m = p.material;
+  const auto& s = p.springs;
+  const auto spring = [](const std::optional<double>& k, const std::optional<double>& d,
+                         double k_material, double d_material) {
+    return SpringConstants{k.value_or(k_material), d.value_or(d_material)};
+  };
+  r.structural_u = spring(s.structural_k, s.structural_damping, m.stretch_stiffness * (dv / du),
+                          m.stretch_damping * (dv / du));
+  r.structural_v = spring(s.structural_k, s.structural_damping, m.stretch_stiffness * (du / dv),
+                          m.stretch_damping * (du / dv));
+  r.shear = spring(s.shear_k, s.shear_damping, m.shear_stiffness * shear_ratio,
+                   m.shear_damping * shear_ratio);
+  r.bending_u = spring(s.bending_k, s.bending_damping, m.bending_rigidity / (du * du) * (dv / du),
+                       m.bending_damping / (du * du) * (dv / du));
+  r.bending_v = spring(s.bending_k, s.bending_damping, m.bending_rigidity / (dv * dv) * (du / dv),
+                       m.bending_damping / (dv * dv) * (du / dv));
+  r.bending_diagonal = spring(s.bending_k, s.bending_damping,
+                              m.bending_rigidity / (du * dv) * (shear_ratio * shear_ratio),
+                              m.bending_damping / (du * dv) * (shear_ratio * shear_ratio));
+  return r;
+}
+
+double detail::chain_stiffness(const Params& p) {
+  const ResolvedSprings r = resolve_springs(p);
+  const double ks = std::max(r.structural_u.k, r.structural_v.k);
+  const double kb = std::max({r.bending_u.k, r.bending_v.k, r.bending_diagonal.k});
+  // A chain's highest mode: 4 k_s / m at wave number π while k_s >= 4 k_b;
+  // beyond, where the bending springs' pair of steps rings (cos θ = -k_s / 4 k_b).
+  return ks >= 4 * kb ? ks : (2 * ks + 4 * kb + ks * ks / (4 * kb)) / 4;
+}
+
+double explicit_step_limit(const Params& p) {
+  const ResolvedSprings r = resolve_springs(p);
+  const double k = detail::chain_stiffness(p);
+  const double m_min = particle_areal_mass(p) * r.du * r.dv / 4;  // a corner's
+  return k > 0 ? 2.0 / std::sqrt(8.0 * k / m_min) : 1.0;
+}
+
 namespace {
 
-void add_spring(SpringSet& s, const Model& m, int i0, int j0, int i1, int j1) {
+void add_spring(SpringSet& s, const Model& m, int edge, int i0, int j0) {
+  const int i1 = i0 + m.stencil[edge].di, j1 = j0 + m.stencil[edge].dj;
   auto inside = [&](int i, int j) { return i >= 0 && j >= 0 && i < m.nu && j < m.nv; };
   if (!inside(i0, j0) || !inside(i1, j1)) return;
   const int a = m.index(i0, j0), b = m.index(i1, j1);
   s.a.push_back(a);
   s.b.push_back(b);
   s.rest.push_back((m.rest_position[b] - m.rest_position[a]).norm());
+  s.edge.push_back(static_cast<std::uint8_t>(edge));
 }
 
 int nearest(double t, int n) {
@@ -97,24 +146,17 @@ Model build_model(const Params& p) {
     }
   }
 
-  m.structural.k = p.springs.structural_k;
-  m.structural.damping = p.springs.structural_damping;
-  m.shear.k = p.springs.shear_k;
-  m.shear.damping = p.springs.shear_damping;
-  m.bending.k = p.springs.bending_k;
-  m.bending.damping = p.springs.bending_damping;
-  const auto& sp = p.springs;
-  const double ss = sp.structural_k, sd = sp.structural_damping, hs = sp.shear_k,
-               hd = sp.shear_damping, bs = sp.bending_k, bd = sp.bending_damping;
+  // The grid's eight spring offsets and their constants (resolve_springs).
+  const ResolvedSprings sp = resolve_springs(p);
   const double diag = std::hypot(du, dv);
-  m.stencil = {{{1, 0, ss, sd, du},
-                {0, 1, ss, sd, dv},
-                {1, 1, hs, hd, diag},
-                {-1, 1, hs, hd, diag},
-                {2, 0, bs, bd, 2 * du},
-                {0, 2, bs, bd, 2 * dv},
-                {2, 2, bs, bd, 2 * diag},
-                {-2, 2, bs, bd, 2 * diag}}};
+  const auto edge = [](int di, int dj, const SpringConstants& c, double rest) {
+    return StencilEdge{di, dj, c.k, c.damping, rest};
+  };
+  m.stencil = {{edge(1, 0, sp.structural_u, du), edge(0, 1, sp.structural_v, dv),
+                edge(1, 1, sp.shear, diag), edge(-1, 1, sp.shear, diag),
+                edge(2, 0, sp.bending_u, 2 * du), edge(0, 2, sp.bending_v, 2 * dv),
+                edge(2, 2, sp.bending_diagonal, 2 * diag),
+                edge(-2, 2, sp.bending_diagonal, 2 * diag)}};
   // At least kParticlesPerThread particles a thread: on a smaller grid a
   // thread's share costs less than the barriers that end each stage, and when
   // processes share the cores (parallel tests, sweeps) a barrier waits for a
@@ -127,14 +169,15 @@ Model build_model(const Params& p) {
   for (int j = 0; j < m.nv; ++j) {
     for (int i = 0; i < m.nu; ++i) {
       m.chequer[m.index(i, j)] = (i + j) % 2 == 0 ? 1.0 : 0.0;
-      add_spring(m.structural, m, i, j, i + 1, j);
-      add_spring(m.structural, m, i, j, i, j + 1);
-      add_spring(m.shear, m, i, j, i + 1, j + 1);
-      add_spring(m.shear, m, i + 1, j, i, j + 1);
-      add_spring(m.bending, m, i, j, i + 2, j);
-      add_spring(m.bending, m, i, j, i, j + 2);
-      add_spring(m.bending, m, i, j, i + 2, j + 2);
-      add_spring(m.bending, m, i + 2, j, i, j + 2);
+      // Stencil offsets 0-7 (above), each from (i0, j0) to (i0 + di, j0 + dj).
+      add_spring(m.structural, m, 0, i, j);
+      add_spring(m.structural, m, 1, i, j);
+      add_spring(m.shear, m, 2, i, j);
+      add_spring(m.shear, m, 3, i + 1, j);
+      add_spring(m.bending, m, 4, i, j);
+      add_spring(m.bending, m, 5, i, j);
+      add_spring(m.bending, m, 6, i, j);
+      add_spring(m.bending, m, 7, i + 2, j);
       if (i + 1 < m.nu && j + 1 < m.nv) {
         const int a = m.index(i, j), b = m.index(i + 1, j), cc = m.index(i + 1, j + 1),
                   d = m.index(i, j + 1);

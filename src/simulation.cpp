@@ -446,7 +446,7 @@ std::string Simulation::blow_up_reason() const {
                          })));
   if (vmax <= p.integrator.max_speed) return {};
   const double m_min = *std::min_element(model_.mass.begin(), model_.mass.end());
-  const double limit = 2.0 / std::sqrt(8.0 * p.springs.structural_k / m_min);
+  const double limit = explicit_step_limit(p);
   std::ostringstream o;
   o << "the simulation blew up at t = " << state_.time << " s (";
   if (std::isfinite(vmax))
@@ -506,9 +506,10 @@ std::string Simulation::blow_up_reason() const {
   }
   if (p.integrator.dt > limit) {
     o << lead << "integrator.dt = " << p.integrator.dt
-      << " s is too large for the stiffness springs.structural_k = " << p.springs.structural_k
-      << " N/m and the lightest particle (" << m_min << " kg): the explicit limit is about "
-      << limit << " s. Lower integrator.dt, or the stiffness (springs.*_k, self_collision.k).";
+      << " s is too large for the springs (structural " << model_.stencil[0].k << " N/m, bending "
+      << model_.stencil[4].k << " N/m at this spacing) and the lightest particle (" << m_min
+      << " kg): the explicit limit is about " << limit
+      << " s. Lower integrator.dt, or the stiffness (material.*, springs.*_k, self_collision.k).";
     return o.str();
   }
   // Within the springs' limit: a force far beyond what they carry.

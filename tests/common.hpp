@@ -12,7 +12,10 @@ inline Params bare(int n = 2) {
   p.cloth.resolution = {n, n};
   p.cloth.size = {0.01 * (n - 1), 0.01 * (n - 1)};
   p.cloth.center = {0, 0, 1};
-  p.springs = {};
+  // Spring constants set directly (200/20/20 N/m at any spacing), undamped.
+  p.springs.structural_k = 200;
+  p.springs.shear_k = 20;
+  p.springs.bending_k = 20;
   p.springs.structural_damping = p.springs.shear_damping = p.springs.bending_damping = 0;
   p.forces.gravity = {0, 0, 0};
   p.forces.viscous_damping = 0;

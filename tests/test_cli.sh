@@ -25,6 +25,8 @@ printf '[cloth]\nareal_density = -0.12\n' > "$T/mass.toml"
 printf '\n[cloth]\nhumidity = 1.5\n' > "$T/humid.toml"
 printf '[cloth]\nresolution = [1, 5]\n' > "$T/res.toml"
 printf '[integrator]\ndt = 0.0\n' > "$T/dt.toml"
+printf '[material]\nbending_rigidity = -7.2e-4\n' > "$T/material.toml"
+printf '[springs]\n\nbending_k = "stiff"\n' > "$T/springs.toml"
 expect_bad syntax     "syntax.toml:2"                   "$T/syntax.toml"
 expect_bad unknown    "unknown.toml:2: cloth.humidty"   "$T/unknown.toml"
 expect_bad type       "type.toml:2: integrator.dt"      "$T/type.toml"
@@ -32,6 +34,8 @@ expect_bad mass       "mass.toml:2: cloth.areal_density" "$T/mass.toml"
 expect_bad humidity   "humid.toml:3: cloth.humidity"    "$T/humid.toml"
 expect_bad resolution "res.toml:2: cloth.resolution"    "$T/res.toml"
 expect_bad dt         "dt.toml:2: integrator.dt"        "$T/dt.toml"
+expect_bad material   "material.toml:2: material.bending_rigidity: value -0.00072 is out of range" "$T/material.toml"
+expect_bad springs    "springs.toml:3: springs.bending_k: expected a number" "$T/springs.toml"
 expect_bad missing    "nowhere.toml: no such file"      "$T/nowhere.toml"
 expect_bad name       "no-such-scene"                   no-such-scene
 expect_bad set        "--humidity: value 2 is out of range [0, 1]" hang --humidity 2
@@ -119,7 +123,7 @@ grep -q '"realtime_factor"' "$T/a/summary.json" && grep -q '"final"' "$T/a/summa
 # shrunk with the spacing), or at a time step the command line sets; a grid out
 # of range is bad input.
 "$W" run pull-straight --grid 101 --duration 5e-5 --quiet --out "$T/g"
-grep -q '^resolution = \[101, 101\]' "$T/g/scene.toml" && grep -q '^dt = 2.5e-05' "$T/g/scene.toml" &&
+grep -q '^resolution = \[101, 101\]' "$T/g/scene.toml" && grep -q '^dt = 2.4325212770525996e-05' "$T/g/scene.toml" &&
   grep -q '^patch = 2' "$T/g/scene.toml" && ok "--grid 101: resolution, dt, patch" ||
   bad "--grid 101: $(grep -E '^(resolution|dt|patch) ' "$T/g/scene.toml" | tr '\n' ' ')"
 "$W" run pull-straight --grid 101 --set integrator.dt=4e-5 --duration 4e-5 --quiet --out "$T/g2"
@@ -157,6 +161,12 @@ done
 # The other commands.
 "$W" scenes | grep -q "^pull-straight" && ok "scenes" || bad "scenes"
 "$W" check drop-ball --humidity 0.3 | grep -q "humidity = 0.3" && ok "check" || bad "check"
+# check prints the material and the springs it gives on this grid, or as a scene sets them.
+"$W" check pull-straight --grid 101 --set springs.shear_k=30 >"$T/check.txt"
+grep -q '^bending_rigidity = 0.00072$' "$T/check.txt" && grep -q '^# structural_k: unset, from \[material\]$' "$T/check.txt" &&
+  grep -q '^#   bending: k 80 N/m (from material.bending_rigidity); damping 0.04 N·s/m (from material.bending_damping)$' "$T/check.txt" &&
+  grep -q '^#   shear: k 30 N/m (set in \[springs\]); damping 0.01 N·s/m (from material.shear_damping)$' "$T/check.txt" &&
+  ok "check: the material and the springs resolved on the grid" || bad "check springs: $(grep -A4 '^\[springs\]' "$T/check.txt")"
 "$W" run --help | grep -q -- "--humidity" && ok "run --help" || bad "run --help"
 # The README's parameter table is the one `wetcloth params --markdown` prints.
 "$W" params --markdown > "$T/params.md"

@@ -113,6 +113,22 @@ awk 'BEGIN { printf "0.1,0.05,0.000324,101285,0.02\n"
   >>"$PEEL/omega_0.70/metrics.csv"
 printf '[cloth]\nresolution = [51, 51]\nsize = [0.3, 0.3]\nhumidity = 0.7\nareal_density = 0.12\nwater_ratio = 1.0\n\n[forces]\ngravity = [0.0, 0.0, -9.81]\n\n[air]\nmodel = "exchange"\np_atm = 101325.0\n\n[handle.rig]\ntype = "move"\npatch = 1\nvelocity = [0.0, 0.0, 0.02]\n' \
   >"$PEEL/omega_0.70/scene.toml"
+# Grid convergence (the straight pull at ω = 0.7 on 31 and 101 particles; 51
+# is its sweep above) and two cantilevers whose tips droop to Peirce's 41.5°
+# over an overhang of 15 cm: a bending length of 7.5 cm.
+for g in 31 101; do
+  new_sweep "$T/runs/grid-pull-straight-$g"
+  add_case "$T/runs/grid-pull-straight-$g" omega_0.70 0.7 exchange ok 500 $([ $g = 31 ] && echo 0.5 || echo 0.69)
+done
+for g in 26 51; do
+  C="$T/runs/grid-cantilever-$g"; new_sweep "$C"; add_case "$C" omega_0.00 0 off ok 0 "" pin none
+  printf '[cloth]\nresolution = [5, 2]\nsize = [0.3, 0.024]\n\n[material]\nbending_rigidity = 0.00072\n\n[springs]\n# bending_k: unset, from [material]\n\n[handle.clamp]\ntype = "pin"\nat = [0.0, 0.0]\nspan = [0.5, 1.0]\n' \
+    >"$C/omega_0.00/scene.toml"
+  mkdir -p "$C/omega_0.00/frames"
+  awk 'BEGIN { a = 41.48730255881945 * atan2(1, 1) / 45; for (j = 0; j < 2; j++) for (i = 0; i < 5; i++) {
+    x = i <= 2 ? 0.075 * i : 0.15 + 0.075 * (i - 2) * cos(a); z = i <= 2 ? 0.5 : 0.5 - 0.075 * (i - 2) * sin(a)
+    printf "v %.12f %.6f %.12f\n", x, 0.024 * j, z } }' >"$C/omega_0.00/frames/frame_00000.obj"
+done
 for b in badnum badcol nometrics badrow; do cp -r "$ONE" "$T/$b"; done
 sed -i '2s/,0.3,ok,/,wet,ok,/' "$T/badnum/sweep.csv"
 sed -i '1s/,base_diagonal_m,/,base_diag,/' "$T/badcol/sweep.csv"
@@ -225,7 +241,7 @@ if [ ! -e "$T/val/figures/pull-straight_handle_force.png" ]; then ok "stale figu
 R="$T/val/report.md"
 if grep -q '^| experiment | the paper reports | we test | we measured | result |' "$R"; then ok "report has the claims table"
 else bad "report lacks the claims table"; fi
-if [ "$(grep -c '^| [a-z-]* | .* | \(\*\*PASS\|\*\*FAIL\|\*\*INCONCLUSIVE\|not run\|info\)' "$R")" -eq 16 ]; then ok "16 claims, each with a result"
+if [ "$(grep -c '^| [a-z-]* | .* | \(\*\*PASS\|\*\*FAIL\|\*\*INCONCLUSIVE\|not run\|info\)' "$R")" -eq 18 ]; then ok "18 claims, each with a result"
 else bad "claims without a result"; fi
 if grep -q '^| air-models | Fig. 8: the sealed .*sealed 5000, exchange 600 Pa | \*\*PASS\*\* |' "$R"; then ok "air-models claim computed: PASS"
 else bad "air-models claim not computed as PASS"; fi
@@ -245,6 +261,23 @@ if grep -q "^| A rig's recorded force .* | grid \[51, 51\]; .* ω=0.7: 1.010 (90
 then ok "law: peel rig's force balance: PASS"; else bad "law: peel rig: $(grep "^| A rig's" "$R")"; fi
 if "$PY" "$REPORT" "$T/nowhere" "$T/val2/report.md" >/dev/null 2>&1 && [ "$(grep -c '| not run |$' "$T/val2/report.md")" -eq 18 ]
 then ok "report on no runs: every claim and law not run"; else bad "report on no runs"; fi
+# The grid-convergence section: the measures at each grid and their changes,
+# the criteria computed, the cantilever's bending length from its last frame.
+if grep -q '^| pull-straight | handle height, mm | 53.3 | 47.1 | 47.3 | -11.8% | +0.6% |$' "$R"
+then ok "grid table: the straight pull's handle at 31, 51, 101 and its changes"
+else bad "grid table: $(grep '^| pull-straight | handle height' "$R")"; fi
+if grep -q "^| straight pull's handle height: .* | 31 → 51: -11.8%; 51 → 101: +0.6% | \*\*PASS\*\* |$" "$R" \
+   && grep -q "^| drape-ball's contact area: .* | not run | not run |$" "$R"
+then ok "grid criteria computed: PASS, and not run without data"; else bad "grid criteria: $(grep "^| [a-z-]*'s" "$R")"; fi
+if grep -q '^| 5 | 75 | 0.128 | 41.5 | 75.0 | 76.4 |$' "$R" \
+   && grep -q "^| the cantilever's bending length .* | 5: 75.0 mm, 5: 75.0 mm (spread 0%) | \*\*PASS\*\* |$" "$R"
+then ok "cantilever: bending length from the droop (Peirce's 41.5° at twice it)"
+else bad "cantilever: $(grep -A4 'bending springs N/m' "$R")"; fi
+if "$PY" "$REPORT" "$T/nowhere" "$T/val2/report.md" >/dev/null 2>&1 \
+   && [ "$(grep -c '^| [a-z-]* | .* | not run |$' "$T/val2/report.md")" -eq 18 ] \
+   && [ "$(grep -c "^| [a-z' -]*: .* | not run | not run |$" "$T/val2/report.md")" -eq 2 ] \
+   && grep -q "^| the cantilever's bending length .* | not run | not run |$" "$T/val2/report.md"
+then ok "report on no runs: every claim and criterion not run"; else bad "report on no runs"; fi
 
 # The sweep command's printout, with a program to run (WETCLOTH=build/wetcloth).
 W="${WETCLOTH:-}"

@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "wetcloth/scene.hpp"
 #include "wetcloth/simulation.hpp"
 
@@ -20,7 +22,72 @@ TEST(SceneLoader, ReadsValuesAndKeepsDefaults) {
   const Params p = parse_scene("[cloth]\nhumidity = 0.3\nresolution = [11, 21]\n", "s.toml");
   EXPECT_EQ(p.cloth.humidity, 0.3);
   EXPECT_EQ(p.cloth.resolution[1], 21);
-  EXPECT_EQ(p.springs.structural_k, 200);  // MODEL.md default
+  EXPECT_EQ(p.material.stretch_stiffness, 200);  // MODEL.md default
+  EXPECT_FALSE(p.springs.structural_k);          // unset: from the material
+}
+
+// MODEL.md section 1: the springs follow from the material and the spacing,
+// so that a 0.3 m cloth of 51 x 51 gets exactly 200/20/20 N/m; a spring
+// constant set directly is that constant at every grid.
+TEST(SceneLoader, SpringsFollowTheMaterialAndTheSpacing) {
+  const auto stencil = [](const Params& p) { return build_model(p).stencil; };
+  for (const auto& e : stencil(load_scene("pull-straight"))) {
+    const bool structural = std::abs(e.di) + std::abs(e.dj) == 1;
+    const bool shear = std::abs(e.di) == 1 && std::abs(e.dj) == 1;
+    EXPECT_EQ(e.k, structural ? 200.0 : 20.0) << e.di << "," << e.dj;
+    EXPECT_EQ(e.damping, 0.01) << e.di << "," << e.dj;
+    (void)shear;
+  }
+  // l = 12 mm and 3 mm: bending B / l² = 5 and 80 N/m, its damping alike;
+  // structural and shear as given.
+  for (const auto& [grid, bending] : {std::pair{26, 5.0}, std::pair{101, 80.0}}) {
+    const auto s = stencil(at_resolution(load_scene("pull-straight"), grid));
+    EXPECT_DOUBLE_EQ(s[0].k, 200) << grid;
+    EXPECT_DOUBLE_EQ(s[2].k, 20) << grid;
+    for (int e = 4; e < 8; ++e) {
+      EXPECT_NEAR(s[e].k, bending, 1e-9 * bending) << grid;
+      EXPECT_NEAR(s[e].damping, 0.01 * bending / 20, 1e-12) << grid;
+    }
+  }
+  // Set directly: the same at every grid.
+  const auto set = stencil(at_resolution(
+      load_scene("pull-straight", {"springs.bending_k=20", "springs.structural_damping=0.5"}),
+      101));
+  EXPECT_EQ(set[4].k, 20);
+  EXPECT_EQ(set[7].k, 20);
+  EXPECT_EQ(set[0].damping, 0.5);
+  EXPECT_NEAR(set[4].damping, 0.04, 1e-12);  // unset: from the material
+  // A grid that is not square (du = 15 mm, dv = 30 mm): the membrane keeps
+  // its stiffness per unit width in every direction.
+  const auto r = resolve_springs(parse_scene("[cloth]\nresolution = [21, 11]\n", "s.toml"));
+  EXPECT_DOUBLE_EQ(r.structural_u.k, 400);
+  EXPECT_DOUBLE_EQ(r.structural_v.k, 100);
+  EXPECT_DOUBLE_EQ(r.shear.k, 16);
+  EXPECT_DOUBLE_EQ(r.bending_u.k, 7.2e-4 * 0.03 / (0.015 * 0.015 * 0.015));
+  EXPECT_DOUBLE_EQ(r.bending_v.k, 7.2e-4 * 0.015 / (0.03 * 0.03 * 0.03));
+  EXPECT_DOUBLE_EQ(r.bending_diagonal.k,
+                   4 * 7.2e-4 * 0.015 * 0.03 / std::pow(0.015 * 0.015 + 0.03 * 0.03, 2));
+}
+
+// Material keys and spring overrides are checked and named like any other;
+// an unset override reads back unset, and the resolved springs are printed.
+TEST(SceneLoader, MaterialAndSpringOverridesAreCheckedAndPrinted) {
+  EXPECT_NE(error_of("[material]\n\nbending_rigidity = -1\n")
+                .find("bad.toml:3: material.bending_rigidity: value -1.0 is out of range"),
+            std::string::npos);
+  EXPECT_NE(error_of("[springs]\nbending_k = \"stiff\"\n")
+                .find("bad.toml:2: springs.bending_k: expected a number"),
+            std::string::npos);
+  const Params p = load_scene("pull-straight", {"springs.shear_k=30"});
+  const std::string text = to_toml(p);
+  EXPECT_NE(text.find("shear_k = 30.0\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("# structural_k: unset, from [material]\n"), std::string::npos) << text;
+  EXPECT_NE(text.find("#   shear: k 30 N/m (set in [springs])"), std::string::npos) << text;
+  EXPECT_NE(text.find("#   bending: k 20 N/m (from material.bending_rigidity)"), std::string::npos)
+      << text;
+  const Params q = parse_scene(text, "resolved.toml");
+  EXPECT_EQ(q.springs.shear_k, 30.0);
+  EXPECT_FALSE(q.springs.structural_k);
 }
 
 TEST(SceneLoader, IntegersAreAcceptedForNumbers) {

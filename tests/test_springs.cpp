@@ -61,7 +61,7 @@ TEST(Springs, UndampedSpringKeepsEnergyUnderSymplecticEuler) {
     for (std::size_t k = 0; k < m.structural.size(); ++k) {
       const double ext =
           (s.x[m.structural.b[k]] - s.x[m.structural.a[k]]).norm() - m.structural.rest[k];
-      e += 0.5 * m.structural.k * ext * ext;
+      e += 0.5 * m.constants(m.structural, k).k * ext * ext;
     }
     return e;
   };

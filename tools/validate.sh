@@ -9,16 +9,24 @@
 #            drag-corner drape-ball peel-rig air-models, and for the first three
 #            and drape-ball implicit-<scene> and explicit-<scene>: ensembles of
 #            ω = 0.7 moved by k·1e-7, implicit Euler at 1/240 s against the
-#            explicit step, which the report compares), or the run free-cloth
-#            (a law the model keeps; the other, the peel's force balance, is
-#            read from the peel-rig sweep); the report still covers every sweep
-#            in validation/runs.
+#            explicit step, which the report compares; grid-<scene>-<G>: the
+#            grid convergence of pull-straight, pull-oblique and drape-ball at
+#            ω = 0.7 on G = 31 and 101 particles (51 is their sweep above), and
+#            of the cantilever's bending length on 26, 51 and 101), or the run
+#            free-cloth (a law the model keeps; the other, the peel's force
+#            balance, is read from the peel-rig sweep); the report still covers
+#            every sweep in validation/runs.
 # A scene whose `wetcloth check` fails is skipped, with a note in the report.
 # Each sweep's output goes to validation/runs/<name>.log.
 # Environment: PYTHON (default /usr/bin/python3), JOBS (default 2).
 set -u
 AGREEMENT="pull-straight pull-oblique pull-corner drape-ball"
+GRIDDED="pull-straight pull-oblique drape-ball"
+GRIDS="31 101"
+CANTILEVER_GRIDS="26 51 101"
 NAMES="pull-straight pull-oblique pull-corner drag-corner drape-ball peel-rig air-models free-cloth $(for s in $AGREEMENT; do printf 'implicit-%s explicit-%s ' "$s" "$s"; done)"
+NAMES="$NAMES $(for s in $GRIDDED; do for g in $GRIDS; do printf 'grid-%s-%s ' "$s" "$g"; done; done)"
+NAMES="$NAMES $(for g in $CANTILEVER_GRIDS; do printf 'grid-cantilever-%s ' "$g"; done)"
 COMMAND="tools/validate.sh $*"
 [ $# -ge 1 ] || { echo "usage: tools/validate.sh BUILD_DIR [NAME...]" >&2; exit 2; }
 W="$(cd "$1" 2>/dev/null && pwd)/wetcloth"
@@ -108,6 +116,19 @@ for scene in $AGREEMENT; do
   sweep "explicit-$scene" "$scene" --humidity "$JITTERED" --no-plots
   sweep "implicit-$scene" "$scene" --humidity "0.7,$JITTERED" --no-plots \
     --set 'integrator.type="implicit-euler"' --set integrator.dt=0.004166666666666667
+done
+
+# The material does not change with the grid (MODEL.md section 1, issue 25):
+# the same cloth (--grid: its handle's patch in metres, the explicit step
+# shrunk with its stability limit) at ω = 0.7 on coarser and finer grids, and
+# the cantilever's bending length at 12, 6 and 3 mm spacing.
+for scene in $GRIDDED; do
+  for g in $GRIDS; do
+    sweep "grid-$scene-$g" "$scene" --grid "$g" --humidity 0.7 --no-plots
+  done
+done
+for g in $CANTILEVER_GRIDS; do
+  sweep "grid-cantilever-$g" cantilever --grid "$g" --humidity 0 --no-plots
 done
 
 "$PYTHON" tools/validation_report.py "$RUNS" validation/report.md --command "$COMMAND"

@@ -41,6 +41,14 @@ EXPERIMENTS = ["pull-straight", "pull-oblique", "pull-corner", "drag-corner", "d
                "peel-rig", "air-models"] + [f"{i}-{s}" for s in AGREEMENT for i in ("explicit", "implicit")]
 FIGURES = ["fig7", "fig8", "handle_height", "handle_force", "pressure", "contact_area"]
 TREND = [0.3, 0.5, 0.7, 1.0]  # the humidities the trend claims are tested over
+# The material does not change with the grid (MODEL.md section 1): these scenes
+# at ω = 0.7 on grid-<scene>-<G> (51: their sweeps above), and the cantilever's
+# bending length on grid-cantilever-<G>.
+GRIDDED = ["pull-straight", "pull-oblique", "drape-ball"]
+GRID_SIZES = [31, 51, 101, 201]
+CANTILEVER_GRIDS = [26, 51, 101]
+GRID_RUNS = [f"grid-{s}-{g}" for s in GRIDDED for g in GRID_SIZES if g != 51] + \
+    [f"grid-cantilever-{g}" for g in CANTILEVER_GRIDS]
 P_ATM = 101325.0
 HERE = os.path.dirname(os.path.abspath(__file__))
 
@@ -109,11 +117,44 @@ def load_sweep(folder):
                         for k in ("centroid_x_m", "centroid_y_m")):
             c["slid_m"] = math.hypot(rows[-1]["centroid_x_m"] - rows[0]["centroid_x_m"],
                                      rows[-1]["centroid_y_m"] - rows[0]["centroid_y_m"])
+        # A driven hand (a move handle): its mean force over its travel, the
+        # work it did per metre; from the frames while it moved.
+        # and the lifted area when it stops (the last frame of its travel).
+        c["travel_force_n"] = c["stop_lifted_m2"] = None
+        path = driven_path(c["scene"])
+        if path and path[1] > 0:
+            start, end = path[0], path[0] + path[1]
+            moving = [r for r in rows if isinstance(r.get("time_s"), float) and start < r["time_s"] <= end + 1e-9]
+            forces = [r["handle_force_n"] for r in moving if isinstance(r.get("handle_force_n"), float)]
+            if forces:
+                c["travel_force_n"] = sum(forces) / len(forces)
+            if moving and isinstance(moving[-1].get("lifted_area_m2"), float):
+                c["stop_lifted_m2"] = moving[-1]["lifted_area_m2"]
         # The tent's mean slope at the end: pulled height over half its base diagonal.
         h, b = c.get("handle_height_m"), c.get("base_diagonal_m")
         if isinstance(h, float) and isinstance(b, float) and b > 0:
             c["tent_slope"] = h / (b / 2)
     return cases
+
+
+def driven_path(scene):
+    """(start, time on its path) of the measured handle (the first by name that
+    is not a pin) when it is a move handle with a travel limit, else None."""
+    for section in sorted(k for k in scene if k.startswith("handle.")):
+        kind = scene[section].get("type", '"force"').strip('"')
+        if kind == "pin":
+            continue
+        if kind != "move":
+            return None
+        try:
+            velocity = [float(v) for v in scene[section].get("velocity", "[0, 0, 0]").strip("[]").split(",")]
+            travel = float(scene[section].get("max_travel", "0"))
+            start = float(scene[section].get("start", "0"))
+        except ValueError:
+            return None
+        speed = math.sqrt(sum(v * v for v in velocity))
+        return (start, travel / speed) if speed > 0 and travel > 0 else None
+    return None
 
 
 def main_model(cases):
@@ -325,9 +366,13 @@ CLAIMS = [  # (experiment, the paper reports, the test, evaluate(sweeps) -> (mea
      "informational: final wrinkle_rad at each ω (flatter = smaller)",
      lambda s: informational(compare(s, "pull-straight", "wrinkle_rad", [0.0] + TREND, 1, "rad",
                                      lambda v: True, digits=3))),
-    ("pull-oblique", "Fig. 2: a wetter cloth is harder to pull up",
-     "final handle height non-increasing over ω = 0.3 … 1 (ties within 1 mm) and lower at 1 than at 0.3",
-     lambda s: trend(s, "pull-oblique", "handle_height_m", 100, "cm", falling_within(0.001))),
+    ("pull-oblique", "Fig. 2: a wetter cloth is harder to pull up: more force for the same travel",
+     "the hand's mean force over its 10 cm travel at 45° strictly increasing over ω = 0.3, 0.5, 0.7, 1",
+     lambda s: trend(s, "pull-oblique", "travel_force_n", 1, "N", rising, digits=3)),
+    ("pull-oblique", "Fig. 2: a wetter cloth is harder to pull up: less of it lifted",
+     "lifted area when the hand stops, at the end of its travel, strictly decreasing over "
+     "ω = 0.3, 0.5, 0.7, 1",
+     lambda s: trend(s, "pull-oblique", "stop_lifted_m2", 1e4, "cm²", falling, digits=1)),
     ("pull-corner", "Fig. 5: a wetter cloth lifts fewer parts",
      "final lifted area strictly decreasing over ω = 0.3, 0.5, 0.7, 1",
      lambda s: trend(s, "pull-corner", "lifted_area_m2", 1e4, "cm²", falling, digits=1)),
@@ -335,7 +380,10 @@ CLAIMS = [  # (experiment, the paper reports, the test, evaluate(sweeps) -> (mea
      "final wrinkle_rad at ω = 1 greater than at ω = 0.3",
      lambda s: compare(s, "pull-corner", "wrinkle_rad", [0.3, 1.0], 1, "rad", lambda v: v[1] > v[0],
                        digits=3)),
-    ("drag-corner", "sec. 1: a wetter cloth slides less",
+    ("drag-corner", "sec. 1: a wetter cloth takes more force to drag",
+     "the hand's mean force over its 10 cm drag strictly increasing over ω = 0.3, 0.5, 0.7, 1",
+     lambda s: trend(s, "drag-corner", "travel_force_n", 1, "N", rising, digits=3)),
+    ("drag-corner", "sec. 1: a wetter cloth slides less as a whole",
      "slid distance (final centroid from the first) strictly decreasing over ω = 0.3, 0.5, 0.7, 1",
      lambda s: trend(s, "drag-corner", "slid_m", 100, "cm", falling)),
     ("drape-ball", "Fig. 6: a wetter cloth contracts more and wrinkles more",
@@ -479,6 +527,161 @@ LAWS = [  # (law, how it is checked, evaluate(runs, sweeps) -> (measured, expect
 ]
 
 
+# ---------------------------------------------------------------- the grids
+
+def elastica(lam, tip, n=2000):
+    """Peirce's cantilever, the heavy elastica θ'' = −(λ − s) cos θ in units of
+    its bending length, over an overhang λ, integrated (RK4) from the free end
+    (θ = tip, θ' = 0) back to the clamp: (θ at the clamp, the tip's chord angle
+    below the level)."""
+    h = -lam / n
+    s, th, k, x, z = lam, tip, 0.0, 0.0, 0.0
+    f = lambda s_, th_: -(lam - s_) * math.cos(th_)
+    for _ in range(n):
+        k1, t1 = f(s, th), k
+        k2, t2 = f(s + h / 2, th + h / 2 * t1), k + h / 2 * k1
+        k3, t3 = f(s + h / 2, th + h / 2 * t2), k + h / 2 * k2
+        k4, t4 = f(s + h, th + h * t3), k + h * k3
+        angles = (th, th + h / 2 * t1, th + h / 2 * t2, th + h * t3)
+        x -= h / 6 * (math.cos(angles[0]) + 2 * math.cos(angles[1]) + 2 * math.cos(angles[2]) + math.cos(angles[3]))
+        z -= h / 6 * (math.sin(angles[0]) + 2 * math.sin(angles[1]) + 2 * math.sin(angles[2]) + math.sin(angles[3]))
+        th += h / 6 * (t1 + 2 * t2 + 2 * t3 + t4)
+        k += h / 6 * (k1 + 2 * k2 + 2 * k3 + k4)
+        s += h
+    return th, math.atan2(z, x)
+
+
+def chord_angle(lam):
+    """The chord angle of an overhang of λ bending lengths (single-valued to λ ≈ 5, 82°)."""
+    lo, hi = 0.0, math.pi / 2
+    for _ in range(60):
+        mid = (lo + hi) / 2
+        lo, hi = (lo, mid) if elastica(lam, mid, 300)[0] > 0 else (mid, hi)
+    return elastica(lam, (lo + hi) / 2)[1]
+
+
+def bending_length(overhang, phi):
+    """The bending length c of an overhang whose tip droops to the chord angle phi."""
+    lo, hi = 0.01, 5.0
+    for _ in range(50):
+        mid = math.sqrt(lo * hi)
+        lo, hi = (mid, hi) if chord_angle(mid) < phi else (lo, mid)
+    return overhang / math.sqrt(lo * hi)
+
+
+def peirce(overhang, phi):
+    """Peirce's formula for the bending length, c = L (cos(θ/2) / (8 tan θ))^(1/3)."""
+    return overhang * (math.cos(phi / 2) / (8 * math.tan(phi))) ** (1 / 3)
+
+
+def cantilever(folder):
+    """The cantilever run in a sweep folder: {grid, spacing, bending_k, chord, c, peirce}
+    from its last frame (the chord from the clamp's edge, at + span of its pin,
+    to the free end, each the mean across the strip), or None."""
+    cases = load_sweep(folder)
+    if not cases:
+        return None
+    c = cases[0]
+    case_dir = os.path.join(folder, str(c.get("case", "")))
+    frames = sorted(f for f in os.listdir(os.path.join(case_dir, "frames"))
+                    if f.endswith(".obj")) if os.path.isdir(os.path.join(case_dir, "frames")) else []
+    scene = c["scene"]
+    try:
+        nu, nv = (int(v) for v in scene["cloth"]["resolution"].strip("[]").split(","))
+        width = float(scene["cloth"]["size"].strip("[]").split(",")[0])
+        clamp = next(v for k, v in sorted(scene.items()) if k.startswith("handle.") and v.get("type") == '"pin"')
+        edge_u = sum(float(a) for a in (clamp["at"].strip("[]").split(",")[0], clamp["span"].strip("[]").split(",")[0]))
+        rigidity = float(scene["material"]["bending_rigidity"])
+        with open(os.path.join(case_dir, "frames", frames[-1]), encoding="utf-8") as f:
+            v = [[float(x) for x in line.split()[1:4]] for line in f if line.startswith("v ")]
+    except (KeyError, ValueError, StopIteration, IndexError, OSError):
+        return None
+    spacing = width / (nu - 1)
+    bending_k = number(scene.get("springs", {}).get("bending_k")) or rigidity / spacing ** 2
+    column = lambda i: [sum(v[j * nu + i][a] for j in range(nv)) / nv for a in range(3)]
+    edge = round(edge_u * (nu - 1))
+    a, b = column(edge), column(nu - 1)
+    overhang = (nu - 1 - edge) * spacing
+    phi = math.atan2(a[2] - b[2], b[0] - a[0])
+    return {"grid": nu, "spacing": spacing, "bending_k": bending_k, "chord": phi, "ok": c["ok"],
+            "c": bending_length(overhang, phi), "peirce": peirce(overhang, phi), "overhang": overhang}
+
+
+GRID_MEASURES = [("handle_height_m", "handle height", 1000, "mm", 1),
+                 ("contact_area_m2", "contact area", 1e4, "cm²", 0),
+                 ("base_diagonal_m", "base diagonal", 100, "cm", 1),
+                 ("travel_force_n", "hand's force over its travel", 1, "N", 3)]
+
+
+def grid_section(sweeps, runs):
+    """The grid-convergence section: its Markdown lines, and the done-criteria
+    [(what, measured, verdict)]."""
+    sizes = [g for g in GRID_SIZES if g == 51 or any(sweeps.get(f"grid-{s}-{g}") is not None for s in GRIDDED)]
+    value = {}
+    for scene in GRIDDED:
+        for g in sizes:
+            cases = sweeps.get(scene if g == 51 else f"grid-{scene}-{g}")
+            value[scene, g] = find(cases, 0.7) if cases else None
+    change = lambda a, b: (b / a - 1) if isinstance(a, float) and isinstance(b, float) and a else None
+    pct = lambda x: "—" if x is None else f"{x:+.1%}"
+    rows = []
+    for scene in GRIDDED:
+        for key, label, scale, unit, digits in GRID_MEASURES:
+            vals = [(value[scene, g] or {}).get(key) for g in sizes]
+            if not any(isinstance(x, float) for x in vals) or (key == "handle_height_m" and scene == "drape-ball"):
+                continue
+            at = dict(zip(sizes, vals))
+            rows.append([scene, f"{label}, {unit}"] + [fmt(x, scale, digits) for x in vals] +
+                        [pct(change(at.get(31), at.get(51))), pct(change(at.get(51), at.get(101)))])
+    lines = ["## Grid convergence", "",
+             "The same cloth on grids of " + ", ".join(f"{g} × {g}" for g in sizes) + " particles "
+             "(`wetcloth sweep SCENE --grid G --humidity 0.7`: a handle's patch keeps its size in metres, "
+             "the explicit step shrinks with its stability limit; 51 is the sweep above), at the final frame. "
+             "The material is the same at every grid (MODEL.md section 1): structural and shear springs "
+             "keep their constants, bending springs get B / l².", "",
+             md_table(["scene", "measure"] + [f"{g} × {g}" for g in sizes] + ["31 → 51", "51 → 101"], rows), ""]
+    criteria = []
+    for scene, key, label in (("pull-straight", "handle_height_m", "straight pull's handle height"),
+                              ("drape-ball", "contact_area_m2", "drape-ball's contact area")):
+        at = {g: (value[scene, g] or {}).get(key) for g in sizes}
+        coarse, fine = change(at.get(31), at.get(51)), change(at.get(51), at.get(101))
+        if coarse is None or fine is None:
+            criteria.append((f"{label}: from 51 to 101 it changes by less than 5 %, and less than from 31 to 51",
+                             "not run", "not run"))
+            continue
+        ok = abs(fine) < 0.05 and abs(fine) < abs(coarse)
+        bad = [g for g in (31, 51, 101) if value[scene, g] and not value[scene, g]["ok"]]
+        criteria.append((f"{label}: from 51 to 101 it changes by less than 5 %, and less than from 31 to 51",
+                         f"31 → 51: {coarse:+.1%}; 51 → 101: {fine:+.1%}",
+                         verdict(ok, ("blew up at " + ", ".join(map(str, bad))) if bad else "")))
+    bent = [cantilever(os.path.join(runs, f"grid-cantilever-{g}")) for g in CANTILEVER_GRIDS
+            if os.path.exists(os.path.join(runs, f"grid-cantilever-{g}", "sweep.csv"))]
+    bent = [b for b in bent if b]
+    lines += ["### The cantilever's bending length", "",
+              "`wetcloth sweep cantilever --grid G --humidity 0`: a dry strip 30 × 2.4 cm held flat over its "
+              "first 24 cm, its last 6 cm overhanging. The bending length c is that of the heavy elastica "
+              "(Peirce's cantilever, solved exactly) whose tip droops to the same chord angle below the "
+              "clamp's edge; Peirce's own formula, c = L (cos(θ/2) / (8 tan θ))^(1/3), is shown beside it "
+              "(it holds to about 45°).", ""]
+    if bent:
+        lines += [md_table(["grid", "spacing mm", "bending springs N/m", "chord angle °", "bending length c mm",
+                            "Peirce's formula mm"],
+                           [[b["grid"], f"{b['spacing'] * 1000:.0f}", f"{b['bending_k']:.3g}",
+                             f"{math.degrees(b['chord']):.1f}", f"{b['c'] * 1000:.1f}", f"{b['peirce'] * 1000:.1f}"]
+                            for b in bent]), ""]
+    if len(bent) >= 2:
+        cs = [b["c"] for b in bent]
+        spread = max(cs) / min(cs) - 1
+        criteria.append(("the cantilever's bending length is the same at every grid, within 10 %",
+                         ", ".join(f"{b['grid']}: {b['c'] * 1000:.1f} mm" for b in bent) + f" (spread {spread:.0%})",
+                         verdict(spread <= 0.10, "" if all(b["ok"] for b in bent) else "a run blew up")))
+    else:
+        criteria.append(("the cantilever's bending length is the same at every grid, within 10 %", "not run", "not run"))
+    lines += [md_table(["criterion (issue 25)", "measured", "result"],
+                       [[w, m, f"**{v}**" if v.startswith(("PASS", "FAIL")) else v] for w, m, v in criteria]), ""]
+    return lines, criteria
+
+
 # ---------------------------------------------------------------- the report
 
 def machine():
@@ -506,13 +709,16 @@ def git_commit():
 
 def sweep_table(name, cases):
     multi = len({c.get("air_model") for c in cases}) > 1
-    extra = {"drag-corner": ("slid cm", "slid_m", 100, 2), "peel-rig": ("peak force N", "peak_force_n", 1, 3),
-             "drape-ball": ("outer diag. cm", "outer_diagonal_m", 100, 1),
-             "air-models": ("tent slope", "tent_slope", 1, 2)}.get(name)
+    travel = ("force over travel N", "travel_force_n", 1, 3)
+    extra = {"drag-corner": [travel, ("slid cm", "slid_m", 100, 2)],
+             "pull-oblique": [travel, ("lifted at the stop cm²", "stop_lifted_m2", 1e4, 1)],
+             "peel-rig": [("peak force N", "peak_force_n", 1, 3)],
+             "drape-ball": [("outer diag. cm", "outer_diagonal_m", 100, 1)],
+             "air-models": [("tent slope", "tent_slope", 1, 2)]}.get(name, [])
     header = (["ω"] + (["air model"] if multi else []) +
               ["status", "handle height cm", "base diag. cm", "contact cm²", "lifted cm²",
                "peak deficit Pa (any step)", "time to 5 cm s", "wrinkle rad"] +
-              ([extra[0]] if extra else []) + ["wall s"])
+              [e[0] for e in extra] + ["wall s"])
     hums = [c["humidity"] for c in cases if isinstance(c.get("humidity"), float)]
     decimals = next(d for d in range(2, 18) if len({f"{h:.{d}f}" for h in hums}) == len(set(hums)))
     rows = []
@@ -522,7 +728,7 @@ def sweep_table(name, cases):
             c.get("status", "—"), fmt(c.get("handle_height_m"), 100), fmt(c.get("base_diagonal_m"), 100),
             fmt(c.get("contact_area_m2"), 1e4, 1), fmt(c.get("lifted_area_m2"), 1e4, 1),
             fmt(c.get("peak_deficit_pa"), 1, 0), "never" if t5 == -1 else fmt(t5),
-            fmt(c.get("wrinkle_rad"), 1, 3)] + ([fmt(c.get(extra[1]), extra[2], extra[3])] if extra else []) +
+            fmt(c.get("wrinkle_rad"), 1, 3)] + [fmt(c.get(e[1]), e[2], e[3]) for e in extra] +
             [fmt(number(c["summary"].get("wall_seconds")), 1, 0)])
     return md_table(header, rows)
 
@@ -557,10 +763,10 @@ def last_line(path):
 
 def report(runs, report_path, command):
     report_dir = os.path.dirname(os.path.abspath(report_path))
-    others = sorted(d for d in os.listdir(runs) if d not in EXPERIMENTS
+    others = sorted(d for d in os.listdir(runs) if d not in EXPERIMENTS and d not in GRID_RUNS
                     and os.path.exists(os.path.join(runs, d, "sweep.csv"))) if os.path.isdir(runs) else []
     names = EXPERIMENTS + others
-    sweeps = {n: load_sweep(os.path.join(runs, n)) for n in names}
+    sweeps = {n: load_sweep(os.path.join(runs, n)) for n in names + GRID_RUNS}
     version = next((c["summary"].get("version") for cs in sweeps.values() for c in cs or []
                     if c["summary"].get("version")), "?")
     results = [(exp, paper, test, *evaluate(sweeps)) for exp, paper, test, evaluate in CLAIMS]
@@ -589,6 +795,8 @@ def report(runs, report_path, command):
             md_table(["law", "we test", "we measured", "expected", "result"],
                      [[l, h, m, e, f"**{v}**" if v.startswith(("PASS", "FAIL")) else v]
                       for l, h, m, e, v in laws]), ""]
+    grid_lines, _ = grid_section(sweeps, runs)
+    out += grid_lines
 
     cmd_log = os.path.join(runs, "commands.log")
     if os.path.exists(cmd_log):

@@ -110,7 +110,7 @@ int main(int argc, char** argv) {
       } else {
         for (const auto& d : param_defs())
           std::printf("%-28s %-10s %-22s %-22s %s\n", d.key.c_str(), d.unit.c_str(),
-                      format_value(d.default_value).c_str(), d.range_text().c_str(), d.meaning.c_str());
+                      d.default_text().c_str(), d.range_text().c_str(), d.meaning.c_str());
       }
       return 0;
     }

@@ -4,6 +4,7 @@
 
 #include <array>
 #include <map>
+#include <optional>
 #include <string>
 
 namespace wetcloth {
@@ -40,10 +41,24 @@ struct Params {
     double water_ratio = 1.0;   // water held at ω = 1 per unit dry mass r_w
   } cloth;
 
+  // The fabric (MODEL.md section 1): constants of the material, the same at
+  // any grid. Each spring's constants follow from them and the spacing
+  // (resolve_springs); a 0.3 m cloth of 51 x 51 (l = 6 mm) gets 200/20/20 N/m.
+  struct Material {
+    double stretch_stiffness = 200;    // membrane stiffness per unit width, N/m
+    double stretch_damping = 0.01;     // N·s/m
+    double shear_stiffness = 20;       // N/m
+    double shear_damping = 0.01;       // N·s/m
+    double bending_rigidity = 7.2e-4;  // B, N·m: bending springs get B / l²
+    double bending_damping = 3.6e-7;   // N·s·m: bending springs get it / l²
+  } material;
+
+  // Spring constants set directly (the blog's way): the same at every grid.
+  // Unset (the default), each follows from the material.
   struct Springs {
-    double structural_k = 200, structural_damping = 0.01;
-    double shear_k = 20, shear_damping = 0.01;
-    double bending_k = 20, bending_damping = 0.01;
+    std::optional<double> structural_k, structural_damping;
+    std::optional<double> shear_k, shear_damping;
+    std::optional<double> bending_k, bending_damping;
   } springs;
 
   struct Forces {
@@ -139,5 +154,29 @@ double permeability(const Params& p);          // δ(ω), eq. 5, m/(s·Pa)
 double adhesion_pressure(const Params& p);     // ω γ (cos θa + cos θb) / h, Pa (eq. 13, area part)
 double adhesion_edge_tension(const Params& p); // ω γ sin θa, N/m (eq. 13, edge part per √S)
 double adhesion_total(const Params& p, double contact_area);  // eq. 13, N
+
+// The constants of every spring of the grid (MODEL.md section 1), from the
+// material and the spacing du x dv, or from [springs] where a scene sets them.
+// On a square grid (l = du = dv): structural and shear springs get the
+// membrane stiffnesses as they are, bending springs B / l², each damping as
+// its stiffness. On a grid that is not square, the membrane keeps its
+// stiffness per unit width in every direction: a structural spring along u
+// gets k_s dv/du (along v, k_s du/dv), a shear spring k_shear 2 du dv /
+// (du² + dv²); a bending spring along u B dv / du³ (along v, B du / dv³), a
+// diagonal one 4 B du dv / (du² + dv²)².
+struct SpringConstants {
+  double k = 0, damping = 0;  // N/m, N·s/m
+};
+struct ResolvedSprings {
+  double du = 0, dv = 0;  // spacing along u and v, m
+  SpringConstants structural_u, structural_v, shear, bending_u, bending_v, bending_diagonal;
+};
+ResolvedSprings resolve_springs(const Params& p);
+
+// About the largest stable explicit step, s: 2 / √(8 k / m) for the lightest
+// particle (a corner's) and the stiffest chain of springs, k the structural
+// constant or, where bending springs are stiffer than a quarter of it (fine
+// grids), (2 k_s + 4 k_b + k_s² / (4 k_b)) / 4: a chain's highest mode.
+double explicit_step_limit(const Params& p);
 
 }  // namespace wetcloth

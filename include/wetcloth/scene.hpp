@@ -26,12 +26,14 @@ struct ParamDef {
   std::string meaning;
   double min = 0, max = 0;            // range for numbers (inclusive); min > max: none
   std::vector<std::string> choices;   // allowed strings
-  ParamValue default_value;
+  ParamValue default_value;           // an optional number unset: NaN
+  bool optional = false;              // a number that may be left unset (get gives NaN)
   std::function<ParamValue(const Params&, const std::string& handle)> get;
   std::function<void(Params&, const std::string& handle, const ParamValue&)> set;
 
   std::string type_name() const;
   std::string range_text() const;
+  std::string default_text() const;  // the default as TOML, or "unset"
 };
 
 const std::vector<ParamDef>& param_defs();
@@ -56,8 +58,14 @@ Params parse_scene(const std::string& toml_text, const std::string& source_name,
 // when a side would be under 3 or over cloth.resolution's range.
 Params at_resolution(Params p, long long grid);
 
-// Every parameter, resolved, as TOML that load_scene reads back to the same Params.
+// Every parameter, resolved, as TOML that load_scene reads back to the same Params
+// (an optional key left unset is a comment), with the springs' constants as
+// the model resolves them from the material and the spacing (springs_text).
 std::string to_toml(const Params& p);
+
+// Comment lines: each kind of spring's stiffness and damping on this grid
+// (resolve_springs), and where they come from.
+std::string springs_text(const Params& p);
 
 // The checks a scene file gets (ranges, choices, keys that combine), on
 // Params made in code; Simulation's constructor and set_params run it. Throws

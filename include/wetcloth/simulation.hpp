@@ -80,7 +80,9 @@ class Vec3Array {
 struct SpringSet {
   std::vector<int> a, b;
   std::vector<double> rest;
-  double k = 0, damping = 0;
+  // Each spring's offset in Model::stencil, which holds its constants (on a
+  // grid that is not square, a kind's springs along u and v differ).
+  std::vector<std::uint8_t> edge;
   std::size_t size() const { return a.size(); }
 };
 
@@ -128,6 +130,10 @@ struct Model {
                              // first pin (-1: no handle)
   SurfaceKind contact_surface = SurfaceKind::None;
   int index(int i, int j) const { return j * nu + i; }
+  // Spring e of a set: its stiffness (N/m) and damping (N·s/m).
+  const StencilEdge& constants(const SpringSet& set, std::size_t e) const {
+    return stencil[set.edge[e]];
+  }
   // Whether the metrics follow a handle that pulls or drives (not a pin).
   bool measures_a_pull() const {
     return measured_handle >= 0 && handles[measured_handle].type != HandleType::Pin;

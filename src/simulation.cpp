@@ -488,13 +488,6 @@ std::string Simulation::blow_up_reason() const {
          "handles' forces (handle.*.force), the trapped air (air.model) and self_collision.k.";
     return o.str();
   }
-  if (p.integrator.type == "xpbd") {
-    o << lead << "integrator.dt = " << p.integrator.dt << " s in " << xpbd_substeps(p)
-      << " substeps (integrator.substeps = " << p.integrator.substeps
-      << ") is too coarse for a force this large: raise integrator.substeps, or look at the "
-         "handles' forces (handle.*.force), the trapped air (air.model) and self_collision.k.";
-    return o.str();
-  }
   if (!explicit_step) {
     o << lead << "integrator.max_step_strain = " << p.integrator.max_step_strain
       << " lets a substep's springs change too much for their linearisation, or "

@@ -264,7 +264,7 @@ if "$PY" "$REPORT" "$T/nowhere" "$T/val2/report.md" >/dev/null 2>&1 \
 then ok "report on no runs: every law not run"; else bad "report on no runs: laws"; fi
 # The grid-convergence section: the measures at each grid and their changes,
 # the criteria computed, the cantilever's bending length from its last frame.
-if grep -q '^| pull-straight | handle height, mm | 53.3 | 47.1 | 47.3 | -11.8% | +0.6% |$' "$R"
+if grep -q '^| pull-straight | handle height, mm | 53.3 | 47.1 | 47.3 | -11.8% | +0.6% | — |$' "$R"
 then ok "grid table: the straight pull's handle at 31, 51, 101 and its changes"
 else bad "grid table: $(grep '^| pull-straight | handle height' "$R")"; fi
 if grep -q "^| straight pull's handle height: .* | 31 → 51: -11.8%; 51 → 101: +0.6% | \*\*PASS\*\* |$" "$R" \

@@ -5,7 +5,7 @@ BUILD    ?= build
 JOBS     ?= $(shell nproc)
 CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Release
 
-.PHONY: all deps build test demo validate bench clean readme-params
+.PHONY: all deps build test test-clients demo validate bench clean readme-params
 
 all: build
 
@@ -20,6 +20,12 @@ build: deps $(BUILD)/CMakeCache.txt
 
 test: build
 	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
+
+# The caches in the programs that read them: Blender (rest OBJ + PC2 on a Mesh
+# Cache modifier) and VTK's reader; installs blender and python3-vtk9 first.
+test-clients: build
+	@tools/install-deps.sh clients
+	tests/test_clients.sh $(BUILD)/wetcloth $(CURDIR)
 
 demo: build
 	$(BUILD)/wetcloth run pull-straight --humidity 0.7 --out out/demo

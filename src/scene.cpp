@@ -1,6 +1,7 @@
 // Scene files: one table of parameter definitions, used to load, check, print and
 // document every key.
 #include "wetcloth/scene.hpp"
+#include "wetcloth/caches.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -247,6 +248,12 @@ std::vector<ParamDef> make_defs() {
       field("run.duration", "s", 0, 1e6, "simulated time", P(run.duration)),
       field("run.fps", "1/s", 1e-3, 1e5, "output frames per simulated second", P(run.fps)),
       field("run.meshes", "", 0, 0, "write frames/frame_NNNNN.obj", P(run.meshes)),
+      field("run.export", "", 1, 0,
+            "animation caches to write, any of usd, pc2, vtk (comma-separated): cloth.usda; "
+            "cloth.pc2 with cloth_rest.obj; vtk/cloth_NNNNN.vtp with cloth.pvd",
+            P(run.exports)),
+      field("run.up", "", 1, 0, "up axis of the files written: z (the simulation's) or y",
+            P(run.up), {"z", "y"}),
       handle_field("type", "", 1, 0, "force: constant force; move: driven at a velocity; pin: held",
                    H(type), {"force", "move", "pin"}),
       handle_field("at", "1", 0, 1,
@@ -425,7 +432,7 @@ toml::table parse_override(const std::string& text) {
   // Let a bare word stand for a string: --set air.model=sealed.
   const bool bare_word =
       !value.empty() && std::all_of(value.begin(), value.end(), [](unsigned char c) {
-        return std::isalpha(c) || c == '_' || c == '-';
+        return std::isalnum(c) || c == '_' || c == '-' || c == ',';
       });
   try {
     return toml::parse(key + " = " + value, source);
@@ -465,6 +472,11 @@ void check_consistency(const Params& p, const std::string& source,
     bad("contact.surface", "is 'ball' but ball.enabled is false");
   if (p.contact.surface == "table" && !p.table.enabled)
     bad("contact.surface", "is 'table' but table.enabled is false");
+  try {
+    parse_export_formats(p.run.exports);
+  } catch (const std::invalid_argument& e) {
+    bad("run.export", e.what());
+  }
   for (int i = 0; i < 2; ++i)
     if (p.wind.region_min[i] > p.wind.region_max[i])
       bad("wind.region_min", "must not exceed wind.region_max");

@@ -113,6 +113,18 @@ cmp -s "$T/a/metrics.csv" "$T/b/metrics.csv" && ok "identical metrics.csv twice"
 cmp -s "$T/a/metrics.csv" "$T/c/metrics.csv" && ok "scene.toml reproduces the run" || bad "scene.toml does not reproduce"
 grep -q '"realtime_factor"' "$T/a/summary.json" && grep -q '"final"' "$T/a/summary.json" && ok "summary.json" || bad "summary.json"
 
+# Caches: --export writes them beside the frames, and leaves no temporary file;
+# an unknown format or up axis is bad input that names the key.
+"$W" run pull-straight --out "$T/e" --set cloth.resolution=[9,9] --duration 0.1 --quiet --export usd,pc2,vtk --up y
+for f in cloth.usda cloth.pc2 cloth_rest.obj cloth.pvd vtk/cloth_00003.vtp vtk/obstacles.vtp; do
+  [ -s "$T/e/$f" ] && ok "--export wrote $f" || bad "--export: missing $f"
+done
+grep -q 'upAxis = "Y"' "$T/e/cloth.usda" && head -1 "$T/e/frames/frame_00000.obj" | grep -q ", y up" &&
+  ok "--up y: the USD stage and the OBJ frames say so" || bad "--up y not recorded"
+ls "$T/e" "$T/e/vtk" "$T/e/frames" | grep -q '\.tmp$' && bad "--export left temporary files" || ok "--export: no temporary files"
+expect_bad export "run.export" pull-straight --export usd,alembic
+expect_bad up_axis "--up" pull-straight --up x
+
 # A duration between two frames: the run goes on to it, with a last frame there.
 "$W" run pull-straight --out "$T/d" --set cloth.resolution=[9,9] --duration 0.05 --quiet
 [ "$(tail -1 "$T/d/metrics.csv" | cut -d, -f1)" = "0.05" ] && [ -s "$T/d/frames/frame_00002.obj" ] &&

@@ -8,6 +8,8 @@ pkgs=(
   python3 python3-matplotlib
   libglfw3-dev libimgui-dev libepoxy-dev libegl-dev libgl1-mesa-dri xvfb xauth ffmpeg
 )
+# `install-deps.sh clients`: also the tools that read the caches (make test-clients).
+[ "${1:-}" = clients ] && pkgs+=(blender python3-vtk9)
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -21,4 +23,4 @@ if [ "$(id -u)" -ne 0 ]; then
 fi
 export DEBIAN_FRONTEND=noninteractive
 $SUDO apt-get update -qq
-$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}"
+$SUDO apt-get -o DPkg::Lock::Timeout=600 install -y -qq --no-install-recommends "${missing[@]}"

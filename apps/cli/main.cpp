@@ -36,6 +36,12 @@ int main(int argc, char** argv) {
   run->add_option("--out", out_dir, "output folder (default out/<scene name>)")
       ->check(cli::a_path());
   run->add_flag("--quiet", quiet, "no progress bar");
+  std::optional<std::string> exports, up;
+  run->add_option("--export", exports,
+                  "animation caches, any of usd,pc2,vtk (= --set run.export=LIST): DIR/cloth.usda; "
+                  "DIR/cloth.pc2 with DIR/cloth_rest.obj; DIR/vtk/*.vtp with DIR/cloth.pvd");
+  run->add_option("--up", up, "up axis of every file written, z (default) or y (= --set run.up=A)")
+      ->check(CLI::IsMember({"z", "y"}));
   run->footer(
       "Writes DIR/metrics.csv (one row per frame, SI units in the header), DIR/frames/*.obj,\n"
       "DIR/obstacles.obj, DIR/scene.toml (every parameter, resolved) and DIR/summary.json.\n"
@@ -120,6 +126,8 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (*run) {
+      if (exports) run_opts.sets.push_back("run.export=\"" + *exports + "\"");
+      if (up) run_opts.sets.push_back("run.up=" + *up);
       const Params p = run_opts.load();
       const fs::path out = out_dir.empty() ? fs::path("out") / p.name : fs::path(out_dir);
       cli::make_output_folder(out);

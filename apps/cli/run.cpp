@@ -6,10 +6,12 @@
 #include <cmath>
 #include <cstdio>
 #include <mutex>
+#include <optional>
 #include <nlohmann/json.hpp>
 #include <thread>
 
 #include "scene_options.hpp"
+#include "wetcloth/caches.hpp"
 #include "wetcloth/output.hpp"
 #include "wetcloth/scene.hpp"
 
@@ -57,7 +59,11 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress) {
   write_file_atomic(out / "scene.toml", "# resolved by wetcloth " WETCLOTH_VERSION
                                         "; `wetcloth run` this file to reproduce the run\n" +
                                             to_toml(p));
-  write_file_atomic(out / "obstacles.obj", obstacles_obj(sim.model()));
+  const UpAxis up = parse_up_axis(p.run.up);
+  write_file_atomic(out / "obstacles.obj", obstacles_obj(sim.model(), up));
+  const ExportFormats formats = parse_export_formats(p.run.exports);
+  std::optional<CacheWriter> caches;
+  if (formats.any()) caches.emplace(out, sim, formats, up, p.run.fps);
 
   MetricsTable table;
   const long long frames = last_frame_index(p.run.duration, p.run.fps);
@@ -77,8 +83,9 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress) {
     if (p.run.meshes) {
       char name[32];
       std::snprintf(name, sizeof name, "frame_%05lld.obj", f);
-      write_file_atomic(out / "frames" / name, cloth_obj(sim.model(), sim.state()));
+      write_file_atomic(out / "frames" / name, cloth_obj(sim.model(), sim.state(), up));
     }
+    if (caches) caches->add_frame(sim);
     if (pulled && r.time_to_5cm_s < 0 && m.handle_height_m >= 0.05) r.time_to_5cm_s = m.time_s;
     if (progress) print_progress(sim.state().time, p.run.duration, wall());
     if (!ok) {
@@ -88,6 +95,7 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress) {
     }
   }
   if (progress) std::fprintf(stderr, "\n");
+  if (caches) caches->finish();
   r.first = table.rows().front();
   r.final = table.rows().back();
   r.peak_deficit_pa = sim.state().peak_deficit;

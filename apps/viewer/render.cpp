@@ -44,24 +44,28 @@ int spawn_and_wait(const std::vector<std::string>& args) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : 128;
 }
 
-// A frame of `wetcloth run` (frames/frame_NNNNN.obj): v, vn, f a//a b//b c//c.
+// A frame of `wetcloth run` (frames/frame_NNNNN.obj): v, vt, vn, f a/a/a b/b/b c/c/c,
+// written z up, or y up (run.up) as its first line says: read back z up.
 bool read_cloth_obj(const fs::path& path, ClothMesh& mesh) {
   std::ifstream in(path);
   if (!in) return false;
   mesh = ClothMesh{};
   std::string line;
+  bool y_up = false;
   while (std::getline(in, line)) {
     std::istringstream s(line);
     std::string tag;
     s >> tag;
+    if (tag == "#" && line.find(", y up") != std::string::npos) y_up = true;
     if (tag == "v" || tag == "vn") {
       Vec3f p;
       s >> p.x() >> p.y() >> p.z();
+      if (y_up) p = Vec3f(p.x(), -p.z(), p.y());
       (tag == "v" ? mesh.position : mesh.normal).push_back(p);
     } else if (tag == "f") {
       std::array<int, 3> t{};
       std::string tok;
-      for (int k = 0; k < 3 && s >> tok; ++k) t[k] = std::atoi(tok.c_str()) - 1;  // "a//a": a
+      for (int k = 0; k < 3 && s >> tok; ++k) t[k] = std::atoi(tok.c_str()) - 1;  // "a/a/a": a
       mesh.triangles.push_back(t);
     }
   }

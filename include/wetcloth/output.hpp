@@ -3,6 +3,7 @@
 #pragma once
 
 #include <algorithm>
+#include <array>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -13,10 +14,27 @@ namespace wetcloth {
 
 void write_file_atomic(const std::filesystem::path& path, const std::string& contents);
 
-// The cloth: positions, normals, triangles.
-std::string cloth_obj(const Model& m, const State& s);
-// The table (a square around the cloth) and the ball.
-std::string obstacles_obj(const Model& m);
+// Which way is up in the files written: the simulation's own z (the
+// default), or y (x, y, z) -> (x, z, -y), as Houdini, Maya and Blender's OBJ
+// importer expect by default.
+enum class UpAxis { Z, Y };
+UpAxis parse_up_axis(const std::string& up);  // "z" or "y"; std::invalid_argument else
+inline Vec3 to_up(const Vec3& x, UpAxis up) {
+  return up == UpAxis::Z ? x : Vec3(x.x(), x.z(), -x.y());
+}
+
+// The cloth: positions, texture coordinates (u, v) = (i, j) / (nu - 1, nv - 1),
+// normals, triangles.
+std::string cloth_obj(const Model& m, const State& s, UpAxis up = UpAxis::Z);
+
+// An obstacle as a triangle mesh: the table (a square around the cloth), the ball.
+struct NamedMesh {
+  std::string name;
+  std::vector<Vec3> points;
+  std::vector<std::array<int, 3>> triangles;  // 0-based
+};
+std::vector<NamedMesh> obstacle_meshes(const Model& m);
+std::string obstacles_obj(const Model& m, UpAxis up = UpAxis::Z);
 
 // metrics.csv, one row per output frame.
 class MetricsTable {

@@ -143,6 +143,8 @@ struct Params {
     double duration = 2.0;    // s
     double fps = 30;          // output frames per simulated second
     bool meshes = true;       // write frames/*.obj
+    std::string exports;      // run.export: caches to write, "usd,pc2,vtk" or any of them
+    std::string up = "z";     // the up axis of the files written: z (the simulation's) or y
   } run;
 
   std::map<std::string, HandleParams> handles;  // [handle.NAME]

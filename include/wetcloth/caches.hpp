@@ -1,0 +1,79 @@
+// Animation caches that studio tools read (`run.export`): USD, a PC2 point
+// cache with its rest OBJ, VTK PolyData. Each carries the cloth's points and
+// normals per output frame and the wet model's fields per vertex: contact (1
+// within h_th of the contact surface), pressure (the trapped air's P_in under
+// the vertex, Pa; p_atm where none is trapped), adhesion (|F_adh|, N) and
+// humidity (ω).
+//
+//   cloth.usda                one Mesh, time-sampled points, normals, extent and
+//                             primvars, UVs (primvars:st), the obstacles as static
+//                             meshes; up axis, metres and frames per second in the
+//                             stage's metadata. Written when the run ends (the
+//                             time samples are spooled in temporary files, which
+//                             the system removes however the process ends).
+//   cloth.pc2, cloth_rest.obj Blender's Mesh Cache modifier, Houdini; one sample a
+//                             frame. The header's count follows every frame, so
+//                             a run cut short leaves a readable cache.
+//   vtk/cloth_NNNNN.vtp       a PolyData a frame (ParaView); vtk/obstacles.vtp;
+//                             cloth.pvd the collection with each frame's time,
+//                             rewritten as frames come.
+#pragma once
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "wetcloth/output.hpp"
+#include "wetcloth/simulation.hpp"
+
+namespace wetcloth {
+
+struct ExportFormats {
+  bool usd = false, pc2 = false, vtk = false;
+  bool any() const { return usd || pc2 || vtk; }
+};
+// "usd,pc2,vtk", any of them in any order, or "" for none; std::invalid_argument
+// naming the word it does not know.
+ExportFormats parse_export_formats(const std::string& list);
+
+// The fields of one frame, in the file's up axis.
+struct CacheFrame {
+  double time = 0;
+  std::vector<Vec3> points, normals;
+  std::vector<float> contact, pressure, adhesion;
+  double humidity = 0;
+};
+CacheFrame cache_frame(const Simulation& sim, UpAxis up);
+
+class CacheWriter {
+ public:
+  // Opens the caches of `formats` in `dir` for the simulation's cloth.
+  CacheWriter(const std::filesystem::path& dir, const Simulation& sim, ExportFormats formats,
+              UpAxis up, double fps);
+  ~CacheWriter();
+  CacheWriter(const CacheWriter&) = delete;
+  CacheWriter& operator=(const CacheWriter&) = delete;
+
+  void add_frame(const Simulation& sim);
+  // Writes what is written at the end (cloth.usda); further frames are refused.
+  void finish();
+
+ private:
+  struct Spool;  // a time-sampled USD attribute's samples, in a temporary file
+  std::filesystem::path dir_;
+  ExportFormats formats_;
+  UpAxis up_;
+  double fps_;
+  const Model& model_;
+  long long frames_ = 0;
+  double last_code_ = 0;  // USD time code of the last frame
+  bool finished_ = false;
+  std::fstream pc2_;
+  std::vector<double> vtk_times_;
+  std::vector<std::unique_ptr<Spool>> spools_;
+};
+
+}  // namespace wetcloth

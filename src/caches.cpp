@@ -1,0 +1,343 @@
+#include "wetcloth/caches.hpp"
+
+#include <array>
+#include <cstdint>
+#include <cstring>
+#include <sstream>
+#include <stdexcept>
+
+namespace wetcloth {
+
+namespace fs = std::filesystem;
+
+ExportFormats parse_export_formats(const std::string& list) {
+  ExportFormats f;
+  std::istringstream in(list);
+  for (std::string word; std::getline(in, word, ',');) {
+    const auto first = word.find_first_not_of(" \t"), last = word.find_last_not_of(" \t");
+    word = first == std::string::npos ? "" : word.substr(first, last - first + 1);
+    if (word == "usd")
+      f.usd = true;
+    else if (word == "pc2")
+      f.pc2 = true;
+    else if (word == "vtk")
+      f.vtk = true;
+    else if (!word.empty())
+      throw std::invalid_argument("'" + word + "' is not a cache format (usd, pc2, vtk)");
+  }
+  return f;
+}
+
+CacheFrame cache_frame(const Simulation& sim, UpAxis up) {
+  const Model& m = sim.model();
+  const State& s = sim.state();
+  const Workspace& w = sim.workspace();
+  Vec3Array normal(m.n);
+  compute_normals(m, s.x, normal);
+  CacheFrame f;
+  f.time = s.time;
+  f.humidity = m.params.cloth.humidity;
+  f.points.resize(m.n);
+  f.normals.resize(m.n);
+  f.contact.resize(m.n);
+  f.pressure.assign(m.n, static_cast<float>(m.params.air.p_atm));
+  f.adhesion.assign(m.n, 0.0f);
+  const bool pressure = s.pocket_pressure.size() == std::size_t(m.n);
+  const bool adhesion = w.adhesion.size() == std::size_t(m.n);
+  for (int i = 0; i < m.n; ++i) {
+    f.points[i] = to_up(s.x[i], up);
+    f.normals[i] = to_up(normal[i], up);
+    f.contact[i] = s.contact[i] ? 1.0f : 0.0f;
+    if (pressure) f.pressure[i] = static_cast<float>(s.pocket_pressure[i]);
+    if (adhesion) f.adhesion[i] = static_cast<float>(w.adhesion[i]);
+  }
+  return f;
+}
+
+namespace {
+
+// Text of a float as USD and VTK read it back (9 significant digits: exact).
+void put(std::string& o, double v) {
+  char b[32];
+  std::snprintf(b, sizeof b, "%.9g", v);
+  o += b;
+}
+
+template <class T>
+std::string join(const std::vector<T>& v, const char* sep = " ") {
+  std::string o;
+  o.reserve(v.size() * 12);
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    if (i) o += sep;
+    put(o, static_cast<double>(v[i]));
+  }
+  return o;
+}
+
+std::string tuples(const std::vector<Vec3>& v) {  // USD: (x, y, z), ...
+  std::string o;
+  o.reserve(v.size() * 36);
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    o += i ? ", (" : "(";
+    put(o, v[i].x());
+    o += ", ";
+    put(o, v[i].y());
+    o += ", ";
+    put(o, v[i].z());
+    o += ")";
+  }
+  return o;
+}
+
+std::string flat(const std::vector<Vec3>& v) {  // VTK: x y z x y z ...
+  std::string o;
+  o.reserve(v.size() * 36);
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    if (i) o += " ";
+    put(o, v[i].x());
+    o += " ";
+    put(o, v[i].y());
+    o += " ";
+    put(o, v[i].z());
+  }
+  return o;
+}
+
+std::vector<Vec3> uvs(const Model& m) {  // (u, v, 0): the grid's own coordinates
+  std::vector<Vec3> uv;
+  uv.reserve(m.n);
+  for (int j = 0; j < m.nv; ++j)
+    for (int i = 0; i < m.nu; ++i)
+      uv.emplace_back(double(i) / (m.nu - 1), double(j) / (m.nv - 1), 0.0);
+  return uv;
+}
+
+std::string polydata(const std::vector<Vec3>& points, const std::vector<std::array<int, 3>>& tris,
+                     const std::string& point_data) {
+  std::string o = "<?xml version=\"1.0\"?>\n"
+                  "<VTKFile type=\"PolyData\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
+                  "<PolyData>\n<Piece NumberOfPoints=\"" +
+                  std::to_string(points.size()) + "\" NumberOfPolys=\"" +
+                  std::to_string(tris.size()) + "\">\n" + point_data +
+                  "<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" "
+                  "format=\"ascii\">\n" +
+                  flat(points) + "\n</DataArray>\n</Points>\n<Polys>\n" +
+                  "<DataArray type=\"Int32\" Name=\"connectivity\" format=\"ascii\">\n";
+  for (std::size_t k = 0; k < tris.size(); ++k)
+    o += (k ? " " : "") + std::to_string(tris[k][0]) + " " + std::to_string(tris[k][1]) + " " +
+         std::to_string(tris[k][2]);
+  o += "\n</DataArray>\n<DataArray type=\"Int32\" Name=\"offsets\" format=\"ascii\">\n";
+  for (std::size_t k = 0; k < tris.size(); ++k) o += (k ? " " : "") + std::to_string(3 * (k + 1));
+  return o + "\n</DataArray>\n</Polys>\n</Piece>\n</PolyData>\n</VTKFile>\n";
+}
+
+std::string data_array(const char* type, const char* name, int components, const std::string& v) {
+  return std::string("<DataArray type=\"") + type + "\" Name=\"" + name +
+         "\" NumberOfComponents=\"" + std::to_string(components) + "\" format=\"ascii\">\n" + v +
+         "\n</DataArray>\n";
+}
+
+std::string mesh_topology(const std::vector<std::array<int, 3>>& tris, const std::string& indent) {
+  std::string counts, indices;
+  for (std::size_t k = 0; k < tris.size(); ++k) {
+    counts += k ? ", 3" : "3";
+    for (int q = 0; q < 3; ++q) indices += (k || q ? ", " : "") + std::to_string(tris[k][q]);
+  }
+  return indent + "int[] faceVertexCounts = [" + counts + "]\n" + indent +
+         "int[] faceVertexIndices = [" + indices + "]\n";
+}
+
+void write_pc2_header(std::fstream& f, int points, long long samples) {
+  char header[32] = "POINTCACHE2";
+  const std::int32_t version = 1, n = points, count = static_cast<std::int32_t>(samples);
+  const float start = 0.0f, rate = 1.0f;  // sample k is frame k
+  std::memcpy(header + 12, &version, 4);
+  std::memcpy(header + 16, &n, 4);
+  std::memcpy(header + 20, &start, 4);
+  std::memcpy(header + 24, &rate, 4);
+  std::memcpy(header + 28, &count, 4);
+  f.seekp(0);
+  f.write(header, sizeof header);
+}
+
+}  // namespace
+
+// A USD attribute's time samples, "code: value,\n" each, kept in a temporary
+// file until the stage is written.
+struct CacheWriter::Spool {
+  std::string declaration;  // e.g. "point3f[] points"
+  std::FILE* file = std::tmpfile();
+  ~Spool() {
+    if (file) std::fclose(file);
+  }
+  void add(double code, const std::string& value) {
+    std::string line = "            ";
+    put(line, code);
+    line += ": " + value + ",\n";
+    if (!file || std::fwrite(line.data(), 1, line.size(), file) != line.size())
+      throw std::runtime_error("cloth.usda: cannot write its time samples to a temporary file");
+  }
+};
+
+CacheWriter::CacheWriter(const fs::path& dir, const Simulation& sim, ExportFormats formats,
+                         UpAxis up, double fps)
+    : dir_(dir), formats_(formats), up_(up), fps_(fps), model_(sim.model()) {
+  const Model& m = model_;
+  for (const char* f : {"cloth.usda", "cloth.pc2", "cloth_rest.obj", "cloth.pvd"})
+    fs::remove(dir / f);
+  if (fs::exists(dir / "vtk"))
+    for (const auto& e : fs::directory_iterator(dir / "vtk"))
+      if (e.path().extension() == ".vtp") fs::remove(e.path());
+  if (formats.pc2) {
+    write_file_atomic(dir / "cloth_rest.obj", cloth_obj(m, sim.state(), up));
+    pc2_.open(dir / "cloth.pc2", std::ios::binary | std::ios::in | std::ios::out | std::ios::trunc);
+    if (!pc2_) throw std::runtime_error((dir / "cloth.pc2").string() + ": cannot write");
+    write_pc2_header(pc2_, m.n, 0);
+  }
+  if (formats.vtk) {
+    fs::create_directories(dir / "vtk");
+    std::vector<Vec3> points;
+    std::vector<std::array<int, 3>> tris;
+    for (const NamedMesh& mesh : obstacle_meshes(m)) {
+      const int base = static_cast<int>(points.size());
+      for (const Vec3& x : mesh.points) points.push_back(to_up(x, up));
+      for (const auto& t : mesh.triangles) tris.push_back({base + t[0], base + t[1], base + t[2]});
+    }
+    write_file_atomic(dir / "vtk" / "obstacles.vtp", polydata(points, tris, ""));
+  }
+  if (formats.usd)
+    for (const char* d : {"point3f[] points", "normal3f[] normals", "float3[] extent",
+                          "float[] primvars:contact", "float[] primvars:pressure",
+                          "float[] primvars:adhesion", "float primvars:humidity"}) {
+      spools_.push_back(std::make_unique<Spool>());
+      spools_.back()->declaration = d;
+      if (!spools_.back()->file)
+        throw std::runtime_error("cloth.usda: cannot open a temporary file for its time samples");
+    }
+}
+
+CacheWriter::~CacheWriter() = default;
+
+void CacheWriter::add_frame(const Simulation& sim) {
+  if (finished_) throw std::logic_error("CacheWriter: a frame after finish()");
+  const CacheFrame f = cache_frame(sim, up_);
+  const long long k = frames_++;
+  if (formats_.pc2) {
+    std::vector<float> xyz(3 * f.points.size());
+    for (std::size_t i = 0; i < f.points.size(); ++i)
+      for (int q = 0; q < 3; ++q) xyz[3 * i + q] = static_cast<float>(f.points[i][q]);
+    pc2_.seekp(32 + k * static_cast<long long>(xyz.size() * sizeof(float)));
+    pc2_.write(reinterpret_cast<const char*>(xyz.data()),
+               static_cast<std::streamsize>(xyz.size() * sizeof(float)));
+    write_pc2_header(pc2_, static_cast<int>(f.points.size()), k + 1);
+    if (!pc2_.flush()) throw std::runtime_error((dir_ / "cloth.pc2").string() + ": cannot write");
+  }
+  if (formats_.vtk) {
+    char name[32];
+    std::snprintf(name, sizeof name, "cloth_%05lld.vtp", k);
+    const std::string fields =
+        "<PointData Scalars=\"contact\" Normals=\"normals\" TCoords=\"uv\">\n" +
+        data_array("Float32", "normals", 3, flat(f.normals)) +
+        data_array("Float32", "uv", 3, flat(uvs(model_))) +
+        data_array("Float32", "contact", 1, join(f.contact)) +
+        data_array("Float32", "pressure_pa", 1, join(f.pressure)) +
+        data_array("Float32", "adhesion_n", 1, join(f.adhesion)) +
+        data_array("Float32", "humidity", 1,
+                   join(std::vector<float>(f.points.size(), static_cast<float>(f.humidity)))) +
+        "</PointData>\n";
+    write_file_atomic(dir_ / "vtk" / name, polydata(f.points, model_.triangles, fields));
+    vtk_times_.push_back(f.time);
+    std::string pvd =
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n";
+    for (std::size_t q = 0; q < vtk_times_.size(); ++q) {
+      char line[128];
+      std::snprintf(line, sizeof line, "<DataSet timestep=\"%.9g\" file=\"vtk/cloth_%05zu.vtp\"/>\n",
+                    vtk_times_[q], q);
+      pvd += line;
+    }
+    write_file_atomic(dir_ / "cloth.pvd", pvd + "</Collection>\n</VTKFile>\n");
+  }
+  if (formats_.usd) {
+    Vec3 lo = f.points[0], hi = f.points[0];
+    for (const Vec3& x : f.points) {
+      lo = lo.cwiseMin(x);
+      hi = hi.cwiseMax(x);
+    }
+    const double code = f.time * fps_;
+    last_code_ = code;
+    spools_[0]->add(code, "[" + tuples(f.points) + "]");
+    spools_[1]->add(code, "[" + tuples(f.normals) + "]");
+    spools_[2]->add(code, "[" + tuples({lo, hi}) + "]");
+    spools_[3]->add(code, "[" + join(f.contact, ", ") + "]");
+    spools_[4]->add(code, "[" + join(f.pressure, ", ") + "]");
+    spools_[5]->add(code, "[" + join(f.adhesion, ", ") + "]");
+    std::string h;
+    put(h, f.humidity);
+    spools_[6]->add(code, h);
+  }
+}
+
+void CacheWriter::finish() {
+  if (finished_) return;
+  finished_ = true;
+  if (!formats_.usd) return;
+  const Model& m = model_;
+  std::string o = "#usda 1.0\n(\n    defaultPrim = \"wetcloth\"\n    metersPerUnit = 1\n";
+  o += std::string("    upAxis = \"") + (up_ == UpAxis::Z ? "Z" : "Y") + "\"\n";
+  o += "    startTimeCode = 0\n    endTimeCode = ";
+  // The last frame's time code (a run's last frame may fall between two).
+  put(o, last_code_);
+  o += "\n    timeCodesPerSecond = ";
+  put(o, fps_);
+  o += "\n    framesPerSecond = ";
+  put(o, fps_);
+  o += "\n    doc = \"wetcloth " WETCLOTH_VERSION ": " + m.params.name + "\"\n)\n\n";
+  o += "def Xform \"wetcloth\"\n{\n    def Mesh \"cloth\"\n    {\n";
+  o += "        uniform bool doubleSided = 1\n        uniform token subdivisionScheme = \"none\"\n";
+  o += "        uniform token orientation = \"rightHanded\"\n";
+  o += mesh_topology(m.triangles, "        ");
+  std::string st;
+  for (const Vec3& uv : uvs(m)) {
+    st += st.empty() ? "(" : ", (";
+    put(st, uv.x());
+    st += ", ";
+    put(st, uv.y());
+    st += ")";
+  }
+  o += "        texCoord2f[] primvars:st = [" + st + "] (\n            interpolation = \"vertex\"\n        )\n";
+  o += "        normal3f[] normals (\n            interpolation = \"vertex\"\n        )\n";
+  for (const char* name : {"contact", "pressure", "adhesion"})
+    o += std::string("        float[] primvars:") + name +
+         " (\n            interpolation = \"vertex\"\n        )\n";
+  o += "        float primvars:humidity (\n            interpolation = \"constant\"\n        )\n";
+  const fs::path path = dir_ / "cloth.usda", tmp = path.string() + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    out << o;
+    for (const auto& spool : spools_) {
+      out << "        " << spool->declaration << ".timeSamples = {\n";
+      std::rewind(spool->file);
+      char buf[1 << 16];
+      for (std::size_t got; (got = std::fread(buf, 1, sizeof buf, spool->file)) > 0;)
+        out.write(buf, static_cast<std::streamsize>(got));
+      out << "        }\n";
+    }
+    out << "    }\n";
+    for (const NamedMesh& mesh : obstacle_meshes(m)) {
+      std::vector<Vec3> points;
+      for (const Vec3& x : mesh.points) points.push_back(to_up(x, up_));
+      out << "\n    def Mesh \"" << mesh.name << "\"\n    {\n"
+          << mesh_topology(mesh.triangles, "        ") << "        point3f[] points = ["
+          << tuples(points) << "]\n        uniform token subdivisionScheme = \"none\"\n    }\n";
+    }
+    out << "}\n";
+    if (!out.flush()) {
+      out.close();
+      fs::remove(tmp);
+      throw std::runtime_error(tmp.string() + ": cannot write");
+    }
+  }
+  fs::rename(tmp, path);
+}
+
+}  // namespace wetcloth

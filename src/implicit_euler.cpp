@@ -339,7 +339,7 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
                 p = columns(m, w, kP), q = columns(m, w, kQ);
   float* P[6];
   for (int k = 0; k < 6; ++k) P[k] = preconditioner_field(m, w, k);
-  const bool guess = !w.acceleration.empty();
+  const bool guess = !s.acceleration.empty();
   w.fixed_particles.clear();
   for (int a = 0; a < n; ++a)
     if (fixed(m, s, a)) w.fixed_particles.push_back(a);
@@ -373,7 +373,7 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
     Vec3 b = v, start = v;  // fixed: b = x, no change
     if (!fixed(m, s, a)) {
       b = m.mass[a] * v + h * w.force[a];
-      if (guess) start += h * w.acceleration[a];
+      if (guess) start += h * s.acceleration[a];
     }
     Vec3 held = Vec3::Zero();
     if (!fixed(m, s, a) && w.distance[a] <= kOnSurface && w.force[a].dot(w.surface_normal[a]) < 0)

@@ -136,13 +136,25 @@ void Simulation::reset() {
   ws_.distance.assign(n, kInf);
   ws_.adhesion.assign(n, 0.0);
   ws_.border.assign(n, 0);
-  ws_.pocket.assign(n, -1);
+  state_.pocket.assign(n, -1);
   ws_.colliding.assign(n, 0);
   touched_.assign(n, 0);
   release();
   update_contact(model_, state_, ws_);
   start_air(model_, state_, ws_);
   update_strain_order(model_, state_, ws_);
+  compute_normals(model_, state_.x, ws_.normal);
+}
+
+void Simulation::restore(const State& s) {
+  const auto n = static_cast<std::size_t>(model_.n);
+  if (s.x.size() != n || s.v.size() != n || s.contact.size() != n || s.pocket.size() != n)
+    throw std::invalid_argument("restore: a state of " + std::to_string(s.x.size()) +
+                                " particles, the scene has " + std::to_string(n));
+  reset();
+  state_ = s;
+  // What each step's end leaves for the next, made from the state again.
+  update_contact(model_, state_, ws_);
   compute_normals(model_, state_.x, ws_.normal);
 }
 
@@ -235,14 +247,14 @@ void Simulation::take_step() {
     constexpr long long kWhole = 1LL << kMostHalvings;
     long long done = 0;  // in units of dt / 2^kMostHalvings
     while (done < kWhole) {
-      int k = w.halvings;
+      int k = s.halvings;
       while (done % (kWhole >> k) != 0) ++k;
       const int tried = k;
       accumulate_forces(true);
       double strain = 0;
       const double h = implicit_substep(dt, k, strain);
       const bool room = strain <= 0.5 * m.params.integrator.max_step_strain;
-      w.halvings = k == tried && room ? std::max(0, k - 1) : k;
+      s.halvings = k == tried && room ? std::max(0, k - 1) : k;
       done += kWhole >> k;
       s.time = (static_cast<double>(s.steps) + static_cast<double>(done) / kWhole) * dt;
       finish_step(h);
@@ -367,11 +379,11 @@ double Simulation::implicit_substep(double dt, int& k, double& strain) {
     strain = step_strain(m, s, h);
     if (k == kMostHalvings || strain <= m.params.integrator.max_step_strain) {
       ++w.substeps;
-      if (w.acceleration.size() != std::size_t(m.n)) w.acceleration.assign(m.n, Vec3::Zero());
+      if (s.acceleration.size() != std::size_t(m.n)) s.acceleration.assign(m.n, Vec3::Zero());
       for_each_particle_block(m, [&](int first, int end) {
         for (int k = 0; k < 3; ++k) {
           const double* __restrict v = s.v.column(k), * __restrict v0 = w.v_start.column(k);
-          double* __restrict a = w.acceleration.column(k);
+          double* __restrict a = s.acceleration.column(k);
           for (int i = first; i < end; ++i) a[i] = (v[i] - v0[i]) / h;
         }
       });

@@ -419,11 +419,11 @@ TEST(Air, VentedPatchRingedByContactOnTheBallIsSealed) {
   wrap(0.005);
   detail::update_contact(m, s, w);
   detail::start_air(m, s, w);  // atmospheric in the new pocket
-  EXPECT_EQ(w.pocket[mid], -1);  // beyond the band: no air of its own
-  const int pocket = w.pocket[mid + 1];
+  EXPECT_EQ(s.pocket[mid], -1);  // beyond the band: no air of its own
+  const int pocket = s.pocket[mid + 1];
   ASSERT_GE(pocket, 0);
-  EXPECT_EQ(w.pocket[mid - 1], pocket);  // one pocket on both sides of it
-  EXPECT_EQ(std::count(w.pocket.begin(), w.pocket.end(), pocket), 24);
+  EXPECT_EQ(s.pocket[mid - 1], pocket);  // one pocket on both sides of it
+  EXPECT_EQ(std::count(s.pocket.begin(), s.pocket.end(), pocket), 24);
   wrap(0.006);  // the patch rises by 1 mm in 1 µs: too fast for the air to seep in
   detail::update_contact(m, s, w);
   detail::update_air(m, s, w, 1e-6);

@@ -150,6 +150,14 @@ Vec3 cloth_start_position(const Params& p, int i, int j);
 // Humidity drives mass (section 1), permeability (eq. 5) and adhesion (eq. 13).
 void set_humidity(Model& m, double omega);
 
+// How a pocket's deficit answers a change of V_sum over a step of Δt (air.cpp):
+// dΔP/dV_sum = gas + spring (1 - e^(-Δt/τ)) τ/Δt, with 1/τ the seep rate.
+struct PocketAir {
+  double gas = 0, spring = 0, seep_rate = 0;  // Pa/m³, Pa/m³, 1/s
+};
+
+// Everything a run carries from one step to the next: a copy restored into a
+// Simulation of the same scene (Simulation::restore) continues with the same bits.
 struct State {
   double time = 0;
   long long steps = 0;
@@ -168,6 +176,16 @@ struct State {
   // Strain limiting's adaptive order (MODEL.md section 2).
   std::vector<int> source_distance;  // grid steps from the first-moving particles
   bool sources_found = false;
+  // What a step hands to the next beside the particles. The air: each
+  // particle's pocket (-1 none) and how each pocket's deficit answers a change
+  // of its volume over the last step (the implicit air correction uses them).
+  std::vector<int> pocket;
+  std::vector<PocketAir> pocket_air;
+  // Implicit Euler: the halvings of dt the next substep tries, and the last
+  // substep's solved change of velocity per second (the next solve starts
+  // from v + h times it; empty: from v).
+  int halvings = 0;
+  Vec3Array acceleration;
 };
 
 // A symmetric 3x3 block as its six entries xx, yy, zz, xy, xz, yz.
@@ -180,11 +198,6 @@ struct CollisionPair {
   Sym block{};  // implicit Euler: its h² k_t u uᵀ
 };
 
-// How a pocket's deficit answers a change of V_sum over a step of Δt (air.cpp):
-// dΔP/dV_sum = gas + spring (1 - e^(-Δt/τ)) τ/Δt, with 1/τ the seep rate.
-struct PocketAir {
-  double gas = 0, spring = 0, seep_rate = 0;  // Pa/m³, Pa/m³, 1/s
-};
 
 // Scratch arrays, reused every step: nothing is allocated per step.
 struct Workspace {
@@ -194,8 +207,6 @@ struct Workspace {
   std::vector<double> distance;       // signed distance to the contact surface
   std::vector<double> adhesion;       // |adhesion force| per particle, N
   std::vector<std::uint8_t> border;   // border of the contact region
-  std::vector<int> pocket;            // air pocket of each particle, -1 none
-  std::vector<PocketAir> pocket_air;  // per pocket: how its deficit answers V_sum
   std::vector<double> pocket_sums;    // scratch for the implicit air correction
   Vec3Array air_direction;            // A_i n_i of eq. 3 (zero where no air force)
   // Springs (forces/springs.cpp): a zero row, then per thread its ring of
@@ -268,13 +279,10 @@ struct Workspace {
   std::vector<double> row_sums, row_max;
   int cg_iterations = 0;              // of the last implicit solve
   long long cg_iterations_total = 0;  // of every implicit solve since reset
-  // Implicit Euler's step control: velocities at the start of a try, the
-  // halvings of dt the next substep tries; substeps taken since reset (one a
-  // step for the other integrators), and solves (the tries thrown away
-  // included). The last substep's solved change of velocity per second: the
-  // next solve starts from v + h times it.
-  Vec3Array v_start, acceleration;
-  int halvings = 0;
+  // Implicit Euler's step control: velocities at the start of a try; substeps
+  // taken since reset (one a step for the other integrators), and solves (the
+  // tries thrown away included).
+  Vec3Array v_start;
   long long substeps = 0, solves = 0;
   // XPBD (xpbd.cpp): positions at the start of the substep, before contact;
   // the inverse masses the constraints see; a class's corrections (x, y, z
@@ -316,6 +324,11 @@ class Simulation {
   // Advances to time t; returns false (and stops) if the run blew up.
   bool advance_to(double t);
   void reset();
+  // Continues from a state of this scene (a copy of state() taken earlier, in
+  // this or another Simulation of the same parameters): the same bits as the
+  // run it was copied from. Throws std::invalid_argument on a state of
+  // another grid.
+  void restore(const State& s);
   // Live: mass, permeability and adhesion follow. Throws SceneError outside [0, 1].
   void set_humidity(double omega);
   // New parameters, live: the state is kept when the grid is the same size.

@@ -91,16 +91,16 @@ void update_vented(const Model& m, State& s, Workspace& w, double dt) {
   // Not in a pocket: in contact (or not reached yet), or lifted beyond the band
   // (in a region, but holding no air).
   constexpr int kNone = -1, kBeyondBand = -2;
-  std::fill(w.pocket.begin(), w.pocket.end(), kNone);
-  w.pocket_air.clear();
+  std::fill(s.pocket.begin(), s.pocket.end(), kNone);
+  s.pocket_air.clear();
   double total_atm = 0, total_sum = 0;
   int pockets = 0;
   const auto mark = [&](int k, int id) {
-    w.pocket[k] = holds_air(m, w.distance[k]) ? id : kBeyondBand;
+    s.pocket[k] = holds_air(m, w.distance[k]) ? id : kBeyondBand;
     w.queue.push_back(k);
   };
   for (int seed = 0; seed < m.n; ++seed) {
-    if (w.pocket[seed] != kNone || s.contact[seed]) continue;
+    if (s.pocket[seed] != kNone || s.contact[seed]) continue;
     // Breadth-first flood over structural neighbours.
     const int id = pockets++;
     w.queue.clear();
@@ -110,7 +110,7 @@ void update_vented(const Model& m, State& s, Workspace& w, double dt) {
     for (std::size_t q = 0; q < w.queue.size(); ++q) {
       const int k = w.queue[q];
       open = open || m.on_border[k];
-      if (w.pocket[k] == id) {
+      if (s.pocket[k] == id) {
         v_atm += s.air_share[k];
         v_old += s.air_gap[k];
         v_sum += m.area[k] * air_gap(m, w.distance[k]);
@@ -121,14 +121,14 @@ void update_vented(const Model& m, State& s, Workspace& w, double dt) {
       for (const auto& c : nb) {
         if (c[0] < 0 || c[1] < 0 || c[0] >= m.nu || c[1] >= m.nv) continue;
         const int kk = m.index(c[0], c[1]);
-        if (w.pocket[kk] == kNone && !s.contact[kk]) mark(kk, id);
+        if (s.pocket[kk] == kNone && !s.contact[kk]) mark(kk, id);
       }
     }
     v_atm = open ? v_sum : exchange(p, v_atm, v_old, v_sum, a_sum, dt, true);
-    w.pocket_air.push_back(open ? PocketAir{} : pocket_air(p, v_atm, v_sum, a_sum, true));
+    s.pocket_air.push_back(open ? PocketAir{} : pocket_air(p, v_atm, v_sum, a_sum, true));
     const double pin = pressure(p, v_atm, v_sum);
     for (int k : w.queue) {
-      if (w.pocket[k] != id) continue;
+      if (s.pocket[k] != id) continue;
       s.air_share[k] = v_sum > 0 ? v_atm * m.area[k] * air_gap(m, w.distance[k]) / v_sum : 0;
       s.pocket_pressure[k] = pin;
     }
@@ -136,8 +136,8 @@ void update_vented(const Model& m, State& s, Workspace& w, double dt) {
     total_sum += v_sum;
   }
   for (int k = 0; k < m.n; ++k) {
-    if (w.pocket[k] >= 0) continue;
-    w.pocket[k] = kNone;
+    if (s.pocket[k] >= 0) continue;
+    s.pocket[k] = kNone;
     // Open to the room: its gap's air at P_atm, which it brings to the pocket
     // it joins (one peeling from contact, one entering the band), so V_atm
     // stays continuous. Bringing none, each particle a closed tent peeled
@@ -157,9 +157,9 @@ void update_vented(const Model& m, State& s, Workspace& w, double dt) {
 void update_air(const Model& m, State& s, Workspace& w, double dt) {
   const Params& p = m.params;
   const std::string& model = p.air.model;
-  w.pocket_air.clear();
+  s.pocket_air.clear();
   if (m.contact_surface == SurfaceKind::None) {  // no surface, no trapped air
-    std::fill(w.pocket.begin(), w.pocket.end(), -1);
+    std::fill(s.pocket.begin(), s.pocket.end(), -1);
     s.air_atm_volume = s.air_volume = 0;
     s.inner_pressure = p.air.p_atm;
     return;
@@ -170,9 +170,9 @@ void update_air(const Model& m, State& s, Workspace& w, double dt) {
     const auto [v_sum, a_sum, s_now] = ordered_sums<3>(m, w, [&](int j) {
       std::array<double, 3> sum{};
       for (int i = j * m.nu; i < (j + 1) * m.nu; ++i) {
-        w.pocket[i] = holds_air(m, w.distance[i]) ? 0 : -1;  // one pocket under the whole cloth
+        s.pocket[i] = holds_air(m, w.distance[i]) ? 0 : -1;  // one pocket under the whole cloth
         sum[0] += m.area[i] * air_gap(m, w.distance[i]);
-        if (w.pocket[i] >= 0 && !s.contact[i]) sum[1] += m.area[i];
+        if (s.pocket[i] >= 0 && !s.contact[i]) sum[1] += m.area[i];
         if (s.contact[i]) sum[2] += m.area[i];
       }
       return sum;
@@ -198,7 +198,7 @@ void update_air(const Model& m, State& s, Workspace& w, double dt) {
     if (model != "off" && s_now > 0 && a_sum == 0)
       s.air_atm_volume = std::min(s.air_atm_volume, v_sum);
     const bool trapped = model != "off" && s_now > 0;
-    w.pocket_air.push_back(
+    s.pocket_air.push_back(
         trapped ? pocket_air(p, s.air_atm_volume, v_sum, a_sum, model == "exchange") : PocketAir{});
     s.air_volume = v_sum;
     s.inner_pressure = pressure(p, s.air_atm_volume, v_sum);
@@ -255,19 +255,19 @@ void add_air_pressure(const Model& m, const State& s, Workspace& w) {
 // Without it the air film's kHz ringing and the follower direction of eq. 3
 // make explicit steps blow up.
 void correct_air_implicitly(const Model& m, State& s, Workspace& w, double dt) {
-  const std::size_t pockets = w.pocket_air.size();
+  const std::size_t pockets = s.pocket_air.size();
   // Air open to the room (or `off`) has no stiffness and nothing to seep:
   // every change below would be zero.
   const auto inert = [](const PocketAir& a) {
     return a.gas == 0 && a.spring == 0 && a.seep_rate == 0;
   };
-  if (std::all_of(w.pocket_air.begin(), w.pocket_air.end(), inert)) return;
+  if (std::all_of(s.pocket_air.begin(), s.pocket_air.end(), inert)) return;
   const double p_atm = m.params.air.p_atm;
   // Per pocket: Σ b·v (with the seeped deficit given back), Σ b·M⁻¹a, and the
   // share of the deficit that seeps away over the step.
   w.pocket_sums.assign(3 * pockets, 0.0);
   for (std::size_t k = 0; k < pockets; ++k)
-    w.pocket_sums[3 * k + 2] = -std::expm1(-dt * w.pocket_air[k].seep_rate);
+    w.pocket_sums[3 * k + 2] = -std::expm1(-dt * s.pocket_air[k].seep_rate);
   auto given_back = [&](int i, int k) {  // Δt ΔP (1 - e^(-Δt/τ)), a velocity per unit M⁻¹a
     return dt * (p_atm - s.pocket_pressure[i]) * w.pocket_sums[3 * k + 2];
   };
@@ -282,20 +282,20 @@ void correct_air_implicitly(const Model& m, State& s, Workspace& w, double dt) {
     const auto sums = ordered_sums<2>(m, w, [&](int j) {
       std::array<double, 2> row{};
       for (int i = j * m.nu; i < (j + 1) * m.nu; ++i)
-        if (w.pocket[i] == 0) add_terms(i, 0, row.data());
+        if (s.pocket[i] == 0) add_terms(i, 0, row.data());
       return row;
     });
     std::copy(sums.begin(), sums.end(), w.pocket_sums.begin());
   } else {
     for (int i = 0; i < m.n; ++i)
-      if (const int k = w.pocket[i]; k >= 0) add_terms(i, k, &w.pocket_sums[3 * k]);
+      if (const int k = s.pocket[i]; k >= 0) add_terms(i, k, &w.pocket_sums[3 * k]);
   }
   for (std::size_t k = 0; k < pockets; ++k) {
-    const double c = dt * dt * stiffness(w.pocket_air[k], dt);
+    const double c = dt * dt * stiffness(s.pocket_air[k], dt);
     w.pocket_sums[3 * k] = c * w.pocket_sums[3 * k] / (1.0 + c * w.pocket_sums[3 * k + 1]);
   }
   for_each_particle(m, [&](int i) {
-    const int k = w.pocket[i];
+    const int k = s.pocket[i];
     if (k < 0) return;
     const double dv = given_back(i, k) - w.pocket_sums[3 * k];
     if (dv != 0) add(s.v[i], (dv * m.inv_mass[i]) * w.air_direction[i]);

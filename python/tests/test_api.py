@@ -142,9 +142,9 @@ def test_blow_up_names_the_parameter():
 def test_advance_to_releases_the_gil():
     """While advance_to runs in one thread, another runs Python: it finds the
     simulation busy (which it could not see if the GIL were held)."""
-    sim = wetcloth.Simulation("drop-table", grid=25)
+    sim = wetcloth.Simulation("drop-table", grid=15)
     done = threading.Event()
-    worker = threading.Thread(target=lambda: (sim.advance_to(0.5), done.set()))
+    worker = threading.Thread(target=lambda: (sim.advance_to(0.2), done.set()))
     worker.start()
     seen_busy = False
     while not done.is_set() and worker.is_alive():
@@ -156,4 +156,4 @@ def test_advance_to_releases_the_gil():
             break
     worker.join()
     assert seen_busy
-    assert sim.time >= 0.5
+    assert sim.time >= 0.2

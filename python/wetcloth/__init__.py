@@ -23,7 +23,7 @@ State does not yet hold the whole state of a run.
 """
 from ._wetcloth import (BlowUp, Scene, SceneError, Simulation, __version__, load_scene, params,
                         scenes)
-from .sweep import sweep
+from ._sweep import sweep
 
 __all__ = ["BlowUp", "Scene", "SceneError", "Simulation", "load_scene", "params", "scenes", "sweep",
            "__version__"]

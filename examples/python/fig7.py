@@ -16,12 +16,13 @@ def main():
     ap.add_argument("--humidity", default="0,0.3,0.5,0.7,1", help="humidities ω, comma-separated")
     ap.add_argument("--grid", type=int, default=51)
     ap.add_argument("--duration", type=float, default=3.0)
+    ap.add_argument("--processes", type=int, help="cases run at once (default: all cores)")
     ap.add_argument("--out", default="fig7.png")
     args = ap.parse_args()
 
     omegas = [float(w) for w in args.humidity.split(",")]
     table = wetcloth.sweep("pull-straight", vary={"cloth.humidity": omegas},
-                           overrides={"run.duration": args.duration}, grid=args.grid)
+                           overrides={"run.duration": args.duration}, grid=args.grid, processes=args.processes)
 
     fig, (a, b) = plt.subplots(1, 2, figsize=(9, 3.5))
     a.plot(table["humidity"], 100 * table["handle_height_m"], "o-")

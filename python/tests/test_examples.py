@@ -8,7 +8,7 @@ import pytest
 
 EXAMPLES = {
     "flag.py": ["--grid", "9", "--duration", "0.1", "--fps", "20", "--out", "flag.gif"],
-    "fig7.py": ["--humidity", "0.3,0.8", "--grid", "9", "--duration", "0.1", "--out", "fig7.png"],
+    "fig7.py": ["--humidity", "0.3,0.8", "--grid", "9", "--duration", "0.1", "--processes", "1", "--out", "fig7.png"],
     "pressure_live.py": ["--grid", "9", "--duration", "0.1", "--every", "0.02", "--out", "pressure.png"],
 }
 

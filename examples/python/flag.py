@@ -31,7 +31,7 @@ def draw(f):
     x = sim.positions  # (n, 3), a view: no copy
     ax.clear()
     ax.plot_trisurf(x[:, 0], x[:, 1], x[:, 2], triangles=sim.triangles, color="tab:blue", alpha=0.8)
-    ax.set(xlim=(-0.2, 0.2), ylim=(-0.2, 0.2), zlim=(0.35, 0.8), title=f"t = {sim.time:.2f} s")
+    ax.set(xlim=(-0.2, 0.2), ylim=(-0.2, 0.2), zlim=(0.25, 0.8), title=f"t = {sim.time:.2f} s")
 
 
 anim = FuncAnimation(fig, draw, frames=frames + 1, interval=1000 / args.fps)

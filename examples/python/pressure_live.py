@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """The trapped air's pressure deficit while a wet cloth is pulled off the
-table, plotted live: the deficit over time, and under each particle.
+table, plotted live: the deficit over time, and the cloth's height with the
+part in contact (the air pocket's seal) outlined.
 
     python3 examples/python/pressure_live.py
     python3 examples/python/pressure_live.py --out pressure.png   # also saved
@@ -28,9 +29,11 @@ plt.ion()
 fig, (curve, field) = plt.subplots(1, 2, figsize=(10, 4))
 line, = curve.plot([], [])
 curve.set(xlabel="time, s", ylabel="p_atm - p_in, Pa", title="pressure deficit", xlim=(0, args.duration))
-image = field.imshow((p_atm - sim.pressure).reshape(nv, nu), origin="lower", cmap="viridis")
-fig.colorbar(image, ax=field, label="Pa")
-field.set_title("deficit under the cloth")
+height = lambda: 100 * sim.positions[:, 2].reshape(nv, nu)  # cm; particle i + nu j is (i, j)
+image = field.imshow(height(), origin="lower", cmap="viridis")
+fig.colorbar(image, ax=field, label="height, cm")
+field.set(title="height; in contact outlined", xlabel="i", ylabel="j")
+outline = None
 times, deficits = [], []
 steps = max(1, round(args.duration / args.every))
 for k in range(1, steps + 1):
@@ -40,9 +43,17 @@ for k in range(1, steps + 1):
     deficits.append(p_atm - m["inner_pressure_pa"])
     line.set_data(times, deficits)
     curve.set_ylim(0, max(1.0, 1.1 * max(deficits)))
-    deficit = (p_atm - sim.pressure).reshape(nv, nu)
-    image.set_data(deficit)
-    image.set_clim(0, max(1.0, deficit.max()))
+    z = height()
+    image.set_data(z)
+    image.set_clim(0, max(1.0, z.max()))
+    if outline is not None:
+        try:
+            outline.remove()
+        except AttributeError:  # matplotlib before 3.8: piece by piece
+            for piece in outline.collections:
+                piece.remove()
+    contact = sim.in_contact.reshape(nv, nu)
+    outline = field.contour(contact, levels=[0.5], colors="white") if 0 < contact.sum() < contact.size else None
     fig.canvas.draw_idle()
     fig.canvas.flush_events()
 print(f"peak deficit over the updates {max(deficits):.1f} Pa, at any step {sim.peak_deficit:.1f} Pa; "

@@ -250,7 +250,7 @@ std::function<int()> add_sweep_command(CLI::App& app) {
   cmd->add_flag("--quiet", o->quiet, "print nothing but errors");
   cmd->footer(
       "Writes DIR/<case>/ (the outputs of `run`, and its row of sweep.csv) for every case, named\n"
-      "from its values (omega_0.70, sealed_omega_0.70, stretch_stiffness=100_omega_0.70),\n"
+      "from its values (omega_0.70, sealed_omega_0.70, omega_0.70_stretch_stiffness=100),\n"
       "DIR/cases.csv (the cases in order), DIR/sweep.csv (one row per case: a column per varied key\n"
       "besides air_model and humidity, final metrics, peak pressure deficit at any step and over the\n"
       "output frames, time until the handle first reaches 5 cm)\n"

@@ -6,6 +6,7 @@ pkgs=(
   libeigen3-dev libtomlplusplus-dev libcli11-dev nlohmann-json3-dev libstb-dev
   libgtest-dev libgmock-dev libbenchmark-dev libbullet-dev
   python3 python3-matplotlib
+  pybind11-dev python3-dev python3-numpy python3-pytest python3-distributed python3-venv python3-wheel
   libglfw3-dev libimgui-dev libepoxy-dev libegl-dev libgl1-mesa-dri xvfb xauth ffmpeg
 )
 # `install-deps.sh clients`: also the tools that read the caches (make test-clients).

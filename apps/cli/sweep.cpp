@@ -1,15 +1,21 @@
 #include "sweep.hpp"
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
 #include <cstdio>
-#include <cstring>
 #include <filesystem>
+#include <fstream>
+#include <mutex>
+#include <optional>
 #include <sstream>
 #include <thread>
 #include <unistd.h>
 
 #include "run.hpp"
 #include "scene_options.hpp"
+#include "sweep_plan.hpp"
 #include "wetcloth/output.hpp"
 #ifdef WETCLOTH_VIEWER
 #include "../viewer/commands.hpp"
@@ -21,39 +27,6 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct Case {
-  std::string name, air_model;
-  double humidity = 0;
-  Params params;
-  RunResult result;
-};
-
-// Decimals that tell the humidities apart in case names: two, or as many as
-// close ones need (an ensemble moves ω by 1e-7: 0.6999999, 0.7000000, ...).
-int humidity_decimals(std::vector<double> omegas) {
-  std::sort(omegas.begin(), omegas.end());
-  if (const auto twice = std::adjacent_find(omegas.begin(), omegas.end()); twice != omegas.end())
-    throw SceneError("--humidity: " + format_number(*twice) + " is given twice");
-  const auto distinct = [&](int decimals) {
-    char a[32], b[32];
-    for (std::size_t k = 1; k < omegas.size(); ++k) {
-      std::snprintf(a, sizeof a, "%.*f", decimals, omegas[k - 1]);
-      std::snprintf(b, sizeof b, "%.*f", decimals, omegas[k]);
-      if (std::strcmp(a, b) == 0) return false;
-    }
-    return true;
-  };
-  int decimals = 2;
-  while (!distinct(decimals)) ++decimals;  // ends by 17: the doubles differ
-  return decimals;
-}
-
-std::string case_name(double omega, int decimals, const std::string& air, bool several_air_models) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "omega_%.*f", decimals, omega);
-  return several_air_models ? air + "_" + buf : buf;
-}
-
 // The plotting script: next to an installed program, or in the source tree.
 fs::path plot_script() {
   if (const char* env = std::getenv("WETCLOTH_PLOT_SCRIPT")) return env;
@@ -64,21 +37,166 @@ fs::path plot_script() {
   return fs::path(WETCLOTH_SOURCE_DIR) / "tools/plot_sweep.py";
 }
 
-std::string sweep_csv(const std::vector<Case>& cases) {
-  std::string o =
-      "case,air_model,humidity,status,peak_deficit_pa,frame_peak_deficit_pa,time_to_5cm_s";
-  for (const auto& c : metrics_columns()) o += "," + c;
-  o += "\n";
-  for (const auto& c : cases) {
-    o += c.name + "," + c.air_model + "," + format_number(c.humidity) + "," +
-         (c.result.code == kOk ? "ok" : "blew_up") + "," + format_number(c.result.peak_deficit_pa) +
-         "," + format_number(c.result.frame_peak_deficit_pa) + "," +
-         format_number(c.result.time_to_5cm_s);
-    for (double v : metrics_values(c.result.final)) o += "," + format_number(v);
-    o += "\n";
+// Several processes (`--case` on a cluster) may write the same file at once:
+// each through a temporary file of its own.
+void write_shared(const fs::path& path, const std::string& contents) {
+  const fs::path tmp = path.string() + "." + std::to_string(getpid()) + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    out << contents;
+    if (!out.flush()) throw std::runtime_error(tmp.string() + ": cannot write");
+  }
+  fs::rename(tmp, path);
+}
+
+std::string read_text(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// The files a sweep folder holds besides its cases: the cases in order (for
+// --gather), and in each case folder its row of sweep.csv with the header.
+const char* kCasesFile = "cases.csv";
+const char* kRowFile = "sweep_row.csv";
+
+std::string cases_csv(const sweep::Plan& plan) {
+  std::string o = "index,case,overrides\n";
+  for (std::size_t i = 0; i < plan.cases.size(); ++i) {
+    std::string sets;
+    for (const auto& s : plan.cases[i].sets) sets += (sets.empty() ? "" : " ") + s;
+    o += std::to_string(i) + "," + sweep::csv_field(plan.cases[i].name) + "," + sweep::csv_field(sets) + "\n";
   }
   return o;
 }
+
+sweep::Outcome outcome_of(const RunResult& r) {
+  sweep::Outcome o;
+  o.ok = r.code == kOk;
+  o.peak_deficit_pa = r.peak_deficit_pa;
+  o.frame_peak_deficit_pa = r.frame_peak_deficit_pa;
+  o.time_to_5cm_s = r.time_to_5cm_s;
+  o.final = r.final;
+  return o;
+}
+
+// Runs the plotting script on DIR; false when it failed.
+bool plot(const fs::path& out) {
+  const std::string python = fs::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
+  const std::string cmdline = python + " '" + plot_script().string() + "' '" + out.string() + "'";
+  if (std::system(cmdline.c_str()) == 0) return true;
+  std::fprintf(stderr, "wetcloth: the plots failed (%s)\n", cmdline.c_str());
+  return false;
+}
+
+// `--gather DIR`: sweep.csv (and the plots) from the case folders that have
+// finished, in the sweep's order; the missing ones listed. 0 when none is
+// missing, 1 otherwise.
+int gather(const fs::path& dir, bool no_plots, bool quiet) {
+  if (!fs::exists(dir / kCasesFile))
+    throw SceneError("--gather " + dir.string() + ": no " + kCasesFile +
+                     " (not a sweep folder: `wetcloth sweep ... --out DIR` or `--list`/`--case` writes it)");
+  std::istringstream in(read_text(dir / kCasesFile));
+  std::string line, header, rows;
+  std::vector<std::string> missing;
+  std::size_t total = 0, found = 0;
+  std::getline(in, line);  // its header
+  while (std::getline(in, line)) {
+    if (line.empty()) continue;
+    ++total;
+    const auto a = line.find(',');
+    std::string name = line.substr(a + 1);
+    if (!name.empty() && name[0] == '"') {
+      std::string unq;
+      std::size_t k = 1;
+      for (; k < name.size(); ++k) {
+        if (name[k] == '"' && k + 1 < name.size() && name[k + 1] == '"') unq += name[++k];
+        else if (name[k] == '"') break;
+        else unq += name[k];
+      }
+      name = unq;
+    } else {
+      name = name.substr(0, name.find(','));
+    }
+    std::istringstream row(read_text(dir / name / kRowFile));
+    std::string h, r;
+    if (!std::getline(row, h) || !std::getline(row, r) || r.empty()) {
+      missing.push_back(line.substr(0, a) + " " + name);
+      continue;
+    }
+    if (header.empty()) header = h;
+    if (h != header) throw SceneError(dir.string() + "/" + name + "/" + kRowFile + ": its header differs from the other cases'");
+    rows += r + "\n";
+    ++found;
+  }
+  if (found == 0) throw SceneError("--gather " + dir.string() + ": none of its " + std::to_string(total) + " cases has finished");
+  write_file_atomic(dir / "sweep.csv", header + "\n" + rows);
+  if (!quiet) std::printf("gathered %zu of %zu cases into %s\n", found, total, (dir / "sweep.csv").c_str());
+  if (!missing.empty()) {
+    std::fprintf(stderr, "wetcloth: missing %zu of %zu cases (index and name):\n", missing.size(), total);
+    for (const auto& m : missing) std::fprintf(stderr, "  %s\n", m.c_str());
+  }
+  bool plots_ok = true;
+  if (!no_plots) plots_ok = plot(dir);
+  return missing.empty() && plots_ok ? kOk : kError;
+}
+
+// The line `sweep` keeps on a terminal while cases run: done, running, time left.
+class ProgressLine {
+ public:
+  ProgressLine(std::size_t total, unsigned jobs, bool on) : total_(total), jobs_(jobs), on_(on) {
+    if (on_) ticker_ = std::thread([this] {
+        std::unique_lock<std::mutex> hold(lock_);
+        while (!stop_) {
+          draw();
+          wake_.wait_for(hold, std::chrono::seconds(1));
+        }
+      });
+  }
+  ~ProgressLine() {
+    if (!on_) return;
+    {
+      std::lock_guard<std::mutex> hold(lock_);
+      stop_ = true;
+    }
+    wake_.notify_all();
+    ticker_.join();
+    std::fprintf(stderr, "\r\033[K");
+    std::fflush(stderr);
+  }
+  // Before a case's line is printed: the progress line is cleared.
+  void case_done() {
+    if (!on_) return;
+    std::lock_guard<std::mutex> hold(lock_);
+    ++done_;
+    std::fprintf(stderr, "\r\033[K");
+    std::fflush(stderr);
+  }
+  void redraw() {
+    if (!on_) return;
+    std::lock_guard<std::mutex> hold(lock_);
+    draw();
+  }
+
+ private:
+  void draw() {
+    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    const std::size_t running = std::min<std::size_t>(jobs_, total_ - done_);
+    char left[64] = "?";
+    if (done_ > 0) std::snprintf(left, sizeof left, "%.0f s", wall / done_ * (total_ - done_));
+    std::fprintf(stderr, "\r\033[Ksweep: %zu/%zu cases done, %zu running, %.0f s wall, time left ~%s", done_,
+                 total_, running, wall, left);
+    std::fflush(stderr);
+  }
+  std::size_t total_, done_ = 0;
+  unsigned jobs_;
+  bool on_, stop_ = false;
+  const std::chrono::steady_clock::time_point start_ = std::chrono::steady_clock::now();
+  std::mutex lock_;
+  std::condition_variable wake_;
+  std::thread ticker_;
+};
 
 }  // namespace
 
@@ -86,114 +204,168 @@ std::function<int()> add_sweep_command(CLI::App& app) {
   struct Options {
     SceneOptions scene;
     std::vector<double> humidities;
-    std::vector<std::string> air_models;
-    std::string out;
+    std::vector<std::string> air_models, vary;
+    std::string out, gather;
+    std::optional<long long> case_index;
     unsigned jobs = std::max(1u, std::thread::hardware_concurrency());
-    bool render = false, quiet = false, no_plots = false;
+    bool render = false, quiet = false, no_plots = false, list = false;
   };
   auto o = std::make_shared<Options>();
-  auto* cmd = app.add_subcommand("sweep", "run a scene at several humidities (and air models), in parallel");
-  cmd->add_option("scene", o->scene.scene, "scene: a TOML file, or a built-in name")->required();
-  cmd->add_option("--humidity", o->humidities, "humidities ω to run, e.g. 0,0.3,0.5,0.7,1")
+  auto* cmd = app.add_subcommand(
+      "sweep", "run a scene over the cartesian product of parameter values, in parallel or one case at a time");
+  cmd->add_option("scene", o->scene.scene, "scene: a TOML file, or a built-in name");
+  cmd->add_option("--vary", o->vary,
+                  "KEY=V1,V2,...: run every value of the parameter KEY (TOML values; repeatable: the "
+                  "cartesian product), e.g. --vary material.stretch_stiffness=100,200 --vary "
+                  "cloth.resolution=[25,25],[51,51]")
+      ->allow_extra_args(false);
+  cmd->add_option("--humidity", o->humidities, "humidities ω to run, e.g. 0,0.3,0.5,0.7,1 (= --vary cloth.humidity=...)")
       ->delimiter(',')
-      ->required()
       ->check(in_range_of("cloth.humidity"));
-  cmd->add_option("--air-models", o->air_models, "air models to compare, e.g. exchange,sealed (paper Fig. 8)")
+  cmd->add_option("--air-models", o->air_models,
+                  "air models to compare, e.g. exchange,sealed (paper Fig. 8; = --vary air.model=...)")
       ->delimiter(',')
       ->check(CLI::IsMember({"exchange", "sealed", "vented", "off"}));
-  cmd->add_option("--set", o->scene.sets, "override a parameter, KEY=VALUE (repeatable)")
+  cmd->add_option("--set", o->scene.sets, "override a parameter in every case, KEY=VALUE (repeatable)")
       ->allow_extra_args(false);
   cmd->add_option("--duration", o->scene.duration, "simulated time per case, s")
       ->check(in_range_of("run.duration"));
+  cmd->add_option("--threads", o->scene.threads,
+                  "threads of each case's step (default: the cores shared between --jobs; 0: chosen "
+                  "as it runs)")
+      ->check(in_range_of("integrator.threads"));
   o->scene.add_grid_to(cmd);
   cmd->add_option("--out", o->out, "output folder (default out/<scene>-sweep)")->check(a_path());
   cmd->add_option("--jobs", o->jobs, "cases run at once (default: all cores)")->check(CLI::PositiveNumber);
+  cmd->add_flag("--list", o->list, "print the cases, one a line: index, folder name, overrides; run nothing");
+  cmd->add_option("--case", o->case_index,
+                  "run case I alone (from --list; 0-based) into DIR/<case>: one task of a job array. "
+                  "`--gather DIR` makes sweep.csv once they have run");
+  cmd->add_option("--gather", o->gather,
+                  "make DIR/sweep.csv and the plots from the case folders of DIR that have run "
+                  "(--case), and list the missing ones (exit 1 if any)")
+      ->check(a_path());
   cmd->add_flag("--render", o->render, "also render a contact sheet of the last frames (contact_sheet.png)");
   cmd->add_flag("--no-plots", o->no_plots, "skip the plots");
   cmd->add_flag("--quiet", o->quiet, "print nothing but errors");
   cmd->footer(
-      "Writes DIR/<case>/ (the outputs of `run`) for every case, DIR/sweep.csv (one row per case:\n"
-      "humidity, final metrics, peak pressure deficit at any step and over the output frames,\n"
-      "time until the handle first reaches 5 cm)\n"
+      "Writes DIR/<case>/ (the outputs of `run`, and its row of sweep.csv) for every case, named\n"
+      "from its values (omega_0.70, sealed_omega_0.70, omega_0.70_stretch_stiffness=100),\n"
+      "DIR/cases.csv (the cases in order), DIR/sweep.csv (one row per case: a column per varied key\n"
+      "besides air_model and humidity, final metrics, peak pressure deficit at any step and over the\n"
+      "output frames, time until the handle first reaches 5 cm)\n"
       "and the plots that mean something for the scene: fig7 (pulled height and base diagonal\n"
       "against humidity), pressure, contact_area and handle_height over time (for a driven\n"
       "handle handle_force, against how far it has moved), and fig8 with several air models\n"
-      "(PNG and SVG).");
+      "(PNG and SVG). On a cluster: --list, then --case I per task, then --gather DIR.");
 
   return [cmd, o]() -> int {
     if (!*cmd) return -1;
+    if (!o->gather.empty()) {
+      if (!o->scene.scene.empty() || o->case_index || o->list || !o->vary.empty() || !o->humidities.empty() ||
+          !o->air_models.empty())
+        throw SceneError("--gather DIR takes no scene and no cases (it reads DIR/cases.csv)");
+      return gather(o->gather, o->no_plots, o->quiet);
+    }
+    if (o->scene.scene.empty()) throw SceneError("sweep: a SCENE is required (or --gather DIR)");
     // Every case is checked before anything is written.
-    std::vector<Case> cases;
-    const bool several = o->air_models.size() > 1;
-    std::vector<std::string> airs = o->air_models;
-    const Params base = o->scene.load();
-    if (airs.empty()) airs.push_back(base.air.model);
-    const int decimals = humidity_decimals(o->humidities);
-    for (const auto& air : airs)
-      for (double w : o->humidities) {
-        Case c;
-        c.name = case_name(w, decimals, air, several);
-        c.air_model = air;
-        c.humidity = w;
-        std::vector<std::string> sets = o->scene.overrides();
-        share_cores(sets, o->jobs);
-        sets.push_back("cloth.humidity=" + format_number(w));
-        sets.push_back("air.model=\"" + air + "\"");
-        c.params = load_on_grid(o->scene.scene, sets, o->scene.grid);
-        cases.push_back(std::move(c));
+    std::vector<sweep::Varied> varied;
+    if (!o->air_models.empty()) varied.push_back({"air.model", o->air_models, "--air-models"});
+    if (!o->humidities.empty()) {
+      sweep::Varied h{"cloth.humidity", {}, "--humidity"};
+      for (double w : o->humidities) h.values.push_back(format_number(w));
+      varied.push_back(h);
+    }
+    for (const auto& v : o->vary) varied.push_back(sweep::parse_vary(v));
+    const unsigned jobs = o->case_index ? 1u : o->jobs;
+    std::vector<std::string> base = o->scene.overrides();
+    share_cores(base, jobs);
+    const Params scene = o->scene.load();
+    const sweep::Plan plan = sweep::plan(varied, [&](const std::vector<std::string>& sets) {
+      std::vector<std::string> all = base;
+      all.insert(all.end(), sets.begin(), sets.end());
+      return load_on_grid(o->scene.scene, all, o->scene.grid);
+    });
+    const std::size_t n = plan.cases.size();
+    if (o->list) {
+      for (std::size_t i = 0; i < n; ++i) {
+        std::string sets;
+        for (const auto& s : plan.cases[i].sets) sets += " " + s;
+        std::printf("%zu\t%s\t%s\n", i, plan.cases[i].name.c_str(), sets.c_str() + 1);
       }
-    const fs::path out = o->out.empty() ? fs::path("out") / (base.name + "-sweep") : fs::path(o->out);
+      return kOk;
+    }
+    if (o->case_index && (*o->case_index < 0 || static_cast<std::size_t>(*o->case_index) >= n))
+      throw SceneError("--case " + std::to_string(*o->case_index) + ": the sweep has " + std::to_string(n) +
+                       " cases, 0 to " + std::to_string(n - 1) + " (--list prints them)");
+    const fs::path out = o->out.empty() ? fs::path("out") / (scene.name + "-sweep") : fs::path(o->out);
     make_output_folder(out);
+    write_shared(out / kCasesFile, cases_csv(plan));
 
+    std::vector<std::size_t> chosen;
+    for (std::size_t i = 0; i < n; ++i)
+      if (!o->case_index || static_cast<long long>(i) == *o->case_index) chosen.push_back(i);
     std::vector<std::pair<Params, fs::path>> runs;
-    for (const auto& c : cases) runs.emplace_back(c.params, out / c.name);
+    for (std::size_t i : chosen) runs.emplace_back(plan.cases[i].params, out / plan.cases[i].name);
+    std::vector<RunResult> results(n);
+    std::vector<std::string> rows(n);
     // Cases end in any order; each is printed once those before it in the
     // list have been, so that the table reads in the order asked for.
-    std::vector<bool> ended(cases.size(), false);
+    std::vector<bool> ended(runs.size(), false);
     std::size_t printed = 0;
-    run_all(runs, o->jobs, [&](std::size_t i, const RunResult& r) {
-      cases[i].result = r;
-      ended[i] = true;
-      for (; printed < cases.size() && ended[printed]; ++printed) {
-        if (o->quiet) continue;
-        const Case& c = cases[printed];
-        // Both peaks: the plots show the frames', and a step between frames
-        // can go higher (up to the breakthrough cap as a peel starts).
-        std::printf(
-            "%-22s %s  handle %.4f m  contact %.5f m²  peak deficit (any step) %.1f Pa, "
-            "over frames %.1f Pa  (%.1f s wall)\n",
-            c.name.c_str(), c.result.code == kOk ? "ok     " : "BLEW UP",
-            c.result.final.handle_height_m, c.result.final.contact_area_m2,
-            c.result.peak_deficit_pa, c.result.frame_peak_deficit_pa, c.result.wall_seconds);
-      }
-      std::fflush(stdout);
-    });
-    write_file_atomic(out / "sweep.csv", sweep_csv(cases));
-
+    {
+      ProgressLine progress(runs.size(), jobs, !o->quiet && isatty(STDERR_FILENO));
+      run_all(runs, jobs, [&](std::size_t k, const RunResult& r) {
+        const std::size_t i = chosen[k];
+        results[i] = r;
+        ended[k] = true;
+        if (r.code == kOk || r.code == kBlowUp) {  // a row: it ran
+          rows[i] = sweep::csv_row(plan.cases[i], outcome_of(r));
+          write_shared(out / plan.cases[i].name / kRowFile, sweep::csv_header(plan) + rows[i]);
+        }
+        progress.case_done();
+        for (; printed < runs.size() && ended[printed]; ++printed) {
+          if (o->quiet) continue;
+          const std::size_t c = chosen[printed];
+          const RunResult& cr = results[c];
+          // Both peaks: the plots show the frames', and a step between frames
+          // can go higher (up to the breakthrough cap as a peel starts).
+          std::printf(
+              "%-22s %s  handle %.4f m  contact %.5f m²  peak deficit (any step) %.1f Pa, "
+              "over frames %.1f Pa  (%.1f s wall)\n",
+              plan.cases[c].name.c_str(), cr.code == kOk ? "ok     " : "BLEW UP", cr.final.handle_height_m,
+              cr.final.contact_area_m2, cr.peak_deficit_pa, cr.frame_peak_deficit_pa, cr.wall_seconds);
+        }
+        std::fflush(stdout);
+        progress.redraw();
+      });
+    }
     int code = kOk;
-    for (const auto& c : cases)
-      if (c.result.code != kOk) {
-        std::fprintf(stderr, "wetcloth: %s: %s\n", c.name.c_str(), c.result.message.c_str());
+    for (std::size_t i : chosen)
+      if (results[i].code != kOk) {
+        std::fprintf(stderr, "wetcloth: %s: %s\n", plan.cases[i].name.c_str(), results[i].message.c_str());
         code = kBlowUp;
       }
-    if (!o->no_plots) {
-      const std::string python = fs::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
-      const std::string cmdline = python + " '" + plot_script().string() + "' '" + out.string() + "'";
-      if (std::system(cmdline.c_str()) != 0) {
-        std::fprintf(stderr, "wetcloth: the plots failed (%s)\n", cmdline.c_str());
-        if (code == kOk) code = kError;
-      }
+    if (o->case_index) {
+      if (!o->quiet) std::printf("results: %s\n", (out / plan.cases[chosen[0]].name).c_str());
+      return code;
     }
+    std::string csv = sweep::csv_header(plan);
+    for (const auto& r : rows) csv += r;
+    write_file_atomic(out / "sweep.csv", csv);
+    if (!o->no_plots && !plot(out) && code == kOk) code = kError;
     bool sheet = false;
     if (o->render) {
 #ifdef WETCLOTH_VIEWER
       std::vector<std::pair<std::string, fs::path>> tiles;
-      for (const auto& c : cases) {
+      const bool several = std::any_of(varied.begin(), varied.end(),
+                                       [](const auto& v) { return v.key == "air.model" && v.values.size() > 1; });
+      for (const auto& c : plan.cases) {
         // "omega", spelt out: the sheet's font is ASCII, it drew ω as 'w'.
-        char label[64];
-        std::snprintf(label, sizeof label, "%s%somega = %.*f", several ? c.air_model.c_str() : "",
-                      several ? ", " : "", decimals, c.humidity);
-        tiles.emplace_back(label, out / c.name);
+        char label[96];
+        std::snprintf(label, sizeof label, "%s%somega = %.3g", several ? c.air_model.c_str() : "",
+                      several ? ", " : "", c.humidity);
+        tiles.emplace_back(plan.extra_keys.empty() ? std::string(label) : c.name, out / c.name);
       }
       std::string error;
       sheet = viewer::render_contact_sheet(tiles, out / "contact_sheet.png", 480, 360, &error);

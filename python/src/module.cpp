@@ -1,0 +1,522 @@
+// wetcloth as a Python module (pybind11): scenes, a Simulation stepped from
+// Python with its state as NumPy arrays, and what wetcloth.sweep runs per
+// case. It binds the public API of include/wetcloth as it is.
+#include <pybind11/numpy.h>
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <atomic>
+#include <charconv>
+#include <chrono>
+#include <cmath>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "sweep_plan.hpp"  // apps/cli: the cases of a sweep, as `wetcloth sweep` makes them
+#include "wetcloth/output.hpp"
+#include "wetcloth/scene.hpp"
+#include "wetcloth/simulation.hpp"
+
+namespace py = pybind11;
+using namespace wetcloth;
+
+namespace {
+
+struct BlowUpError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+// The loader names an override "--set 'KEY=VALUE'": from Python it is the key.
+std::string clean_message(std::string m) {
+  if (m.rfind("--set '", 0) == 0)
+    if (const auto end = m.find("': "); end != std::string::npos) m = m.substr(end + 3);
+  if (m.rfind("Params: ", 0) == 0) m = m.substr(8);
+  return m;
+}
+
+// A key from Python: dotted ("cloth.humidity"), or a keyword with "__" for the
+// dots (cloth__humidity); humidity, duration, threads stand for their keys.
+std::string normal_key(std::string key) {
+  if (key == "humidity") return "cloth.humidity";
+  if (key == "duration") return "run.duration";
+  if (key == "threads") return "integrator.threads";
+  for (std::size_t at; (at = key.find("__")) != std::string::npos;) key.replace(at, 2, ".");
+  const bool ok = !key.empty() && std::all_of(key.begin(), key.end(), [](unsigned char c) {
+    return std::isalnum(c) || c == '_' || c == '-' || c == '.';
+  });
+  if (!ok) throw SceneError("'" + key + "': not a parameter key (wetcloth.params() lists them)");
+  return key;
+}
+
+std::string shortest(double v) {
+  if (std::isnan(v)) return "nan";
+  if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+  char buf[64];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  std::string s(buf, r.ptr);
+  if (s.find_first_of(".eE") == std::string::npos) s += ".0";
+  return s;
+}
+
+// A Python value as TOML text: bool, int, float (NumPy scalars too), str, or a
+// flat sequence of numbers. Anything else is a TypeError naming the key.
+std::string toml_value(const std::string& key, py::handle v, bool top = true) {
+  const py::module_ np = py::module_::import("numpy");
+  py::object value = py::reinterpret_borrow<py::object>(v);
+  if (py::isinstance(value, np.attr("generic"))) value = value.attr("item")();
+  if (py::isinstance<py::bool_>(value)) return value.cast<bool>() ? "true" : "false";
+  if (PyLong_Check(value.ptr())) return py::str(value).cast<std::string>();
+  if (PyFloat_Check(value.ptr())) return shortest(value.cast<double>());
+  if (py::isinstance<py::str>(value)) {
+    std::string s = "\"";
+    for (unsigned char c : value.cast<std::string>()) {
+      if (c == '"' || c == '\\') {
+        s += '\\';
+        s += static_cast<char>(c);
+      } else if (c < 0x20 || c == 0x7f) {
+        char buf[8];
+        std::snprintf(buf, sizeof buf, "\\u%04x", c);
+        s += buf;
+      } else {
+        s += static_cast<char>(c);
+      }
+    }
+    return s + "\"";
+  }
+  if (top && (py::isinstance<py::list>(value) || py::isinstance<py::tuple>(value) ||
+              py::isinstance<py::array>(value))) {
+    if (py::isinstance<py::array>(value) && value.cast<py::array>().ndim() != 1)
+      throw SceneError(key + ": expected a flat list of numbers, got an array of " +
+                       std::to_string(value.cast<py::array>().ndim()) + " dimensions");
+    std::string s = "[";
+    for (py::handle e : value) s += (s.size() > 1 ? ", " : "") + toml_value(key, e, false);
+    return s + "]";
+  }
+  throw py::type_error(key + ": a value of type " + py::str(py::type::of(value).attr("__name__")).cast<std::string>() +
+                       " cannot be a parameter (a number, a string, True/False or a list of numbers)");
+}
+
+// Overrides from a dict and keywords, as KEY=VALUE texts (later ones win);
+// "grid" is taken out (it is not a parameter: the same cloth, G wide).
+std::vector<std::string> override_texts(const py::object& overrides, const py::dict& kw,
+                                        std::optional<long long>* grid) {
+  std::vector<std::string> sets;
+  const auto add = [&](py::handle k, py::handle v) {
+    if (!py::isinstance<py::str>(k)) throw py::type_error("a parameter key must be a str");
+    const std::string raw = k.cast<std::string>();
+    if (raw == "grid" && grid) {
+      if (!PyLong_Check(v.ptr()) || py::isinstance<py::bool_>(v)) throw py::type_error("grid: expected an int");
+      *grid = v.cast<long long>();
+      return;
+    }
+    const std::string key = normal_key(raw);
+    sets.push_back(key + "=" + toml_value(key, v));
+  };
+  if (!overrides.is_none()) {
+    if (!py::isinstance<py::dict>(overrides))
+      throw py::type_error("overrides: expected a dict of {\"key\": value}");
+    for (auto [k, v] : overrides.cast<py::dict>()) add(k, v);
+  }
+  for (auto [k, v] : kw) add(k, v);
+  return sets;
+}
+
+// A scene loaded (wetcloth.load_scene): its parameters, resolved.
+struct Scene {
+  Params params;
+};
+
+// SCENE (a built-in name, a path, or a Scene) with overrides; with a grid, the
+// same cloth G particles wide, as `wetcloth run --grid` makes it.
+Params load(const py::object& scene, const std::vector<std::string>& sets, std::optional<long long> grid) {
+  Params p;
+  if (py::isinstance<Scene>(scene)) {
+    const Params& base = scene.cast<const Scene&>().params;
+    p = parse_scene(to_toml(base), base.name, sets);
+  } else if (py::isinstance<py::str>(scene) || py::hasattr(scene, "__fspath__")) {
+    p = load_scene(py::str(py::module_::import("os").attr("fspath")(scene)).cast<std::string>(), sets);
+  } else {
+    throw py::type_error("scene: expected a built-in scene's name, a path or a wetcloth.Scene");
+  }
+  if (!grid) return p;
+  const double dt = p.integrator.dt;
+  try {
+    p = at_resolution(p, *grid);
+  } catch (const SceneError& e) {
+    throw SceneError(std::string("grid: ") + e.what());
+  }
+  if (std::any_of(sets.begin(), sets.end(), [](const std::string& s) {
+        return s.rfind("integrator.dt=", 0) == 0;
+      }))
+    p.integrator.dt = dt;
+  check_params(p);
+  return p;
+}
+
+py::object to_python(const ParamValue& v) {
+  return std::visit(
+      [](const auto& x) -> py::object {
+        using T = std::decay_t<decltype(x)>;
+        if constexpr (std::is_same_v<T, double>)
+          return std::isnan(x) ? py::object(py::none()) : py::object(py::float_(x));
+        else if constexpr (std::is_same_v<T, bool> || std::is_same_v<T, long long> || std::is_same_v<T, std::string>)
+          return py::cast(x);
+        else
+          return py::cast(std::vector<typename T::value_type>(x.begin(), x.end()));  // a list
+      },
+      v);
+}
+
+py::object get_value(const Params& p, const std::string& raw) {
+  const std::string key = normal_key(raw);
+  std::string handle;
+  const ParamDef* d = sweep::def_of(key, &handle);
+  if (!d) throw SceneError(key + ": unknown key (wetcloth.params() lists the keys)");
+  if (!handle.empty() && !p.handles.count(handle)) throw SceneError(key + ": the scene has no such handle");
+  return to_python(d->get(p, handle));
+}
+
+py::dict metrics_dict(const Metrics& m) {
+  py::dict d;
+  const auto cols = metrics_columns();
+  const auto vals = metrics_values(m);
+  for (std::size_t i = 0; i < cols.size(); ++i) d[py::str(cols[i])] = vals[i];
+  return d;
+}
+
+const char* handle_type(HandleType t) {
+  return t == HandleType::Force ? "force" : t == HandleType::Move ? "move" : "pin";
+}
+
+class PySimulation {
+ public:
+  explicit PySimulation(const Params& p) : sim_(p) {}
+
+  // One thread in the simulation at a time: advance_to lets go of the GIL.
+  struct Busy {
+    explicit Busy(PySimulation& s) : s(s) {
+      if (s.busy_.exchange(true))
+        throw std::runtime_error("this Simulation is busy in another thread (advance_to)");
+    }
+    ~Busy() { s.busy_ = false; }
+    PySimulation& s;
+  };
+
+  void check_blow_up() const {
+    if (const std::string why = sim_.blow_up_reason(); !why.empty()) throw BlowUpError(why);
+  }
+
+  void step() {
+    Busy busy(*this);
+    check_blow_up();
+    {
+      py::gil_scoped_release free;
+      sim_.step();
+    }
+    check_blow_up();
+  }
+
+  // As Simulation::advance_to (the same steps), in slices of about 0.1 s
+  // between which Ctrl-C is heard.
+  void advance_to(double t) {
+    Busy busy(*this);
+    const double dt = sim_.model().params.integrator.dt;
+    if (!std::isfinite(t) || t < 0 || t / dt > 1e15)
+      throw SceneError("advance_to: t = " + shortest(t) + " s is not a time to reach (finite, >= 0)");
+    check_blow_up();
+    const auto target = static_cast<long long>(std::llround(t / dt));
+    while (sim_.state().steps < target) {
+      bool blew = false;
+      {
+        py::gil_scoped_release free;
+        const auto start = std::chrono::steady_clock::now();
+        while (sim_.state().steps < target) {
+          sim_.step();
+          if (!sim_.blow_up_reason().empty()) {
+            blew = true;
+            break;
+          }
+          if (std::chrono::steady_clock::now() - start > std::chrono::milliseconds(100)) break;
+        }
+      }
+      if (blew) check_blow_up();
+      if (PyErr_CheckSignals() != 0) throw py::error_already_set();
+    }
+  }
+
+  void set(const std::string& raw, py::handle value) {
+    Busy busy(*this);
+    const std::string key = normal_key(raw);
+    const Params& now = sim_.model().params;
+    const Params p = parse_scene(to_toml(now), now.name, {key + "=" + toml_value(key, value)});
+    if (p.cloth.resolution != now.cloth.resolution)
+      throw SceneError(key + ": the grid cannot change in a running Simulation (make a new one)");
+    if (key == "cloth.humidity")
+      sim_.set_humidity(p.cloth.humidity);  // live: mass, permeability, adhesion
+    else
+      sim_.set_params(p);
+  }
+
+  // x or v as an n x 3 view of the State's columns (every x, then y, then z):
+  // strides (8, 8 n) bytes, no copy. Read-only: assign the property to set it.
+  py::array view(py::object self, bool velocities) {
+    const Vec3Array& a = velocities ? sim_.state().v : sim_.state().x;
+    const auto n = static_cast<py::ssize_t>(a.size());
+    py::array out(py::dtype::of<double>(), {n, py::ssize_t{3}},
+                  {py::ssize_t{sizeof(double)}, static_cast<py::ssize_t>(n * sizeof(double))}, a.column(0), self);
+    out.attr("setflags")(py::arg("write") = false);
+    return out;
+  }
+
+  void assign(py::handle value, bool velocities, const char* what) {
+    Busy busy(*this);
+    const auto arr = py::array_t<double, py::array::c_style | py::array::forcecast>::ensure(value);
+    if (!arr) throw py::type_error(std::string(what) + ": expected an array of numbers");
+    const auto n = static_cast<py::ssize_t>(sim_.model().n);
+    if (arr.ndim() != 2 || arr.shape(0) != n || arr.shape(1) != 3) {
+      std::string shape;
+      for (py::ssize_t k = 0; k < arr.ndim(); ++k) shape += (k ? ", " : "") + std::to_string(arr.shape(k));
+      throw SceneError(std::string(what) + ": expected shape (" + std::to_string(n) + ", 3), got (" + shape + ")");
+    }
+    Vec3Array& a = velocities ? sim_.state().v : sim_.state().x;
+    const auto r = arr.unchecked<2>();
+    for (py::ssize_t i = 0; i < n; ++i)
+      for (int k = 0; k < 3; ++k) a.column(k)[i] = r(i, k);
+  }
+
+  Simulation sim_;
+
+ private:
+  std::atomic<bool> busy_{false};
+};
+
+template <class T, class U>
+py::array_t<T> copy_of(const std::vector<U>& v) {
+  py::array_t<T> out(static_cast<py::ssize_t>(v.size()));
+  std::copy(v.begin(), v.end(), out.mutable_data());
+  return out;
+}
+
+// What `wetcloth sweep` tabulates for one case, without its files: the frames
+// of run_scene (apps/cli/run.cpp), the same steps.
+py::dict run_case(const py::object& scene, const std::vector<std::string>& sets, std::optional<long long> grid) {
+  const Params p = load(scene, sets, grid);
+  sweep::Outcome o;
+  std::string message;
+  {
+    py::gil_scoped_release free;
+    Simulation sim(p);
+    const long long frames = last_frame_index(p.run.duration, p.run.fps);
+    const bool pulled = sim.model().measures_a_pull();
+    for (long long f = 0; f <= frames; ++f) {
+      const bool ok = sim.advance_to(frame_time(f, p.run.duration, p.run.fps));
+      const Metrics m = sim.metrics();
+      o.final = m;
+      o.frame_peak_deficit_pa = std::max(o.frame_peak_deficit_pa, p.air.p_atm - m.inner_pressure_pa);
+      if (pulled && o.time_to_5cm_s < 0 && m.handle_height_m >= 0.05) o.time_to_5cm_s = m.time_s;
+      if (!ok) {
+        o.ok = false;
+        message = sim.blow_up_reason();
+        break;
+      }
+    }
+    o.peak_deficit_pa = sim.state().peak_deficit;
+  }
+  py::dict d;
+  d["status"] = o.ok ? "ok" : "blew_up";
+  d["message"] = message;
+  d["peak_deficit_pa"] = o.peak_deficit_pa;
+  d["frame_peak_deficit_pa"] = o.frame_peak_deficit_pa;
+  d["time_to_5cm_s"] = o.time_to_5cm_s;
+  d["final"] = metrics_dict(o.final);
+  return d;
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_wetcloth, m) {
+  m.doc() = "wetcloth's C++ core (see the wetcloth package's docstring)";
+  m.attr("__version__") = WETCLOTH_VERSION;
+
+  static py::exception<SceneError> scene_error(m, "SceneError", PyExc_ValueError);
+  static py::exception<BlowUpError> blow_up(m, "BlowUp", PyExc_RuntimeError);
+  scene_error.doc() = "A bad scene, key or value (a ValueError); the message names the key.";
+  blow_up.doc() = "The simulation blew up; the message names the parameter to look at.";
+  py::register_exception_translator([](std::exception_ptr e) {
+    try {
+      if (e) std::rethrow_exception(e);
+    } catch (const SceneError& x) {
+      scene_error(clean_message(x.what()).c_str());
+    } catch (const BlowUpError& x) {
+      blow_up(x.what());
+    }
+  });
+
+  m.def("scenes", [] {
+    py::dict d;
+    for (const auto& s : builtin_scenes()) d[py::str(s.name)] = s.description;
+    return d;
+  }, "The built-in scenes: {name: description}.");
+
+  m.def("params", [] {
+    py::list rows;
+    for (const ParamDef& d : param_defs()) {
+      py::dict r;
+      r["key"] = d.key;
+      r["type"] = d.type_name();
+      r["unit"] = d.unit;
+      r["default"] = d.default_text();
+      r["range"] = d.range_text();
+      r["meaning"] = d.meaning;
+      rows.append(r);
+    }
+    return rows;
+  }, "Every scene parameter, as `wetcloth params` lists them: dicts of key, type, unit, default, range, meaning.");
+
+  py::class_<Scene>(m, "Scene", "A scene's parameters, resolved (wetcloth.load_scene).")
+      .def_property_readonly("name", [](const Scene& s) { return s.params.name; })
+      .def_property_readonly("description", [](const Scene& s) { return s.params.description; })
+      .def("get", [](const Scene& s, const std::string& key) { return get_value(s.params, key); },
+           py::arg("key"), "A parameter's value: get('cloth.humidity').")
+      .def("toml", [](const Scene& s) { return to_toml(s.params); }, "Every parameter as TOML (as scene.toml).")
+      .def("__repr__", [](const Scene& s) { return "<wetcloth.Scene '" + s.params.name + "'>"; });
+
+  m.def("load_scene", [](const py::object& scene, const py::object& overrides, const py::kwargs& kw) {
+        std::optional<long long> grid;
+        const auto sets = override_texts(overrides, kw, &grid);
+        return Scene{load(scene, sets, grid)};
+      }, py::arg("scene"), py::arg("overrides") = py::none(),
+      "A built-in scene's name or a TOML file's path, with overrides by dotted key "
+      "({'cloth.humidity': 0.7}) or keyword (humidity=0.7, cloth__humidity=0.7; grid=G: the "
+      "same cloth G particles wide). Raises SceneError naming the key.");
+
+  py::class_<PySimulation>(m, "Simulation", R"doc(A wet cloth stepped from Python.
+
+Simulation(scene, overrides=None, **keywords): scene is a built-in name, a
+path or a wetcloth.Scene; overrides by dotted key ({"cloth.humidity": 0.7})
+or keyword (humidity=0.7, cloth__humidity=0.7, duration=, threads=; grid=G
+is the same cloth G particles wide). A bad key or value raises SceneError.
+
+positions and velocities are read-only views of the state (n x 3 float64,
+strides (8, 8 n): the library keeps x, y, z in columns), no copy: they follow
+the simulation as it steps. Assign the property to set them (a copy in).
+triangles, in_contact, pressure and adhesion are copies, made at each read.
+Saving and restoring a state is not offered yet: the State does not yet hold
+the whole state of a run.)doc")
+      .def(py::init([](const py::object& scene, const py::object& overrides, const py::kwargs& kw) {
+             std::optional<long long> grid;
+             const auto sets = override_texts(overrides, kw, &grid);
+             const Params p = load(scene, sets, grid);
+             return std::make_unique<PySimulation>(p);
+           }),
+           py::arg("scene"), py::arg("overrides") = py::none())
+      .def("step", &PySimulation::step, "One time step. Raises BlowUp if the state blew up.")
+      .def("advance_to", &PySimulation::advance_to, py::arg("t"),
+           "Steps until time t (s), releasing the GIL while it steps. Raises BlowUp.")
+      .def_property_readonly("time", [](const PySimulation& s) { return s.sim_.state().time; }, "Simulated time, s.")
+      .def_property_readonly("steps", [](const PySimulation& s) { return s.sim_.state().steps; })
+      .def_property_readonly("dt", [](const PySimulation& s) { return s.sim_.model().params.integrator.dt; })
+      .def_property_readonly("n", [](const PySimulation& s) { return s.sim_.model().n; }, "Particles.")
+      .def_property_readonly("grid", [](const PySimulation& s) {
+        return py::make_tuple(s.sim_.model().nu, s.sim_.model().nv);
+      }, "(nu, nv): particle i + nu j is grid point (i, j).")
+      .def_property_readonly("name", [](const PySimulation& s) { return s.sim_.model().params.name; })
+      .def("metrics", [](PySimulation& s) {
+        PySimulation::Busy busy(s);
+        return metrics_dict(s.sim_.metrics());
+      },
+           "The metrics now: a dict of metrics.csv's columns.")
+      .def("set", &PySimulation::set, py::arg("key"), py::arg("value"),
+           "Sets a parameter between steps (cloth.humidity live; handle.NAME.force ...). The grid "
+           "cannot change.")
+      .def("get", [](const PySimulation& s, const std::string& key) { return get_value(s.sim_.model().params, key); },
+           py::arg("key"))
+      .def("toml", [](const PySimulation& s) { return to_toml(s.sim_.model().params); })
+      .def_property_readonly("peak_deficit", [](const PySimulation& s) { return s.sim_.state().peak_deficit; },
+                             "Largest p_atm - p_in over every step so far, Pa.")
+      .def_property_readonly("handles", [](const PySimulation& s) {
+        py::dict d;
+        for (const Handle& h : s.sim_.model().handles) {
+          py::dict e;
+          e["type"] = handle_type(h.type);
+          e["particles"] = copy_of<int>(h.particles);
+          e["force"] = py::make_tuple(h.force.x(), h.force.y(), h.force.z());
+          e["velocity"] = py::make_tuple(h.velocity.x(), h.velocity.y(), h.velocity.z());
+          d[py::str(h.name)] = e;
+        }
+        return d;
+      }, "The handles by name: {name: {type, particles, force, velocity}} (set one with "
+         "set('handle.NAME.force', [fx, fy, fz])).")
+      .def_property("positions", [](py::object self) { return self.cast<PySimulation&>().view(self, false); },
+                    [](PySimulation& s, py::handle v) { s.assign(v, false, "positions"); },
+                    "n x 3 positions, m: a read-only view, no copy.")
+      .def_property("velocities", [](py::object self) { return self.cast<PySimulation&>().view(self, true); },
+                    [](PySimulation& s, py::handle v) { s.assign(v, true, "velocities"); },
+                    "n x 3 velocities, m/s: a read-only view, no copy.")
+      .def_property_readonly("triangles", [](const PySimulation& s) {
+        const auto& t = s.sim_.model().triangles;
+        py::array_t<int> out({static_cast<py::ssize_t>(t.size()), py::ssize_t{3}});
+        std::copy_n(t.empty() ? nullptr : t[0].data(), 3 * t.size(), out.mutable_data());
+        return out;
+      }, "m x 3 particle indices (int32), a copy.")
+      .def_property_readonly("in_contact", [](const PySimulation& s) {
+        const auto& c = s.sim_.state().contact;
+        py::array_t<bool> out(static_cast<py::ssize_t>(c.size()));
+        for (std::size_t i = 0; i < c.size(); ++i) out.mutable_data()[i] = c[i] != 0;
+        return out;
+      }, "n booleans: within the liquid-bridge height of the surface, a copy.")
+      .def_property_readonly("pressure", [](const PySimulation& s) { return copy_of<double>(s.sim_.state().pocket_pressure); },
+                             "n inner pressures P_in under each particle, Pa (p_atm where no pocket), a copy.")
+      .def_property_readonly("adhesion", [](const PySimulation& s) { return copy_of<double>(s.sim_.workspace().adhesion); },
+                             "n adhesion forces |F|, N, of the last step, a copy.")
+      .def("save", [](const PySimulation&, const py::object&) {
+        PyErr_SetString(PyExc_NotImplementedError,
+                        "Simulation.save is not offered yet: the State does not yet hold the whole "
+                        "state of a run, so a restored run would not continue as this one would");
+        throw py::error_already_set();
+      }, py::arg("path"))
+      .def("__repr__", [](const PySimulation& s) {
+        return "<wetcloth.Simulation '" + s.sim_.model().params.name + "' t=" + shortest(s.sim_.state().time) + " s>";
+      });
+
+  // For wetcloth.sweep: the cases as `wetcloth sweep` plans them, and one run.
+  m.def("_plan_sweep", [](const py::object& scene, const py::list& varied, const std::vector<std::string>& base,
+                          std::optional<long long> grid) {
+    std::vector<sweep::Varied> vs;
+    for (py::handle item : varied) {
+      const auto pair = item.cast<py::tuple>();
+      sweep::Varied v;
+      v.key = normal_key(pair[0].cast<std::string>());
+      v.option = v.key;
+      const py::object values = pair[1];
+      if (py::isinstance<py::str>(values) || !py::hasattr(values, "__iter__"))
+        throw py::type_error(v.key + ": expected a list of values");
+      for (py::handle e : values) v.values.push_back(toml_value(v.key, e));
+      vs.push_back(v);
+    }
+    const sweep::Plan plan = sweep::plan(vs, [&](const std::vector<std::string>& sets) {
+      std::vector<std::string> all = base;
+      all.insert(all.end(), sets.begin(), sets.end());
+      return load(scene, all, grid);
+    });
+    py::list cases;
+    for (const auto& c : plan.cases) {
+      py::dict d;
+      d["name"] = c.name;
+      d["sets"] = c.sets;
+      d["columns"] = c.columns;
+      d["humidity"] = c.humidity;
+      d["air_model"] = c.air_model;
+      cases.append(d);
+    }
+    return py::make_tuple(plan.extra_keys, cases);
+  });
+  m.def("_override_texts", [](const py::object& overrides) {
+    std::optional<long long> grid;
+    auto sets = override_texts(overrides, py::dict(), &grid);
+    return py::make_tuple(sets, grid);
+  });
+  m.def("_run_case", &run_case);
+  m.def("_metrics_columns", &metrics_columns);
+}

@@ -1,0 +1,159 @@
+"""The module's API: scenes, parameters, a Simulation, its arrays, and bad
+input raising Python exceptions (never a crash)."""
+import threading
+
+import numpy as np
+import pytest
+
+import wetcloth
+
+SMALL = {"grid": 9}  # a 9 x 9 cloth: quick
+
+
+def test_scenes_and_params():
+    scenes = wetcloth.scenes()
+    assert "drop-table" in scenes and "flag" in scenes
+    keys = [p["key"] for p in wetcloth.params()]
+    assert "cloth.humidity" in keys and "handle.*.force" in keys
+    row = next(p for p in wetcloth.params() if p["key"] == "cloth.humidity")
+    assert row["range"] == "[0, 1]" and row["unit"]
+
+
+def test_load_scene_overrides():
+    s = wetcloth.load_scene("pull-straight", {"cloth.humidity": 0.3}, air__model="sealed")
+    assert s.name == "pull-straight"
+    assert s.get("cloth.humidity") == 0.3 and s.get("air.model") == "sealed"
+    assert s.get("cloth.resolution") == [51, 51]
+    assert wetcloth.load_scene("pull-straight", grid=11).get("cloth.resolution") == [11, 11]
+    assert "humidity = 0.3" in s.toml()
+    sim = wetcloth.Simulation(s, humidity=0.9)  # a Scene, overridden again
+    assert sim.get("cloth.humidity") == 0.9 and sim.get("air.model") == "sealed"
+
+
+def test_step_arrays_and_metrics():
+    sim = wetcloth.Simulation("drop-table", **SMALL)
+    n = sim.n
+    assert sim.grid == (9, 9) and n == 81
+    x = sim.positions
+    assert x.shape == (n, 3) and x.dtype == np.float64 and not x.flags.writeable
+    z0 = x[:, 2].copy()
+    sim.step()
+    assert sim.steps == 1 and sim.time == pytest.approx(sim.dt)
+    sim.advance_to(0.05)
+    assert sim.time == pytest.approx(0.05)
+    assert (x[:, 2] < z0).all()  # the view follows the state: the cloth falls
+    assert sim.velocities.shape == (n, 3) and (sim.velocities[:, 2] < 0).all()
+    assert np.shares_memory(x, sim.positions)
+    tri = sim.triangles
+    assert tri.shape == (2 * 8 * 8, 3) and tri.min() == 0 and tri.max() == n - 1
+    assert sim.in_contact.dtype == bool and sim.in_contact.shape == (n,)
+    assert sim.pressure.shape == (n,) and sim.adhesion.shape == (n,)
+    m = sim.metrics()
+    assert list(m) == wetcloth._wetcloth._metrics_columns()
+    assert m["time_s"] == sim.time and m["centroid_x_m"] == pytest.approx(x[:, 0].mean(), abs=1e-9)
+    sim.advance_to(0.3)  # on the table by now
+    assert sim.in_contact.any() and sim.metrics()["contact_area_m2"] > 0
+
+
+def test_set_between_steps_and_handles():
+    sim = wetcloth.Simulation("pull-straight", humidity=0.5, **SMALL)
+    assert sim.handles["pull"]["type"] == "force"
+    assert sim.handles["pull"]["force"] == (0.0, 0.0, 1.0)
+    assert len(sim.handles["pull"]["particles"]) > 0
+    sim.advance_to(0.01)
+    sim.set("cloth.humidity", 0.8)
+    sim.set("handle.pull.force", np.array([0.0, 0.0, 2.0]))
+    assert sim.get("cloth.humidity") == 0.8 and sim.handles["pull"]["force"] == (0.0, 0.0, 2.0)
+    sim.advance_to(0.02)
+    assert sim.time == pytest.approx(0.02)
+
+
+def test_positions_assignment():
+    sim = wetcloth.Simulation("hang", **SMALL)
+    x = sim.positions.copy()
+    x[:, 0] += 0.01
+    sim.positions = x
+    assert (sim.positions == x).all()
+    with pytest.raises(wetcloth.SceneError, match=r"positions: expected shape \(81, 3\), got \(81, 2\)"):
+        sim.positions = np.zeros((81, 2))
+    with pytest.raises(wetcloth.SceneError, match="velocities"):
+        sim.velocities = np.zeros(243)
+    with pytest.raises(TypeError):
+        sim.positions = "no"
+
+
+@pytest.mark.parametrize("overrides, text", [
+    ({"cloth.humidty": 0.5}, "cloth.humidty: unknown key"),
+    ({"cloth.humidity": 1.5}, r"cloth.humidity: value 1.5 is out of range \[0, 1\]"),
+    ({"cloth.humidity": "wet"}, "cloth.humidity: expected a number"),
+    ({"cloth.resolution": [10]}, "cloth.resolution: expected an array of 2"),
+    ({"cloth.resolution": np.zeros((2, 2))}, "cloth.resolution: expected a flat list"),
+    ({"air.model": "leaky"}, "air.model: 'leaky' is not one of"),
+    ({"handle.nope.force": [0, 0, 1]}, "handle.nope: the scene has no such handle"),
+    ({"cloth.humidity\n[x]": 1}, "not a parameter key"),
+    ({"integrator.dt": float("nan")}, "integrator.dt: value is not finite|out of range"),
+])
+def test_bad_values_raise_scene_error(overrides, text):
+    with pytest.raises(wetcloth.SceneError, match=text):
+        wetcloth.Simulation("pull-straight", overrides, **SMALL)
+    assert issubclass(wetcloth.SceneError, ValueError)
+
+
+def test_bad_types_and_scenes():
+    with pytest.raises(TypeError, match="cloth.humidity: a value of type dict"):
+        wetcloth.Simulation("hang", {"cloth.humidity": {}})
+    with pytest.raises(TypeError):
+        wetcloth.Simulation(42)
+    with pytest.raises(TypeError):
+        wetcloth.Simulation("hang", [("cloth.humidity", 0.5)])
+    with pytest.raises(TypeError):
+        wetcloth.Simulation("hang", grid="9")
+    with pytest.raises(wetcloth.SceneError, match="not a file and not a built-in scene"):
+        wetcloth.Simulation("no-such-scene")
+    with pytest.raises(wetcloth.SceneError, match="grid: .*each side must be"):
+        wetcloth.Simulation("hang", grid=1)
+    sim = wetcloth.Simulation("hang", **SMALL)
+    with pytest.raises(TypeError):
+        sim.advance_to("soon")
+    for t in (float("nan"), float("inf"), -1.0, 1e300):
+        with pytest.raises(wetcloth.SceneError, match="advance_to"):
+            sim.advance_to(t)
+    with pytest.raises(wetcloth.SceneError, match=r"cloth.humidity: value 2\.0 is out of range"):
+        sim.set("cloth.humidity", 2)
+    with pytest.raises(wetcloth.SceneError, match="the grid cannot change"):
+        sim.set("cloth.resolution", [11, 11])
+    with pytest.raises(wetcloth.SceneError, match="unknown key"):
+        sim.get("cloth.colour")
+    with pytest.raises(NotImplementedError, match="save is not offered yet"):
+        sim.save("state.bin")
+    sim.step()  # still usable after every error above
+    assert sim.steps == 1
+
+
+def test_blow_up_names_the_parameter():
+    sim = wetcloth.Simulation("hang", {"integrator.dt": 0.004}, **SMALL)
+    with pytest.raises(wetcloth.BlowUp, match="integrator.dt"):
+        sim.advance_to(1.0)
+    assert issubclass(wetcloth.BlowUp, RuntimeError)
+    with pytest.raises(wetcloth.BlowUp):  # and stays blown up
+        sim.step()
+
+
+def test_advance_to_releases_the_gil():
+    """While advance_to runs in one thread, another runs Python: it finds the
+    simulation busy (which it could not see if the GIL were held)."""
+    sim = wetcloth.Simulation("drop-table", grid=15)
+    done = threading.Event()
+    worker = threading.Thread(target=lambda: (sim.advance_to(0.2), done.set()))
+    worker.start()
+    seen_busy = False
+    while not done.is_set() and worker.is_alive():
+        try:
+            sim.step()
+        except RuntimeError as e:
+            assert "busy" in str(e)
+            seen_busy = True
+            break
+    worker.join()
+    assert seen_busy
+    assert sim.time >= 0.2

@@ -1,0 +1,29 @@
+"""wetcloth: wet cloth on contact surfaces, from Python.
+
+    import wetcloth
+    sim = wetcloth.Simulation("drop-table", humidity=0.7)
+    sim.advance_to(0.5)
+    sim.positions          # (n, 3) float64, a read-only view of the state
+    sim.metrics()          # {"time_s": ..., "contact_area_m2": ..., ...}
+
+scenes(), load_scene(name_or_path, **overrides), params() (the table of
+`wetcloth params`), Simulation(scene, overrides=None, **keywords), and
+sweep(scene, vary={...}, client=None) for parameter studies.
+
+Overrides are given by dotted key ({"cloth.humidity": 0.7}) or keyword
+(humidity=0.7, or cloth__humidity=0.7: "__" stands for the dots); grid=G is
+the same cloth G particles wide. A bad key or value raises SceneError (a
+ValueError) naming the key; a blow-up raises BlowUp naming the parameter to
+look at. Arrays: positions and velocities are views without a copy (strides
+(8, 8 n): the library holds x, y, z in columns); triangles, in_contact,
+pressure and adhesion are copies. advance_to releases the GIL while it steps.
+
+Saving and restoring a state (save/load) is not offered yet: the library's
+State does not yet hold the whole state of a run.
+"""
+from ._wetcloth import (BlowUp, Scene, SceneError, Simulation, __version__, load_scene, params,
+                        scenes)
+from ._sweep import sweep
+
+__all__ = ["BlowUp", "Scene", "SceneError", "Simulation", "load_scene", "params", "scenes", "sweep",
+           "__version__"]

@@ -5,7 +5,11 @@
 
 #include <cstring>
 
+#include <filesystem>
+#include <fstream>
+
 #include "common.hpp"
+#include "wetcloth/checkpoint.hpp"
 
 namespace wetcloth {
 namespace {
@@ -72,6 +76,52 @@ INSTANTIATE_TEST_SUITE_P(
 TEST(Restore, RefusesAStateOfAnotherGrid) {
   Simulation small(test::bare(3)), large(test::bare(4));
   EXPECT_THROW(large.restore(small.state()), std::invalid_argument);
+}
+
+// The same through a checkpoint file: the scene and the state come back, and
+// the run continues with the same bits. A damaged file, another format's, or
+// not a checkpoint at all, is bad input that names the file.
+TEST(Checkpoint, ResumesFromAFileWithTheSameBits) {
+  namespace fs = std::filesystem;
+  const fs::path file = fs::temp_directory_path() / "wetcloth_test_checkpoint.state";
+  const Params p = load_scene("drape-ball", {"cloth.resolution=[15,15]"});
+  Simulation first(p);
+  ASSERT_TRUE(first.advance_to(0.2));
+  save_checkpoint(file, first.model().params, first.state());
+  ASSERT_TRUE(first.advance_to(0.3));
+
+  const Checkpoint c = load_checkpoint(file);
+  EXPECT_EQ(to_toml(c.params), to_toml(p));
+  Simulation second(c.params);
+  second.restore(c.state);
+  ASSERT_TRUE(second.advance_to(0.3));
+  EXPECT_TRUE(same_bits(second.state().x, first.state().x));
+  EXPECT_TRUE(same_bits(second.state().v, first.state().v));
+
+  std::string bytes;
+  {
+    std::ifstream in(file, std::ios::binary);
+    bytes.assign(std::istreambuf_iterator<char>(in), {});
+  }
+  const auto expect_refused = [&](std::string damaged, const std::string& why) {
+    std::ofstream(file, std::ios::binary | std::ios::trunc) << damaged;
+    try {
+      load_checkpoint(file);
+      ADD_FAILURE() << "accepted: " << why;
+    } catch (const SceneError& e) {
+      EXPECT_NE(std::string(e.what()).find(file.string()), std::string::npos) << e.what();
+      EXPECT_NE(std::string(e.what()).find(why), std::string::npos) << e.what();
+    }
+  };
+  std::string flipped = bytes;
+  flipped[bytes.size() / 2] ^= 1;
+  expect_refused(flipped, "checksum");
+  std::string version = bytes;
+  version[16] = 9;
+  expect_refused(version, "format 9");
+  expect_refused("[cloth]\nhumidity = 0.5\n", "not a wetcloth checkpoint");
+  expect_refused(bytes.substr(0, 40), "checksum");
+  fs::remove(file);
 }
 
 }  // namespace

@@ -15,6 +15,7 @@
 
 #include "sweep_plan.hpp"  // apps/cli: the cases of a sweep, as `wetcloth sweep` makes them
 #include "wetcloth/output.hpp"
+#include "wetcloth/checkpoint.hpp"
 #include "wetcloth/scene.hpp"
 #include "wetcloth/simulation.hpp"
 
@@ -470,12 +471,17 @@ the whole state of a run.)doc")
                              "n inner pressures P_in under each particle, Pa (p_atm where no pocket), a copy.")
       .def_property_readonly("adhesion", [](const PySimulation& s) { return copy_of<double>(s.sim_.workspace().adhesion); },
                              "n adhesion forces |F|, N, of the last step, a copy.")
-      .def("save", [](const PySimulation&, const py::object&) {
-        PyErr_SetString(PyExc_NotImplementedError,
-                        "Simulation.save is not offered yet: the State does not yet hold the whole "
-                        "state of a run, so a restored run would not continue as this one would");
-        throw py::error_already_set();
-      }, py::arg("path"))
+      .def("save", [](const PySimulation& s, const std::string& path) {
+        save_checkpoint(path, s.sim_.model().params, s.sim_.state());
+      }, py::arg("path"),
+           "Write the whole state with its scene to PATH (a versioned binary file with a checksum); "
+           "Simulation.load(PATH) continues it with the same bits.")
+      .def_static("load", [](const std::string& path) {
+        const Checkpoint c = load_checkpoint(path);
+        auto sim = std::make_unique<PySimulation>(c.params);
+        sim->sim_.restore(c.state);
+        return sim;
+      }, py::arg("path"), "A Simulation continued from a file Simulation.save wrote.")
       .def("__repr__", [](const PySimulation& s) {
         return "<wetcloth.Simulation '" + s.sim_.model().params.name + "' t=" + shortest(s.sim_.state().time) + " s>";
       });

@@ -124,10 +124,23 @@ def test_bad_types_and_scenes():
         sim.set("cloth.resolution", [11, 11])
     with pytest.raises(wetcloth.SceneError, match="unknown key"):
         sim.get("cloth.colour")
-    with pytest.raises(NotImplementedError, match="save is not offered yet"):
-        sim.save("state.bin")
+    with pytest.raises(wetcloth.SceneError, match="not a wetcloth checkpoint"):
+        wetcloth.Simulation.load(__file__)
     sim.step()  # still usable after every error above
     assert sim.steps == 1
+
+
+def test_save_and_load_continue_with_the_same_bits(tmp_path):
+    sim = wetcloth.Simulation("drape-ball", **SMALL)
+    sim.advance_to(0.2)
+    sim.save(str(tmp_path / "ball.state"))
+    sim.advance_to(0.3)
+    again = wetcloth.Simulation.load(str(tmp_path / "ball.state"))
+    assert again.time == pytest.approx(0.2)
+    again.advance_to(0.3)
+    assert np.array_equal(again.positions, sim.positions)
+    assert np.array_equal(again.velocities, sim.velocities)
+    assert again.metrics() == sim.metrics()
 
 
 def test_blow_up_names_the_parameter():

@@ -18,8 +18,8 @@ look at. Arrays: positions and velocities are views without a copy (strides
 (8, 8 n): the library holds x, y, z in columns); triangles, in_contact,
 pressure and adhesion are copies. advance_to releases the GIL while it steps.
 
-Saving and restoring a state (save/load) is not offered yet: the library's
-State does not yet hold the whole state of a run.
+sim.save(path) writes the whole state with its scene; Simulation.load(path)
+continues it with the same bits as the run it came from.
 """
 from ._wetcloth import (BlowUp, Scene, SceneError, Simulation, __version__, load_scene, params,
                         scenes)

@@ -119,7 +119,7 @@ template <class Fn>
 void stage(benchmark::State& st, const Simulation& from, bool restore, Fn fn) {
   const Model& m = warmed(st.range(0), false).model();
   State s = from.state();
-  Workspace w = from.workspace();
+  Workspace w = detail::workspace(from);
   benchmark::DoNotOptimize(&s);
   benchmark::DoNotOptimize(&w);
   for (auto _ : st) {

@@ -31,7 +31,6 @@ ExportFormats parse_export_formats(const std::string& list) {
 CacheFrame cache_frame(const Simulation& sim, UpAxis up) {
   const Model& m = sim.model();
   const State& s = sim.state();
-  const Workspace& w = sim.workspace();
   Vec3Array normal(m.n);
   compute_normals(m, s.x, normal);
   CacheFrame f;
@@ -43,13 +42,13 @@ CacheFrame cache_frame(const Simulation& sim, UpAxis up) {
   f.pressure.assign(m.n, static_cast<float>(m.params.air.p_atm));
   f.adhesion.assign(m.n, 0.0f);
   const bool pressure = s.pocket_pressure.size() == std::size_t(m.n);
-  const bool adhesion = w.adhesion.size() == std::size_t(m.n);
+  const bool adhesion = sim.adhesion().size() == std::size_t(m.n);
   for (int i = 0; i < m.n; ++i) {
     f.points[i] = to_up(s.x[i], up);
     f.normals[i] = to_up(normal[i], up);
     f.contact[i] = s.contact[i] ? 1.0f : 0.0f;
     if (pressure) f.pressure[i] = static_cast<float>(s.pocket_pressure[i]);
-    if (adhesion) f.adhesion[i] = static_cast<float>(w.adhesion[i]);
+    if (adhesion) f.adhesion[i] = static_cast<float>(sim.adhesion()[i]);
   }
   return f;
 }

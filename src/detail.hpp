@@ -8,8 +8,12 @@
 #include <limits>
 
 #include "wetcloth/simulation.hpp"
+#include "workspace.hpp"
 
 namespace wetcloth::detail {
+
+// A simulation's scratch, for the library's stages, its tests and benchmarks.
+inline Workspace& workspace(const Simulation& sim) { return detail_workspace(sim); }
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 

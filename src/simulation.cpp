@@ -101,7 +101,29 @@ void compute_normals(const Model& m, const Vec3Array& x, Vec3Array& normal) {
   detail::compute_normals(m, x.column(0), normal, quad_normals);
 }
 
-Simulation::Simulation(const Params& p) : model_((check_params(p), build_model(p))) {
+Workspace& detail_workspace(const Simulation& sim) { return *sim.ws_; }
+
+Simulation::Simulation(const Simulation& o)
+    : model_(o.model_), state_(o.state_), ws_(std::make_unique<Workspace>(*o.ws_)),
+      grab_particle_(o.grab_particle_), grab_target_(o.grab_target_), grab_k_(o.grab_k_),
+      touched_(o.touched_), threads_(o.threads_) {}
+Simulation& Simulation::operator=(const Simulation& o) {
+  if (this != &o) *this = Simulation(o);
+  return *this;
+}
+Simulation::Simulation(Simulation&&) noexcept = default;
+Simulation& Simulation::operator=(Simulation&&) noexcept = default;
+Simulation::~Simulation() = default;
+
+StepStats Simulation::stats() const {
+  return {ws_->handle_force, ws_->substeps, ws_->solves, ws_->cg_iterations,
+          ws_->cg_iterations_total};
+}
+
+const std::vector<double>& Simulation::adhesion() const { return ws_->adhesion; }
+
+Simulation::Simulation(const Params& p)
+    : model_((check_params(p), build_model(p))), ws_(std::make_unique<Workspace>()) {
   start_thread_choice();
   reset();
 }
@@ -125,25 +147,26 @@ void Simulation::reset() {
   state_.air_gap.assign(n, 0.0);
   state_.pocket_pressure.assign(n, model_.params.air.p_atm);
   state_.source_distance.assign(n, 0);
-  const int grab = ws_.grab_particle;
-  ws_ = Workspace{};
-  ws_.grab_particle = grab;
-  for (auto* a : {&ws_.force, &ws_.normal, &ws_.surface_normal, &ws_.air_direction})
+  *ws_ = Workspace{};
+  ws_->grab_particle = grab_particle_;
+  ws_->grab_target = grab_target_;
+  ws_->grab_k = grab_k_;
+  for (auto* a : {&ws_->force, &ws_->normal, &ws_->surface_normal, &ws_->air_direction})
     a->assign(n, Vec3::Zero());
-  ws_.x_before.assign(n, Vec3::Zero());
-  ws_.row_sums.assign(model_.nv, 0.0);
-  ws_.row_max.assign(model_.nv, 0.0);
-  ws_.distance.assign(n, kInf);
-  ws_.adhesion.assign(n, 0.0);
-  ws_.border.assign(n, 0);
+  ws_->x_before.assign(n, Vec3::Zero());
+  ws_->row_sums.assign(model_.nv, 0.0);
+  ws_->row_max.assign(model_.nv, 0.0);
+  ws_->distance.assign(n, kInf);
+  ws_->adhesion.assign(n, 0.0);
+  ws_->border.assign(n, 0);
   state_.pocket.assign(n, -1);
-  ws_.colliding.assign(n, 0);
+  ws_->colliding.assign(n, 0);
   touched_.assign(n, 0);
   release();
-  update_contact(model_, state_, ws_);
-  start_air(model_, state_, ws_);
-  update_strain_order(model_, state_, ws_);
-  compute_normals(model_, state_.x, ws_.normal);
+  update_contact(model_, state_, *ws_);
+  start_air(model_, state_, *ws_);
+  update_strain_order(model_, state_, *ws_);
+  compute_normals(model_, state_.x, ws_->normal);
 }
 
 void Simulation::restore(const State& s) {
@@ -154,8 +177,8 @@ void Simulation::restore(const State& s) {
   reset();
   state_ = s;
   // What each step's end leaves for the next, made from the state again.
-  update_contact(model_, state_, ws_);
-  compute_normals(model_, state_.x, ws_.normal);
+  update_contact(model_, state_, *ws_);
+  compute_normals(model_, state_.x, ws_->normal);
 }
 
 void Simulation::set_humidity(double omega) {
@@ -171,23 +194,23 @@ void Simulation::set_params(const Params& p) {
   model_ = build_model(p);
   start_thread_choice();
   if (!same_grid) reset();
-  ws_.strain_springs.clear();  // their lengths may have changed: ordered again next step
+  ws_->strain_springs.clear();  // their lengths may have changed: ordered again next step
 }
 
 void Simulation::grab(int particle, const Vec3& target, double stiffness) {
-  ws_.grab_particle = particle;
-  ws_.grab_target = target;
-  ws_.grab_k = stiffness;
+  ws_->grab_particle = grab_particle_ = particle;
+  ws_->grab_target = grab_target_ = target;
+  ws_->grab_k = grab_k_ = stiffness;
 }
 
-void Simulation::release() { ws_.grab_particle = -1; }
+void Simulation::release() { ws_->grab_particle = grab_particle_ = -1; }
 
 // 1. Forces, in a fixed order (the order of a float sum is part of the result).
 // Implicit Euler takes the damping into its matrix, so leaves it out here.
 void Simulation::accumulate_forces(bool implicit) {
   const Model& m = model_;
   State& s = state_;
-  Workspace& w = ws_;
+  Workspace& w = *ws_;
   for_each_particle(m, [&](int i) { put(w.force[i], Vec3::Zero()); });
   add_spring_forces(m, s, w, m.params.integrator.type == "explicit-euler");
   compute_normals(m, s.x.column(0), w.normal, w.quad_normals);
@@ -208,10 +231,10 @@ void Simulation::step() {
   }
   (model_.threads == 1 ? c.steps_on_one : c.steps_on_most)++;
   const auto start = std::chrono::steady_clock::now();
-  const long long substeps = ws_.substeps;
+  const long long substeps = ws_->substeps;
   take_step();
   c.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  c.substeps += ws_.substeps - substeps;
+  c.substeps += ws_->substeps - substeps;
   // A trial times each count for 2 ms (two substeps at least); the faster is
   // kept for 0.25 s of stepping, a trial's cost under 2 %.
   constexpr double kTrialSeconds = 2e-3, kKeepSeconds = 0.25;
@@ -228,7 +251,7 @@ void Simulation::step() {
 void Simulation::take_step() {
   const Model& m = model_;
   State& s = state_;
-  Workspace& w = ws_;
+  Workspace& w = *ws_;
   const double dt = m.params.integrator.dt;
   const std::string& integrator = m.params.integrator.type;
 
@@ -309,7 +332,7 @@ int xpbd_substeps(const Params& p) {
 void Simulation::xpbd_step() {
   const Model& m = model_;
   State& s = state_;
-  Workspace& w = ws_;
+  Workspace& w = *ws_;
   const double dt = m.params.integrator.dt, c = m.params.forces.viscous_damping;
   const int substeps = xpbd_substeps(m.params);
   const double h = dt / substeps, inv_h2 = 1.0 / (h * h);
@@ -370,7 +393,7 @@ void Simulation::xpbd_step() {
 double Simulation::implicit_substep(double dt, int& k, double& strain) {
   const Model& m = model_;
   State& s = state_;
-  Workspace& w = ws_;
+  Workspace& w = *ws_;
   w.v_start = s.v;
   for (;;) {
     const double h = std::ldexp(dt, -k);
@@ -397,7 +420,7 @@ double Simulation::implicit_substep(double dt, int& k, double& strain) {
 
 // The air term taken implicitly on the new velocities, then x += h v.
 void Simulation::move_at_new_velocities(double h) {
-  correct_air_implicitly(model_, state_, ws_, h);
+  correct_air_implicitly(model_, state_, *ws_, h);
   for_each_particle_block(model_, [&](int first, int end) {
     const double *__restrict vx = state_.v.column(0), *__restrict vy = state_.v.column(1),
                              *__restrict vz = state_.v.column(2);
@@ -418,7 +441,7 @@ void Simulation::move_at_new_velocities(double h) {
 void Simulation::finish_step(double h) {
   const Model& m = model_;
   State& s = state_;
-  Workspace& w = ws_;
+  Workspace& w = *ws_;
   apply_handle_constraints(m, s, w);
   collide(m, s, &touched_);
   apply_friction(m, s, w, touched_, h);
@@ -565,7 +588,7 @@ Metrics Simulation::metrics() const {
     const Vec3 dir = h.type == HandleType::Move  ? h.velocity
                      : h.type == HandleType::Pin ? Vec3::UnitZ()
                                                  : h.force;
-    r.handle_force_n = dir.norm() > 0 ? ws_.handle_force.dot(dir.normalized()) : 0.0;
+    r.handle_force_n = dir.norm() > 0 ? ws_->handle_force.dot(dir.normalized()) : 0.0;
   }
   double zmax = -kInf, cx = 0, cy = 0, mass = 0;
   for (int i = 0; i < m.n; ++i) {
@@ -628,7 +651,7 @@ Metrics Simulation::metrics() const {
           if (o < 0 || s.contact[o]) continue;
           const Vec3 d = s.x[o] - s.x[k];
           const double len = d.norm();
-          if (len > 0) r.front_pull_n += e.k * (len - e.rest) / len * d.dot(ws_.surface_normal[k]);
+          if (len > 0) r.front_pull_n += e.k * (len - e.rest) / len * d.dot(ws_->surface_normal[k]);
         }
     }
   return r;

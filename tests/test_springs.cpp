@@ -20,7 +20,7 @@ Vec3Array forces_on_pair(double k, double kd, const Vec3& x1, const Vec3& v1) {
   const Vec3 up(0, 0, 0.01);
   s.x = {Vec3::Zero(), x1, up, x1 + up};
   s.v = {Vec3::Zero(), v1, Vec3::Zero(), v1};
-  Workspace& w = const_cast<Workspace&>(sim.workspace());
+  Workspace& w = detail::workspace(sim);
   w.force.assign(w.force.size(), Vec3::Zero());
   detail::add_spring_forces(sim.model(), s, w, true);
   return w.force;
@@ -101,7 +101,7 @@ TEST_P(DampingSolve, ConservesMomentumAndMatchesEquation1) {
   Simulation sim(test::coarse("pull-straight", GetParam()));
   const Model& m = sim.model();
   State& s = sim.state();
-  Workspace& w = const_cast<Workspace&>(sim.workspace());
+  Workspace& w = detail::workspace(sim);
   std::uint64_t seed = 7;
   auto rnd = [&] {
     seed = seed * 6364136223846793005ULL + 1442695040888963407ULL;

@@ -116,7 +116,7 @@ TEST(StrainLimit, LooksOnlyWhereNeededWithTheSameBits) {
   ASSERT_GT(sim.metrics().max_strain, 2 * p.strain_limit.tau);
   const Model& m = sim.model();
   State fast = sim.state(), plain = sim.state();
-  Workspace w = sim.workspace();
+  Workspace w = detail::workspace(sim);
   p.strain_limit.enabled = true;
   Model limited = m;
   limited.params = p;
@@ -162,7 +162,7 @@ Jolted jolted_cloth(bool pinned) {
     p.handles["pin"] = pin;
   }
   Simulation sim(p);
-  Jolted j{sim.model(), sim.state(), sim.workspace()};
+  Jolted j{sim.model(), sim.state(), detail::workspace(sim)};
   unsigned seed = 12345;
   auto random = [&] {  // in [-1, 1)
     seed = seed * 1664525u + 1013904223u;
@@ -256,7 +256,7 @@ TEST(StrainLimit, FreeClothUnderAForceAcceleratesAtFOverM) {
   double limited = 0;  // steps in which the limiter moved a particle
   while (sim.state().time < t - dt / 2) {
     sim.step();
-    limited += !sim.workspace().strain_changed.empty();
+    limited += !detail::workspace(sim).strain_changed.empty();
   }
   ASSERT_TRUE(sim.blow_up_reason().empty()) << sim.blow_up_reason();
   ASSERT_GT(limited, 0.5 * t / dt);  // the test can fail: the limiter acts most steps

@@ -49,7 +49,7 @@ struct GrowingTent {
 GrowingTent grow_tent_steadily(Simulation& sim, double steps_per_tau) {
   const Model& m = sim.model();
   State& s = sim.state();
-  Workspace& w = const_cast<Workspace&>(sim.workspace());
+  Workspace& w = detail::workspace(sim);
   GrowingTent t{0.02, 0, 0, 0};
   make_tent(sim, t.height, 0.08);
   detail::update_contact(m, s, w);
@@ -86,7 +86,7 @@ TEST(Adhesion, ParticleForcesSumToEquation13) {
   for (double lift : {0.0, 0.02}) {
     Simulation sim = flat_on_table(1.0);
     make_tent(sim, lift, 0.08);  // a contact region with an inner border too
-    Workspace& w = const_cast<Workspace&>(sim.workspace());
+    Workspace& w = detail::workspace(sim);
     detail::update_contact(sim.model(), sim.state(), w);
     w.force.assign(w.force.size(), Vec3::Zero());
     detail::add_adhesion(sim.model(), sim.state(), w);
@@ -120,7 +120,7 @@ TEST(Contact, BorderIsContactOnTheClothsBorderOrNextToLifted) {
       pattern = pattern * 1103515245u + 12345u;
       x.z() = (pattern >> 16) % 3 == 0 ? 2 * h_th : 0.0;
     }
-    Workspace& w = const_cast<Workspace&>(sim.workspace());
+    Workspace& w = detail::workspace(sim);
     detail::update_contact(m, s, w);
     int borders = 0;
     for (int j = 0; j < nv; ++j)
@@ -145,7 +145,7 @@ TEST(Contact, BorderIsContactOnTheClothsBorderOrNextToLifted) {
 TEST(Adhesion, SwitchedOffAboveTheLiquidBridge) {
   Simulation sim = flat_on_table(1.0);
   for (auto&& x : sim.state().x) x.z() = 1.5e-3;  // above h_th = 1 mm
-  Workspace& w = const_cast<Workspace&>(sim.workspace());
+  Workspace& w = detail::workspace(sim);
   detail::update_contact(sim.model(), sim.state(), w);
   detail::add_adhesion(sim.model(), sim.state(), w);
   for (double a : w.adhesion) EXPECT_EQ(a, 0.0);
@@ -181,7 +181,7 @@ TEST(Air, PocketHeldStillRelaxesWithTheModelsTimeConstant) {
   make_tent(sim, 0.02, 0.08);
   const Model& m = sim.model();
   State& s = sim.state();
-  Workspace& w = const_cast<Workspace&>(sim.workspace());
+  Workspace& w = detail::workspace(sim);
   detail::update_contact(m, s, w);
   detail::update_air(m, s, w, 0.0);
   const double v_sum = s.air_volume, tau = air_time_constant(sim);
@@ -223,7 +223,7 @@ TEST(Air, OneStepFeelsTheDeficitAtItsEnd) {
     Simulation sim = flat_on_table(0.5);
     const Model& m = sim.model();
     State& s = sim.state();
-    Workspace& w = const_cast<Workspace&>(sim.workspace());
+    Workspace& w = detail::workspace(sim);
     const GrowingTent t = grow_tent_steadily(sim, steps_per_tau);
     const double dt = t.dt;
     // The tent's velocities for one more step of the same growth, then the
@@ -262,7 +262,7 @@ TEST(Air, BreakthroughCapsTheDeficit) {
   Simulation sim = flat_on_table(1.0);
   make_tent(sim, 0.02, 0.08);
   State& s = sim.state();
-  Workspace& w = const_cast<Workspace&>(sim.workspace());
+  Workspace& w = detail::workspace(sim);
   detail::update_contact(sim.model(), s, w);
   s.air_atm_volume = 0;  // all the air gone: P_in would be 0
   detail::update_air(sim.model(), s, w, 1e-5);
@@ -307,7 +307,7 @@ TEST(Air, ForcePointsTowardTheSurfaceUnderSuction) {
     }
     for (Simulation* sim : {&table, &ball}) {
       State& s = sim->state();
-      Workspace& w = const_cast<Workspace&>(sim->workspace());
+      Workspace& w = detail::workspace(*sim);
       compute_normals(sim->model(), s.x, w.normal);
       detail::update_contact(sim->model(), s, w);
       std::fill(s.pocket_pressure.begin(), s.pocket_pressure.end(),
@@ -378,7 +378,7 @@ TEST(Air, VentedClothFallingOntoTheBallIsOpenToTheRoom) {
   Simulation sim(test::coarse("drape-ball", {"cloth.humidity=0.7"}));
   const Params& p = sim.model().params;
   ASSERT_EQ(p.air.model, "vented");
-  const Workspace& w = sim.workspace();
+  const Workspace& w = detail::workspace(sim);
   int beyond_band = 0, in_pocket = 0;
   for (int i = 0; i < sim.model().n; ++i) (w.distance[i] < p.air.band ? in_pocket : beyond_band)++;
   ASSERT_GT(beyond_band, 0);  // the test needs both kinds
@@ -399,7 +399,7 @@ TEST(Air, VentedPatchRingedByContactOnTheBallIsSealed) {
   const Model& m = sim.model();
   const Params& p = m.params;
   State& s = sim.state();
-  Workspace& w = const_cast<Workspace&>(sim.workspace());
+  Workspace& w = detail::workspace(sim);
   const Vec3 c = to_vec(p.ball.center);
   const int mid = m.index(m.nu / 2, m.nv / 2);
   // Wrap the cloth onto the ball, then lift a 5 x 5 patch about its middle by
@@ -435,7 +435,7 @@ TEST(Friction, NeverReversesOrGrowsAndStopsASlowParticle) {
   Simulation sim = flat_on_table(1.0);
   const Model& m = sim.model();
   State& s = sim.state();
-  Workspace& w = const_cast<Workspace&>(sim.workspace());
+  Workspace& w = detail::workspace(sim);
   detail::update_contact(m, s, w);
   w.force.assign(w.force.size(), Vec3::Zero());
   detail::add_adhesion(m, s, w);
@@ -468,7 +468,7 @@ TEST(Friction, EachParticleAloneOnRowsLongerThanAChunk) {
   Model& m = const_cast<Model&>(sim.model());
   ASSERT_GT(m.nu, detail::kChunk);
   State& s = sim.state();
-  Workspace& w = const_cast<Workspace&>(sim.workspace());
+  Workspace& w = detail::workspace(sim);
   detail::update_contact(m, s, w);
   w.force.assign(w.force.size(), Vec3::Zero());
   detail::add_adhesion(m, s, w);
@@ -584,7 +584,7 @@ TEST(SelfCollision, CandidatesSearchedAroundMoversAreTheWholeSearch) {
   for (int k = 0; k < 400; ++k) {
     const Vec3Array x = sim.state().x;  // where the step found the pairs
     sim.step();
-    const Workspace& w = sim.workspace();
+    const Workspace& w = detail::workspace(sim);
     const auto& a = w.candidates_anchor;
     const bool moved = !w.candidate_movers.empty() && 4 * w.candidate_movers.size() <= std::size_t(m.n);
     partial += moved;
@@ -620,7 +620,7 @@ TEST(SelfCollision, MoversMeetingEachOtherArePaired) {
   Simulation sim(p);
   const Model& m = sim.model();
   State& s = sim.state();
-  auto& w = const_cast<Workspace&>(sim.workspace());
+  auto& w = detail::workspace(sim);
   detail::add_self_collision(m, s, w, true);  // the whole search
   const auto paired = [&](int i, int j) {
     return std::binary_search(w.candidates.begin(), w.candidates.end(),
@@ -743,7 +743,7 @@ TEST(Handles, PeelRigForceBalancesTheLiftedLoad) {
     const double load = (areal_weight + suction) * r.lifted_area_m2 + r.front_pull_n;
     off.push_back(std::abs(r.handle_force_n / load - 1));
     double limiter = 0;
-    for (const int k : rig.particles) limiter -= sim.workspace().strain_reaction[k].z();
+    for (const int k : rig.particles) limiter -= detail::workspace(sim).strain_reaction[k].z();
     limiter_share = std::max(limiter_share, limiter / r.handle_force_n);
   }
   ASSERT_GT(off.size(), std::size_t(frames / 2));

@@ -79,7 +79,7 @@ TEST(Xpbd, SpringSweepConservesMomentum) {
   for (int i = 0; i < sim.model().n; ++i)  // stretched unevenly, beyond the limit
     s.x[i] = 1.3 * s.x[i] + Vec3(0.001 * std::sin(i), 0.002 * std::cos(3.0 * i), 0.0);
   const Vec3 before = centroid(sim);
-  Workspace w = sim.workspace();
+  Workspace w = detail::workspace(sim);
   w.x_prev = s.x;
   detail::xpbd_begin_substep(sim.model(), s, w);
   detail::project_springs(sim.model(), s, w, 1.0 / 2400);

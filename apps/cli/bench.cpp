@@ -79,13 +79,15 @@ json measure(const Grid& g, int repetitions) {
   for (int rep = 0; rep < repetitions; ++rep) {
     Simulation sim(g.params);
     sim.step();
-    const Workspace& w = sim.workspace();
-    const long long substeps = w.substeps, solves = w.solves, iterations = w.cg_iterations_total;
+    const StepStats before = sim.stats();
+    const long long substeps = before.substeps, solves = before.solves,
+                    iterations = before.cg_iterations_total;
     const auto start = std::chrono::steady_clock::now();
     for (long long k = 0; k < g.steps; ++k) sim.step();
     wall.push_back(std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
     // Implicit Euler's step control may take a step in substeps, and throw
     // solves away; the other integrators take one substep and no solve.
+    const StepStats w = sim.stats();
     r["substeps_per_step"] = static_cast<double>(w.substeps - substeps) / g.steps;
     r["solves_per_step"] = static_cast<double>(w.solves - solves) / g.steps;
     r["cg_iterations_per_solve"] = w.solves > solves

@@ -111,7 +111,7 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress) {
   s["status"] = r.code == kOk ? "ok" : "blew up";
   if (r.code != kOk) s["message"] = r.message;
   s["steps"] = r.steps;
-  s["substeps"] = sim.workspace().substeps;  // more than steps where implicit Euler halved some
+  s["substeps"] = sim.stats().substeps;  // more than steps where implicit Euler halved some
   s["particles"] = sim.model().n;
   // The count asked for (0: chosen as it ran), always a number; beside it how
   // the choice went, or the count used (at most one thread per 1024 particles).

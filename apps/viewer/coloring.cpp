@@ -33,7 +33,7 @@ float follow(float scale, float current_max, float floor) {
 Legend cloth_mesh(const Simulation& sim, ColorBy mode, float& scale, ClothMesh& mesh, float range) {
   const Model& m = sim.model();
   const State& s = sim.state();
-  const Workspace& w = sim.workspace();
+  const std::vector<double>& adhesion = sim.adhesion();
   const int n = m.n;
 
   Vec3Array normal(n);
@@ -88,7 +88,7 @@ Legend cloth_mesh(const Simulation& sim, ColorBy mode, float& scale, ClothMesh& 
       break;
     }
     case ColorBy::Adhesion: {
-      const int na = std::min(n, static_cast<int>(w.adhesion.size()));
+      const int na = std::min(n, static_cast<int>(adhesion.size()));
       // An inner particle in contact holds adhesion_pressure * its area; the
       // border's share of the edge term comes on top, so the scale goes to twice that.
       const double cell = m.params.cloth.size[0] / std::max(1, m.nu - 1) * m.params.cloth.size[1] /
@@ -97,13 +97,13 @@ Legend cloth_mesh(const Simulation& sim, ColorBy mode, float& scale, ClothMesh& 
       if (!(top > 0)) {
         float peak = 0;
         for (int i = 0; i < na; ++i)
-          if (std::isfinite(w.adhesion[i]))
-            peak = std::max(peak, static_cast<float>(w.adhesion[i]));
+          if (std::isfinite(adhesion[i]))
+            peak = std::max(peak, static_cast<float>(adhesion[i]));
         top = scale = follow(scale, peak, 1e-9f);
       }
       legend = {"adhesion force per particle, N", 0, top, false, false};
       for (int i = 0; i < n; ++i)
-        mesh.color[i] = colormap(i < na ? static_cast<float>(w.adhesion[i]) / top : 0.0f, false);
+        mesh.color[i] = colormap(i < na ? static_cast<float>(adhesion[i]) / top : 0.0f, false);
       break;
     }
   }

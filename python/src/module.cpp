@@ -469,7 +469,7 @@ the whole state of a run.)doc")
       }, "n booleans: within the liquid-bridge height of the surface, a copy.")
       .def_property_readonly("pressure", [](const PySimulation& s) { return copy_of<double>(s.sim_.state().pocket_pressure); },
                              "n inner pressures P_in under each particle, Pa (p_atm where no pocket), a copy.")
-      .def_property_readonly("adhesion", [](const PySimulation& s) { return copy_of<double>(s.sim_.workspace().adhesion); },
+      .def_property_readonly("adhesion", [](const PySimulation& s) { return copy_of<double>(s.sim_.adhesion()); },
                              "n adhesion forces |F|, N, of the last step, a copy.")
       .def("save", [](const PySimulation& s, const std::string& path) {
         save_checkpoint(path, s.sim_.model().params, s.sim_.state());

@@ -1,0 +1,124 @@
+// The step's scratch arrays, reused every step so that a step allocates
+// nothing. Private to the library (and to its tests and micro-benchmarks,
+// which reach it through detail::workspace).
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "wetcloth/simulation.hpp"
+
+namespace wetcloth {
+
+// A symmetric 3x3 block as its six entries xx, yy, zz, xy, xz, yz.
+using Sym = std::array<double, 6>;
+
+// Two particles closer than the self-collision distance; u points from j to i.
+struct CollisionPair {
+  int i = 0, j = 0;
+  Vec3 u = Vec3::Zero();
+  Sym block{};  // implicit Euler: its h² k_t u uᵀ
+};
+
+
+// Scratch arrays, reused every step: nothing is allocated per step.
+struct Workspace {
+  Vec3Array force, normal, surface_normal;
+  std::vector<Vec3> x_before;
+  std::vector<double> quad_normals;   // compute_normals' scratch
+  std::vector<double> distance;       // signed distance to the contact surface
+  std::vector<double> adhesion;       // |adhesion force| per particle, N
+  std::vector<std::uint8_t> border;   // border of the contact region
+  std::vector<double> pocket_sums;    // scratch for the implicit air correction
+  Vec3Array air_direction;            // A_i n_i of eq. 3 (zero where no air force)
+  // Springs (forces/springs.cpp): a zero row, then per thread its ring of
+  // edge rows.
+  std::vector<double> spring_rows;
+  std::vector<float> damping_columns;    // apply_spring_damping's columns and scratch
+  std::vector<double> damping_impulses;  // and its impulses
+  std::vector<int> queue;
+  // Strain limiting: structural and shear springs in adaptive order, the first
+  // spring of each level (and the end); within a level, the corrections found
+  // (each spring's shortening and its ends' shares, by inverse mass), how many
+  // move each particle, and their sums.
+  struct StrainSpring {
+    int a = 0, b = 0;
+    double max_len = 0;  // (1 + τ_c) l0
+    int slot = 0;        // 4 × lower end + stencil offset: its strain_stretched flag
+  };
+  struct StrainCorrection {
+    int a = 0, b = 0;
+    double wa = 0, wb = 0;     // a moves by wa corr, b by -wb corr (before the relaxation)
+    Vec3 corr = Vec3::Zero();  // (x_b - x_a)(1 - max_len / |x_b - x_a|)
+  };
+  std::vector<StrainSpring> strain_springs;
+  std::vector<int> strain_levels;
+  std::vector<StrainCorrection> strain_corrections;
+  std::vector<Vec3> strain_delta;
+  std::vector<int> strain_count;
+  // The force the last limit_strain's corrections exerted on each pinned,
+  // driven or held particle (minus the momentum they gave the free ends, over
+  // dt²; zero elsewhere), and those particles: part of a handle's reaction.
+  std::vector<Vec3> strain_reaction;
+  std::vector<int> strain_reacting;
+  std::vector<int> strain_index;               // stencil slot -> its place in strain_springs
+  std::vector<std::uint8_t> strain_stretched;  // per stencil slot, at the start of a pass
+  std::vector<std::uint8_t> strain_queued;     // per spring: in strain_heap
+  std::vector<int> strain_heap, strain_touched;
+  std::vector<int> strain_moved, strain_over;  // particles moved, springs stretched in a pass
+  std::vector<std::uint8_t> strain_saved;      // x_before holds where it started this call
+  std::vector<int> strain_changed;             // particles moved in this call
+  Vec3 handle_force = Vec3::Zero();            // force the first pulling handle exerts, N
+  // Self-collision spatial hash (counting sort by cell).
+  std::vector<int> cell_start, cell_entries, particle_cell;
+  std::vector<std::array<long long, 3>> cell_coord;
+  std::vector<std::uint8_t> colliding;  // in a pair within d_t (the pairs' ends, listed once)
+  std::vector<int> colliding_particles;
+  std::vector<CollisionPair> collision_pairs;
+  // Self-collision candidates: pairs (i < j, sorted) whose anchors are within
+  // candidates_radius; the particles searched again this step, and their flags
+  // (zero between steps).
+  std::vector<std::array<int, 2>> candidates, candidates_merged;
+  std::vector<int> candidate_movers;
+  std::vector<std::uint8_t> candidate_moved;
+  // Particles anchored again since the hash was built (its entries for them
+  // are out of date), and their flags.
+  std::vector<int> hash_stale;
+  std::vector<std::uint8_t> hash_stale_flag;
+  std::vector<std::vector<std::array<int, 2>>>
+      thread_candidates;                      // each thread's share of the search
+  std::vector<std::uint8_t> candidate_close;  // candidate within d_t this step
+  Vec3Array candidates_anchor;
+  double candidates_radius = 0;
+  // Implicit Euler, in columns (see implicit_euler.cpp): in float, the
+  // matrix's 8 forward stencil edges' blocks and the block-Jacobi
+  // preconditioner; in double, the conjugate-gradient vectors and the
+  // matrix's diagonal blocks; per-row sums; the particles whose velocity the
+  // solve keeps (pinned, driven, held).
+  std::vector<float> float_columns;
+  std::vector<double> cg_columns;
+  std::vector<int> fixed_particles;
+  std::vector<double> row_sums, row_max;
+  int cg_iterations = 0;              // of the last implicit solve
+  long long cg_iterations_total = 0;  // of every implicit solve since reset
+  // Implicit Euler's step control: velocities at the start of a try; substeps
+  // taken since reset (one a step for the other integrators), and solves (the
+  // tries thrown away included).
+  Vec3Array v_start;
+  long long substeps = 0, solves = 0;
+  // XPBD (xpbd.cpp): positions at the start of the substep, before contact;
+  // the inverse masses the constraints see; a class's corrections (x, y, z
+  // columns) and where along a row each class is; the particles the measured
+  // handle holds and the constraints' impulse on them over the substep.
+  Vec3Array x_prev, x_before_collide;
+  std::vector<double> free_inv_mass, correction, class_gate;
+  std::vector<int> reaction_particles;
+  Vec3 reaction_impulse = Vec3::Zero();
+  // The viewer's hand (Simulation::grab), copied in from the Simulation.
+  int grab_particle = -1;
+  Vec3 grab_target = Vec3::Zero();
+  double grab_k = 0;
+};
+
+}  // namespace wetcloth

@@ -19,6 +19,7 @@
 #include "cli/scene_options.hpp"
 #include "draw.hpp"
 #include "programs.hpp"
+#include "wetcloth/checkpoint.hpp"
 #include "wetcloth/scene.hpp"
 #include "wetcloth/simulation.hpp"
 
@@ -359,6 +360,12 @@ class Viewer {
       case GLFW_KEY_F:
         frame_camera();
         break;
+      case GLFW_KEY_F5:
+        save_state();
+        break;
+      case GLFW_KEY_F9:
+        load_state();
+        break;
       default:
         break;
     }
@@ -392,6 +399,37 @@ class Viewer {
     } else {
       std::fprintf(stderr, "wetcloth: error: cannot write %s\n", path.c_str());
       status_ = "cannot write " + path.string();
+    }
+  }
+
+  // F5 / F9: the whole state with its scene, into out/viewer/NAME.state and
+  // back (wetcloth::save_checkpoint); a loaded run continues as it would have.
+  fs::path state_file() const { return fs::path("out") / "viewer" / (params_.name + ".state"); }
+
+  void save_state() {
+    const fs::path path = state_file();
+    try {
+      fs::create_directories(path.parent_path());
+      save_checkpoint(path, sim_->model().params, sim_->state());
+      status_ = "state saved: " + path.string();
+    } catch (const std::exception& e) {
+      status_ = std::string("cannot save the state: ") + e.what();
+    }
+  }
+
+  void load_state() {
+    const fs::path path = state_file();
+    try {
+      Checkpoint c = load_checkpoint(path);
+      if (to_toml(c.params) != to_toml(sim_->model().params)) {
+        params_ = std::move(c.params);
+        start_scene();
+      }
+      sim_->restore(c.state);
+      after_reset();
+      status_ = "state loaded: " + path.string();
+    } catch (const std::exception& e) {
+      status_ = std::string("cannot load the state: ") + e.what();
     }
   }
 
@@ -519,6 +557,9 @@ class Viewer {
     if (was_recording) ImGui::PopStyleColor();
     ImGui::SameLine();
     if (ImGui::Button("Screenshot")) screenshot_ = true;
+    if (ImGui::Button("Save state")) save_state();
+    ImGui::SameLine();
+    if (ImGui::Button("Load state")) load_state();
     if (!status_.empty()) {
       ImGui::PushTextWrapPos(0);
       ImGui::TextDisabled("%s", status_.c_str());

@@ -113,7 +113,7 @@ Vec3 cloth_start_position(const Params& p, int i, int j) {
   const double u = i * (p.cloth.size[0] / (nu - 1)) - 0.5 * p.cloth.size[0];
   const double v = j * (p.cloth.size[1] / (nv - 1)) - 0.5 * p.cloth.size[1];
   // Vertical cloths hang with v = 0 at the top.
-  const Vec3 flat = p.cloth.orientation == "vertical" ? Vec3(u, 0, -v) : Vec3(u, v, 0);
+  const Vec3 flat = p.cloth.orientation == Orientation::Vertical ? Vec3(u, 0, -v) : Vec3(u, v, 0);
   const Eigen::AngleAxisd tilt(p.cloth.tilt * std::numbers::pi / 180, Vec3::UnitX());
   return to_vec(p.cloth.center) + (p.cloth.tilt != 0 ? Vec3(tilt * flat) : flat);
 }
@@ -204,15 +204,13 @@ Model build_model(const Params& p) {
       if (!fresh) m.triangle_pairs.push_back({it->second, t});
     }
 
-  if (p.contact.surface == "table" && p.table.enabled) m.contact_surface = SurfaceKind::Table;
-  if (p.contact.surface == "ball" && p.ball.enabled) m.contact_surface = SurfaceKind::Ball;
+  if (p.contact.surface == SurfaceChoice::Table && p.table.enabled) m.contact_surface = SurfaceKind::Table;
+  if (p.contact.surface == SurfaceChoice::Ball && p.ball.enabled) m.contact_surface = SurfaceKind::Ball;
 
   for (const auto& [name, hp] : p.handles) {
     Handle h;
     h.name = name;
-    h.type = hp.type == "pin"    ? HandleType::Pin
-             : hp.type == "move" ? HandleType::Move
-                                 : HandleType::Force;
+    h.type = hp.type;
     // The grid rectangle from `at` to `at + span`, widened by the patch.
     const int r = static_cast<int>(hp.patch);
     // (std::minmax of two temporaries would return dangling references; of a

@@ -30,12 +30,6 @@ std::string format_number(double v) {
   return std::string(buf, r.ptr);
 }
 
-UpAxis parse_up_axis(const std::string& up) {
-  if (up == "z") return UpAxis::Z;
-  if (up == "y") return UpAxis::Y;
-  throw std::invalid_argument("'" + up + "': the up axis is z or y");
-}
-
 std::string cloth_obj(const Model& m, const State& s, UpAxis up) {
   Vec3Array normal(m.n);
   compute_normals(m, s.x, normal);

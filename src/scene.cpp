@@ -25,6 +25,34 @@ namespace {
 
 constexpr double kNoLimit = 1e300;
 
+// A member as the loader holds it: an enum by its name in the scene file
+// (ChoiceNames), anything else as it is.
+template <class T>
+ParamValue to_value(const T& v) {
+  if constexpr (std::is_enum_v<T>)
+    return to_string(v);
+  else
+    return v;
+}
+template <class T>
+T from_value(const ParamValue& v) {
+  if constexpr (std::is_enum_v<T>) {
+    const auto& names = ChoiceNames<T>::names;
+    const auto it = std::find(names.begin(), names.end(), std::get<std::string>(v));
+    if (it == names.end()) throw std::invalid_argument("not a choice: " + std::get<std::string>(v));
+    return static_cast<T>(it - names.begin());
+  } else {
+    return std::get<T>(v);
+  }
+}
+template <class T>
+std::vector<std::string> choices_of(std::vector<std::string> given) {
+  if constexpr (std::is_enum_v<T>)
+    return {ChoiceNames<T>::names.begin(), ChoiceNames<T>::names.end()};
+  else
+    return given;
+}
+
 template <class F>
 ParamDef field(std::string key, std::string unit, double lo, double hi, std::string meaning, F acc,
                std::vector<std::string> choices = {}) {
@@ -35,13 +63,13 @@ ParamDef field(std::string key, std::string unit, double lo, double hi, std::str
   d.meaning = std::move(meaning);
   d.min = lo;
   d.max = hi;
-  d.choices = std::move(choices);
+  d.choices = choices_of<T>(std::move(choices));
   Params defaults;
-  d.default_value = acc(defaults);
+  d.default_value = to_value(acc(defaults));
   d.get = [acc](const Params& p, const std::string&) {
-    return ParamValue(acc(const_cast<Params&>(p)));
+    return to_value(acc(const_cast<Params&>(p)));
   };
-  d.set = [acc](Params& p, const std::string&, const ParamValue& v) { acc(p) = std::get<T>(v); };
+  d.set = [acc](Params& p, const std::string&, const ParamValue& v) { acc(p) = from_value<T>(v); };
   return d;
 }
 
@@ -55,14 +83,14 @@ ParamDef handle_field(std::string key, std::string unit, double lo, double hi, s
   d.meaning = std::move(meaning);
   d.min = lo;
   d.max = hi;
-  d.choices = std::move(choices);
+  d.choices = choices_of<T>(std::move(choices));
   HandleParams defaults;
-  d.default_value = acc(defaults);
+  d.default_value = to_value(acc(defaults));
   d.get = [acc](const Params& p, const std::string& h) {
-    return ParamValue(acc(const_cast<HandleParams&>(p.handles.at(h))));
+    return to_value(acc(const_cast<HandleParams&>(p.handles.at(h))));
   };
   d.set = [acc](Params& p, const std::string& h, const ParamValue& v) {
-    acc(p.handles[h]) = std::get<T>(v);
+    acc(p.handles[h]) = from_value<T>(v);
   };
   return d;
 }
@@ -101,8 +129,7 @@ std::vector<ParamDef> make_defs() {
       field("cloth.size", "m", 1e-4, 100, "width (u) and height (v) of the cloth", P(cloth.size)),
       field("cloth.center", "m", -inf, inf, "centre of the cloth at t = 0", P(cloth.center)),
       field("cloth.orientation", "", 1, 0,
-            "horizontal: in the xy plane; vertical: in the xz plane, v down", P(cloth.orientation),
-            {"horizontal", "vertical"}),
+            "horizontal: in the xy plane; vertical: in the xz plane, v down", P(cloth.orientation)),
       field("cloth.tilt", "°", -90, 90,
             "then turned about the x axis through its centre: tilted by 20, a falling cloth "
             "lands edge first (with air.model = \"exchange\" the wedge of air under it leaks "
@@ -176,7 +203,7 @@ std::vector<ParamDef> make_defs() {
       field("ball.center", "m", -inf, inf, "centre of the ball", P(ball.center)),
       field("ball.radius", "m", 1e-4, 100, "radius of the ball", P(ball.radius)),
       field("contact.surface", "", 1, 0, "the surface the cloth sticks to and traps air against",
-            P(contact.surface), {"table", "ball", "none"}),
+            P(contact.surface)),
       field("contact.bridge_height", "m", 0, 1,
             "liquid-bridge threshold h_th: closer is in contact", P(contact.bridge_height)),
       field("adhesion.enabled", "", 0, 0, "liquid-bridge adhesion (eq. 13)", P(adhesion.enabled)),
@@ -191,9 +218,9 @@ std::vector<ParamDef> make_defs() {
       field("friction.mu", "1", 0, 10, "Coulomb friction coefficient μ", P(friction.mu)),
       field("friction.normal", "", 1, 0,
             "normal force for friction: contact (adhesion + load) or adhesion (the paper's)",
-            P(friction.normal), {"contact", "adhesion"}),
+            P(friction.normal)),
       field("air.model", "", 1, 0, "trapped air: exchange (paper), sealed (Yamada), vented, off",
-            P(air.model), {"exchange", "sealed", "vented", "off"}),
+            P(air.model)),
       field("air.p_atm", "Pa", 1, 1e7, "atmospheric pressure", P(air.p_atm)),
       field("air.d_delta", "m/(s·Pa)", 0, 1, "dry permeability D_δ (eq. 5)", P(air.d_delta)),
       field("air.k_delta", "m/(s·Pa)", 0, 1, "permeability lost per unit humidity K_δ (eq. 5)",
@@ -206,7 +233,7 @@ std::vector<ParamDef> make_defs() {
       field(
           "air.force_direction", "", 1, 0,
           "direction of the pressure force (eq. 3): surface normal (conservative) or cloth normal",
-          P(air.force_direction), {"surface", "cloth"}),
+          P(air.force_direction)),
       field("air.paper_update_rule", "", 0, 0, "update the air only when its volume grew (paper)",
             P(air.paper_update_rule)),
       field("air.paper_threshold", "m³", 0, 1, "growth per step that triggers that update",
@@ -222,7 +249,7 @@ std::vector<ParamDef> make_defs() {
             "time integrator: symplectic-euler (small steps, the reference), xpbd (large steps "
             "in substeps: dt 1/240 s, integrator.substeps), implicit-euler (backward Euler), "
             "explicit-euler (the blog's forward Euler: it gains energy every step, for comparison)",
-            P(integrator.type), {"xpbd", "explicit-euler", "symplectic-euler", "implicit-euler"}),
+            P(integrator.type)),
       field("integrator.dt", "s", 1e-9, 1, "time step", P(integrator.dt)),
       field("integrator.substeps", "", 0, 10000,
             "xpbd: substeps a step, each one sweep of the constraints (0: 10, and one per 10 "
@@ -253,9 +280,9 @@ std::vector<ParamDef> make_defs() {
             "cloth.pc2 with cloth_rest.obj; vtk/cloth_NNNNN.vtp with cloth.pvd",
             P(run.exports)),
       field("run.up", "", 1, 0, "up axis of the files written: z (the simulation's) or y",
-            P(run.up), {"z", "y"}),
+            P(run.up)),
       handle_field("type", "", 1, 0, "force: constant force; move: driven at a velocity; pin: held",
-                   H(type), {"force", "move", "pin"}),
+                   H(type)),
       handle_field("at", "1", 0, 1,
                    "(u, v) of the handle on the cloth: its centre, or with span one end", H(at)),
       handle_field("span", "1", -1, 1,
@@ -468,9 +495,9 @@ void check_consistency(const Params& p, const std::string& source,
       line = ":" + std::to_string(n->source().begin.line);
     throw SceneError(source + line + (sets.empty() ? "" : sets + "'") + ": " + key + ": " + msg);
   };
-  if (p.contact.surface == "ball" && !p.ball.enabled)
+  if (p.contact.surface == SurfaceChoice::Ball && !p.ball.enabled)
     bad("contact.surface", "is 'ball' but ball.enabled is false");
-  if (p.contact.surface == "table" && !p.table.enabled)
+  if (p.contact.surface == SurfaceChoice::Table && !p.table.enabled)
     bad("contact.surface", "is 'table' but table.enabled is false");
   try {
     parse_export_formats(p.run.exports);
@@ -504,17 +531,17 @@ void check_consistency(const Params& p, const std::string& source,
   const auto nonzero = [](const Vec3d& v) { return v[0] != 0 || v[1] != 0 || v[2] != 0; };
   for (const auto& [name, h] : p.handles) {
     const std::string key = "handle." + name + ".";
-    const std::string is = " (this one is " + h.type + ")";
-    if (h.type != "force" && nonzero(h.force))
+    const std::string is = " (this one is " + to_string(h.type) + ")";
+    if (h.type != HandleType::Force && nonzero(h.force))
       bad(key + "force", "applies to force handles only" + is);
-    if (h.type != "force" && h.max_height > 0)
+    if (h.type != HandleType::Force && h.max_height > 0)
       bad(key + "max_height", "applies to force handles only" + is);
     for (int i = 0; i < 2; ++i)
       if (h.at[i] + h.span[i] < 0 || h.at[i] + h.span[i] > 1)
         bad(key + "span", "at + span must stay on the cloth, in [0, 1]");
-    if (h.type == "pin" && h.max_travel > 0)
+    if (h.type == HandleType::Pin && h.max_travel > 0)
       bad(key + "max_travel", "applies to force and move handles only" + is);
-    if (h.type != "move" && nonzero(h.velocity))
+    if (h.type != HandleType::Move && nonzero(h.velocity))
       bad(key + "velocity", "applies to move handles only" + is);
   }
 }
@@ -704,12 +731,12 @@ Params at_resolution(Params p, long long grid) {
   const double k_before = detail::chain_stiffness(p);
   p.cloth.resolution = {grid, height};
   // A set number of xpbd substeps grows with the grid (0, the default, grows by itself).
-  if (p.integrator.type == "xpbd" && scale > 1 && p.integrator.substeps > 0)
+  if (p.integrator.type == IntegratorType::Xpbd && scale > 1 && p.integrator.substeps > 0)
     p.integrator.substeps =
         std::llround(std::ceil(static_cast<double>(p.integrator.substeps) * scale));
   // The particles get lighter as the spacing squared; bending springs stiffer
   // (B / l²), and from about 101 x 101 on a 0.3 m cloth they set the limit.
-  if (p.integrator.type != "implicit-euler" && p.integrator.type != "xpbd" && scale > 1) {
+  if (p.integrator.type != IntegratorType::ImplicitEuler && p.integrator.type != IntegratorType::Xpbd && scale > 1) {
     p.integrator.dt /= scale;
     const double k_after = detail::chain_stiffness(p);
     if (k_after > k_before) p.integrator.dt *= std::sqrt(k_before / k_after);

@@ -212,7 +212,7 @@ void Simulation::accumulate_forces(bool implicit) {
   State& s = state_;
   Workspace& w = *ws_;
   for_each_particle(m, [&](int i) { put(w.force[i], Vec3::Zero()); });
-  add_spring_forces(m, s, w, m.params.integrator.type == "explicit-euler");
+  add_spring_forces(m, s, w, m.params.integrator.type == IntegratorType::ExplicitEuler);
   compute_normals(m, s.x.column(0), w.normal, w.quad_normals);
   add_gravity(m, w.force);
   if (!implicit) add_viscous_damping(m, s, w.force);
@@ -253,11 +253,13 @@ void Simulation::take_step() {
   State& s = state_;
   Workspace& w = *ws_;
   const double dt = m.params.integrator.dt;
-  const std::string& integrator = m.params.integrator.type;
+  const IntegratorType integrator = m.params.integrator.type;
 
-  if (integrator == "xpbd") {
+  switch (integrator) {
+  case IntegratorType::Xpbd:
     xpbd_step();
-  } else if (integrator == "implicit-euler") {
+    break;
+  case IntegratorType::ImplicitEuler: {
     // Baraff & Witkin's step control (their section 5.5): a substep whose
     // springs change too much for their linearisation is taken again at half
     // the size. Where they double the size after every substep that held, the
@@ -282,9 +284,12 @@ void Simulation::take_step() {
       s.time = (static_cast<double>(s.steps) + static_cast<double>(done) / kWhole) * dt;
       finish_step(h);
     }
-  } else {
+    break;
+  }
+  case IntegratorType::ExplicitEuler:
+  case IntegratorType::SymplecticEuler:
     accumulate_forces(false);
-    if (integrator == "explicit-euler") {
+    if (integrator == IntegratorType::ExplicitEuler) {
       for (int i = 0; i < m.n; ++i) {
         add(s.x[i], dt * s.v[i]);
         add(s.v[i], (dt * m.inv_mass[i]) * w.force[i]);
@@ -314,6 +319,7 @@ void Simulation::take_step() {
     s.time = (s.steps + 1) * dt;  // no drift from summing dt
     ++w.substeps;
     finish_step(dt);
+    break;
   }
   ++s.steps;
 }
@@ -493,9 +499,9 @@ std::string Simulation::blow_up_reason() const {
   // Within the explicit limit, a force handle that alone would have driven
   // its patch past max_speed by now is the likelier cause than the step: a
   // single particle of a few mg takes 1 N as 1e5 m/s².
-  const bool explicit_step = p.integrator.type != "implicit-euler" && p.integrator.type != "xpbd";
+  const bool explicit_step = p.integrator.type != IntegratorType::ImplicitEuler && p.integrator.type != IntegratorType::Xpbd;
   const char* lead = " Likely cause: ";
-  if (p.integrator.type == "explicit-euler" && p.integrator.dt <= limit) {
+  if (p.integrator.type == IntegratorType::ExplicitEuler && p.integrator.dt <= limit) {
     // Forward Euler grows every oscillation a little each step, whatever the
     // step: the limit below is the symplectic step's.
     o << lead << "integrator.type = \"explicit-euler\" (the blog's forward Euler) amplifies "
@@ -516,7 +522,7 @@ std::string Simulation::blow_up_reason() const {
       << " m/s²). Lower it, or spread it over a larger handle." << h.name << ".patch.";
     lead = " Or: ";
   }
-  if (p.integrator.type == "xpbd") {
+  if (p.integrator.type == IntegratorType::Xpbd) {
     o << lead << "integrator.dt = " << p.integrator.dt << " s in " << xpbd_substeps(p)
       << " substeps (integrator.substeps = " << p.integrator.substeps
       << ") is too coarse for a force this large: raise integrator.substeps, or look at the "

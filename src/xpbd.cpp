@@ -223,7 +223,7 @@ void collide_with_friction(const Model& m, State& s, Workspace& w,
   });
   const double mu = m.params.friction.mu;
   if (mu == 0) return;
-  const bool with_load = m.params.friction.normal == "contact";
+  const bool with_load = m.params.friction.normal == FrictionNormal::Contact;
   const auto surface = static_cast<std::uint8_t>(m.contact_surface);
   // Per particle, from its flags: 0 no friction, 1 friction from its load,
   // 2 friction from its load and its adhesion (on the contact surface).

@@ -22,8 +22,8 @@ inline Params bare(int n = 2) {
   p.wind.k = 0;
   p.strain_limit.enabled = false;
   p.table.enabled = false;
-  p.contact.surface = "none";
-  p.air.model = "off";
+  p.contact.surface = SurfaceChoice::None;
+  p.air.model = AirModel::Off;
   p.self_collision.enabled = false;
   return p;
 }

@@ -151,7 +151,7 @@ TEST(ImplicitEuler, ClothFallingOntoTheBallRestsOnIt) {
 // a stretched spring toward rest like the exact solution does.
 TEST(ImplicitEuler, StretchedSpringRelaxesTowardRest) {
   Params p = test::bare(2);
-  p.integrator.type = "implicit-euler";
+  p.integrator.type = IntegratorType::ImplicitEuler;
   p.integrator.dt = 1e-3;
   p.integrator.cg_tolerance = 1e-12;
   p.integrator.max_step_strain = 10;  // one backward-Euler step, not halved

@@ -128,7 +128,7 @@ TEST(SceneLoader, ChoicesAreChecked) {
 TEST(SceneLoader, HandleKeysAreChecked) {
   const Params p = parse_scene("[handle.pull]\nforce = [0, 0, 2]\npatch = 1\n", "s.toml");
   EXPECT_EQ(p.handles.at("pull").force[2], 2.0);
-  EXPECT_EQ(p.handles.at("pull").type, "force");
+  EXPECT_EQ(p.handles.at("pull").type, HandleType::Force);
   const auto e = error_of("[handle.pull]\nforse = [0, 0, 2]\n");
   EXPECT_NE(e.find("handle.pull.forse"), std::string::npos) << e;
 }
@@ -157,7 +157,7 @@ TEST(SceneLoader, HandleKeysMustFitTheType) {
 TEST(SceneLoader, OverridesUseDottedKeysAndNameThemselves) {
   const Params p = parse_scene("", "s.toml", {"cloth.resolution=[5,7]", "air.model=sealed"});
   EXPECT_EQ(p.cloth.resolution[1], 7);
-  EXPECT_EQ(p.air.model, "sealed");
+  EXPECT_EQ(p.air.model, AirModel::Sealed);
   const auto e = error_of("", {"cloth.humidity=2"});
   EXPECT_NE(e.find("--set 'cloth.humidity=2'"), std::string::npos) << e;
   EXPECT_NE(error_of("", {"nonsense"}).find("KEY=VALUE"), std::string::npos);
@@ -241,12 +241,12 @@ TEST(SceneLoader, ParamsMadeInCodeAreChecked) {
   EXPECT_NE(error_building(p).find("Params: integrator.dt: value -0.001 is out of range"),
             std::string::npos);
   p = load_scene("drop-table");
-  p.contact.surface = "ball";
+  p.contact.surface = SurfaceChoice::Ball;
   EXPECT_NE(error_building(p).find("contact.surface: is 'ball' but ball.enabled is false"),
             std::string::npos);
   Simulation sim(load_scene("drop-table"));
   p = sim.model().params;
-  p.air.model = "leaky";
+  p.air.model = static_cast<AirModel>(7);  // no such model
   EXPECT_THROW(sim.set_params(p), SceneError);
   EXPECT_THROW(sim.set_humidity(1.5), SceneError);
   EXPECT_NO_THROW(sim.set_humidity(1.0));

@@ -50,7 +50,7 @@ TEST(Scenes, DropBallNeverPenetrates) { expect_never_inside(test::coarse("drop-b
 // after it, and collision must put them back on the table.
 TEST(Scenes, LimiterNeverLeavesParticlesInTheTable) {
   Params p = test::coarse("drop-table", {"table.height=0.37", "cloth.center=[0,0,0.37]"});
-  p.handles["press"].type = "move";
+  p.handles["press"].type = HandleType::Move;
   p.handles["press"].at = {0, 0};
   p.handles["press"].velocity = {0, 0, -0.2};
   Simulation sim(p);
@@ -135,7 +135,7 @@ TEST(Scenes, LatePinAndMoveThatStops) {
 
   Params drag = test::coarse("pull-corner");
   HandleParams& rig = drag.handles.begin()->second;
-  rig.type = "move";
+  rig.type = HandleType::Move;
   rig.force = {0, 0, 0};
   rig.max_height = 0;
   rig.velocity = {-0.1, 0, 0};
@@ -153,7 +153,7 @@ TEST(Scenes, LatePinAndMoveThatStops) {
 TEST(Scenes, LateMoveHandleIsFreeUntilItStarts) {
   Params p = test::coarse("hang");
   for (auto& [name, h] : p.handles) {
-    h.type = "move";
+    h.type = HandleType::Move;
     h.velocity = {0.05, 0, 0};
     h.start = 0.1;
   }
@@ -189,7 +189,7 @@ TEST(Scenes, PinAlongAnEdge) {
   Params p = test::coarse("hang");
   p.handles.clear();
   HandleParams top;
-  top.type = "pin";
+  top.type = HandleType::Pin;
   top.at = {0.0, 0.0};
   top.span = {1.0, 0.0};
   p.handles["top"] = top;

@@ -156,7 +156,7 @@ Jolted jolted_cloth(bool pinned) {
   p.handles["pull"] = pull;
   if (pinned) {
     HandleParams pin;
-    pin.type = "pin";
+    pin.type = HandleType::Pin;
     pin.at = {1, 1};
     pin.patch = 1;
     p.handles["pin"] = pin;

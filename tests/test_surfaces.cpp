@@ -37,7 +37,7 @@ TEST(Surfaces, CollisionProjectsOutAndRemovesInwardVelocity) {
 TEST(Surfaces, TableAloneCollidesAsTheGeneralLoopDoes) {
   Params p = test::bare(6);
   p.table.enabled = true;
-  p.handles["pin"].type = "pin";
+  p.handles["pin"].type = HandleType::Pin;
   p.handles["pin"].at = {0, 0};
   Simulation table_only(p);
   p.ball.enabled = true;

@@ -377,7 +377,7 @@ TEST(Air, VentedTentRingedByContactPullsAsExchange) {
 TEST(Air, VentedClothFallingOntoTheBallIsOpenToTheRoom) {
   Simulation sim(test::coarse("drape-ball", {"cloth.humidity=0.7"}));
   const Params& p = sim.model().params;
-  ASSERT_EQ(p.air.model, "vented");
+  ASSERT_EQ(p.air.model, AirModel::Vented);
   const Workspace& w = detail::workspace(sim);
   int beyond_band = 0, in_pocket = 0;
   for (int i = 0; i < sim.model().n; ++i) (w.distance[i] < p.air.band ? in_pocket : beyond_band)++;

@@ -21,7 +21,7 @@ std::vector<std::string> with(std::vector<std::string> sets, const std::vector<s
 }
 
 Params xpbd(Params p) {
-  p.integrator.type = "xpbd";
+  p.integrator.type = IntegratorType::Xpbd;
   p.integrator.dt = 1.0 / 240;
   return p;
 }
@@ -93,11 +93,11 @@ TEST(Xpbd, SpringSweepConservesMomentum) {
 TEST(Xpbd, PinCarriesTheWeightOfTheHangingCloth) {
   Params p = xpbd(test::bare(9));
   p.springs = Params{}.springs;
-  p.cloth.orientation = "vertical";
+  p.cloth.orientation = Orientation::Vertical;
   p.forces.gravity = {0, 0, -9.81};
   p.forces.viscous_damping = 2.0;  // settle quickly
   HandleParams top;
-  top.type = "pin";
+  top.type = HandleType::Pin;
   top.at = {0, 1};
   top.span = {1, 0};
   p.handles["top"] = top;

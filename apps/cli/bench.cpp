@@ -201,7 +201,7 @@ int run_bench(const Options& o) {
       "wetcloth %s bench: scene %s, integrator %s, dt %g s (first grid), %g s simulated per run, "
       "%d repetitions, "
       "%u threads\nmachine: %u cores, %s\n\n",
-      WETCLOTH_VERSION, p0.name.c_str(), p0.integrator.type.c_str(), dt, o.duration, o.repetitions,
+      WETCLOTH_VERSION, p0.name.c_str(), to_string(p0.integrator.type).c_str(), dt, o.duration, o.repetitions,
       threads, cores, cpu.c_str());
   std::printf(
       " grid  particles  springs  dt µs   steps  substeps/step    wall s    µs/step  "
@@ -209,7 +209,7 @@ int run_bench(const Options& o) {
 
   json doc = {{"version", WETCLOTH_VERSION},
               {"scene", p0.name},
-              {"integrator", p0.integrator.type},
+              {"integrator", to_string(p0.integrator.type)},
               {"dt_s", dt},
               {"threads", threads},
               {"duration_s", o.duration},
@@ -304,7 +304,7 @@ int run_peer(const Options& o, const std::vector<Grid>& grids, unsigned threads,
       "adhesion, self-collision, wind or damping), dt 1/600 s, Bullet's defaults otherwise, "
       "one thread\nmachine: %u cores, %s\n\n",
       WETCLOTH_VERSION, version.c_str(), o.repetitions, o.duration, p0.name.c_str(),
-      p0.integrator.type.c_str(), threads, threads == 1 ? "" : "s", p0.integrator.dt, cores,
+      to_string(p0.integrator.type).c_str(), threads, threads == 1 ? "" : "s", p0.integrator.dt, cores,
       cpu.c_str());
   std::printf(
       "       ------------------- ours -------------------   ------------- Bullet --------------\n"
@@ -314,7 +314,7 @@ int run_peer(const Options& o, const std::vector<Grid>& grids, unsigned threads,
 
   json doc = {{"version", WETCLOTH_VERSION},
               {"scene", p0.name},
-              {"integrator", p0.integrator.type},
+              {"integrator", to_string(p0.integrator.type)},
               {"dt_s", p0.integrator.dt},
               {"threads", threads},
               {"duration_s", o.duration},

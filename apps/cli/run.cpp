@@ -59,7 +59,7 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress) {
   write_file_atomic(out / "scene.toml", "# resolved by wetcloth " WETCLOTH_VERSION
                                         "; `wetcloth run` this file to reproduce the run\n" +
                                             to_toml(p));
-  const UpAxis up = parse_up_axis(p.run.up);
+  const UpAxis up = p.run.up;
   write_file_atomic(out / "obstacles.obj", obstacles_obj(sim.model(), up));
   const ExportFormats formats = parse_export_formats(p.run.exports);
   std::optional<CacheWriter> caches;

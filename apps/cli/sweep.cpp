@@ -225,7 +225,8 @@ std::function<int()> add_sweep_command(CLI::App& app) {
   cmd->add_option("--air-models", o->air_models,
                   "air models to compare, e.g. exchange,sealed (paper Fig. 8; = --vary air.model=...)")
       ->delimiter(',')
-      ->check(CLI::IsMember({"exchange", "sealed", "vented", "off"}));
+      ->check(CLI::IsMember(std::vector<std::string>(ChoiceNames<AirModel>::names.begin(),
+                                                     ChoiceNames<AirModel>::names.end())));
   cmd->add_option("--set", o->scene.sets, "override a parameter in every case, KEY=VALUE (repeatable)")
       ->allow_extra_args(false);
   cmd->add_option("--duration", o->scene.duration, "simulated time per case, s")

@@ -177,7 +177,7 @@ inline Plan plan(const std::vector<Varied>& varied,
       if (varied[k].key != "cloth.humidity" && varied[k].key != "air.model") cs.columns.push_back(text);
     }
     cs.humidity = cs.params.cloth.humidity;
-    cs.air_model = cs.params.air.model;
+    cs.air_model = to_string(cs.params.air.model);
     plan.cases.push_back(std::move(cs));
   }
   for (std::size_t k = 0; k < varied.size(); ++k) {

@@ -372,13 +372,13 @@ Camera frame_box(const Vec3f& lo, const Vec3f& hi, float aspect, const Camera& v
 
 Camera scene_view(const Params& p) {
   Camera c;
-  if (p.cloth.orientation == "vertical") {
+  if (p.cloth.orientation == Orientation::Vertical) {
     c.yaw_deg = -75;  // the cloth spans x and z: nearly face on, a little from the side
     c.pitch_deg = 12;
     return c;
   }
   for (const auto& [name, h] : p.handles) {  // the first pulling handle, by name
-    if (h.type != "force") continue;
+    if (h.type != HandleType::Force) continue;
     const float du = static_cast<float>((h.at[0] - 0.5) * p.cloth.size[0]),
                 dv = static_cast<float>((h.at[1] - 0.5) * p.cloth.size[1]);
     if (std::hypot(du, dv) >
@@ -417,12 +417,12 @@ Camera frame_scene(const Params& p, float aspect) {
   // The cloth's box: v along y (horizontal) or z (vertical), turned by the tilt.
   const float t = static_cast<float>(p.cloth.tilt * std::numbers::pi / 180);
   const float along = sv / 2 * std::abs(std::cos(t)), across = sv / 2 * std::abs(std::sin(t));
-  Vec3f half = p.cloth.orientation == "vertical" ? Vec3f(su / 2, std::max(0.02f, across), along)
+  Vec3f half = p.cloth.orientation == Orientation::Vertical ? Vec3f(su / 2, std::max(0.02f, across), along)
                                                  : Vec3f(su / 2, along, across);
   Vec3f lo = center - half, hi = center + half;
   // Room above a flat cloth for the tent a pulling handle raises.
   const float lift = std::max(su, sv) * 0.4f;
-  if (p.cloth.orientation != "vertical") hi.z() += lift;
+  if (p.cloth.orientation != Orientation::Vertical) hi.z() += lift;
   add_obstacles(p, lo, hi);
   return frame_box(lo, hi, aspect, scene_view(p));
 }
@@ -444,7 +444,7 @@ Stage stage_from(const Params& p) {
   // faces the camera: the light comes from nearer the camera and lower, or the
   // side we see would be the dark one.
   const Camera view = scene_view(p);
-  s.light = p.cloth.orientation == "vertical" ? direction(view.yaw_deg - 45, 35)
+  s.light = p.cloth.orientation == Orientation::Vertical ? direction(view.yaw_deg - 45, 35)
                                               : direction(view.yaw_deg - 95, 53);
   s.table = p.table.enabled;
   s.table_center = {static_cast<float>(p.cloth.center[0]), static_cast<float>(p.cloth.center[1])};
@@ -459,9 +459,9 @@ Stage stage_from(const Params& p) {
     // (a hanging cloth's lower edge is half its height below its centre; a little
     // more below it, as much as it stretches and swings, or a big empty floor shows).
     float low = static_cast<float>(p.cloth.center[2]);
-    if (p.cloth.orientation == "vertical") low -= static_cast<float>(p.cloth.size[1]) * 0.75f;
+    if (p.cloth.orientation == Orientation::Vertical) low -= static_cast<float>(p.cloth.size[1]) * 0.75f;
     if (s.ball) low = std::min(low, s.ball_center.z() - s.ball_radius);
-    s.ground_z = low - (p.cloth.orientation == "vertical" ? 0.0f : 0.1f);
+    s.ground_z = low - (p.cloth.orientation == Orientation::Vertical ? 0.0f : 0.1f);
   }
   return s;
 }

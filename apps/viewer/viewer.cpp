@@ -45,13 +45,6 @@ struct History {
   float span() const { return time.empty() ? 0.0f : time.back() - time.front(); }
 };
 
-// The choices a string parameter allows, from the loader's own definitions.
-std::vector<std::string> choices_of(const std::string& key) {
-  for (const auto& d : param_defs())
-    if (d.key == key) return d.choices;
-  return {};
-}
-
 // A file name in the current folder that does not exist yet: PREFIX-NNN[SUFFIX].
 fs::path unused_name(const std::string& prefix, const std::string& suffix) {
   for (int i = 0;; ++i) {
@@ -515,11 +508,16 @@ class Viewer {
     ImGui::Text("%s", hi.c_str());
   }
 
-  bool combo(const char* label, std::string& value, const std::vector<std::string>& choices) {
+  // A scene's choice (an enum), offered by its names.
+  template <class E>
+  bool combo(const char* label, E& value) {
     bool changed = false;
-    if (ImGui::BeginCombo(label, value.c_str())) {
-      for (const auto& c : choices)
-        if (ImGui::Selectable(c.c_str(), c == value)) changed = c != value, value = c;
+    if (ImGui::BeginCombo(label, to_string(value).c_str())) {
+      const auto& names = ChoiceNames<E>::names;
+      for (std::size_t k = 0; k < names.size(); ++k) {
+        const auto e = static_cast<E>(k);
+        if (ImGui::Selectable(names[k], e == value)) changed = e != value, value = e;
+      }
       ImGui::EndCombo();
     }
     return changed;
@@ -578,11 +576,11 @@ class Viewer {
       params_.cloth.humidity = humidity;
       sim_->set_humidity(humidity);  // live: mass, permeability, adhesion follow
     }
-    if (combo("air model", params_.air.model, choices_of("air.model"))) apply_params();
+    if (combo("air model", params_.air.model)) apply_params();
 
     // The first pulling handle: its force, along its own direction.
     for (auto& [name, hp] : params_.handles) {
-      if (hp.type != "force") continue;
+      if (hp.type != HandleType::Force) continue;
       Vec3 f = to_vec(hp.force);
       float mag = static_cast<float>(f.norm());
       if (ImGui::SliderFloat(("force '" + name + "', N").c_str(), &mag, 0, 5, "%.2f")) {
@@ -592,7 +590,7 @@ class Viewer {
       }
       break;
     }
-    if (combo("integrator", params_.integrator.type, choices_of("integrator.type"))) apply_params();
+    if (combo("integrator", params_.integrator.type)) apply_params();
     float dt = static_cast<float>(params_.integrator.dt);
     if (ImGui::SliderFloat("time step, s", &dt, 1e-6f, 1e-3f, "%.1e",
                            ImGuiSliderFlags_Logarithmic)) {

@@ -14,11 +14,8 @@ namespace wetcloth {
 
 void write_file_atomic(const std::filesystem::path& path, const std::string& contents);
 
-// Which way is up in the files written: the simulation's own z (the
-// default), or y (x, y, z) -> (x, z, -y), as Houdini, Maya and Blender's OBJ
-// importer expect by default.
-enum class UpAxis { Z, Y };
-UpAxis parse_up_axis(const std::string& up);  // "z" or "y"; std::invalid_argument else
+// The files' up axis (run.up): y turns (x, y, z) -> (x, z, -y), as Houdini, Maya
+// and Blender's OBJ importer expect by default.
 inline Vec3 to_up(const Vec3& x, UpAxis up) {
   return up == UpAxis::Z ? x : Vec3(x.x(), x.z(), -x.y());
 }

@@ -13,9 +13,44 @@ using Vec3d = std::array<double, 3>;
 using Vec2d = std::array<double, 2>;
 using Vec2i = std::array<long long, 2>;
 
+// The choices a scene makes, each with its names in the scene file (in the
+// order of the enum's values). The loader parses them once.
+template <class E>
+struct ChoiceNames;
+#define WETCLOTH_CHOICE(E, ...)                                    \
+  template <>                                                      \
+  struct ChoiceNames<E> {                                          \
+    static constexpr std::array names = {__VA_ARGS__};             \
+  };
+enum class HandleType { Force, Move, Pin };
+WETCLOTH_CHOICE(HandleType, "force", "move", "pin")
+enum class Orientation { Horizontal, Vertical };  // the xy plane, the xz plane
+WETCLOTH_CHOICE(Orientation, "horizontal", "vertical")
+enum class SurfaceChoice { Table, Ball, None };
+WETCLOTH_CHOICE(SurfaceChoice, "table", "ball", "none")
+enum class FrictionNormal { Contact, Adhesion };  // adhesion + load; the paper's adhesion alone
+WETCLOTH_CHOICE(FrictionNormal, "contact", "adhesion")
+enum class AirModel { Exchange, Sealed, Vented, Off };
+WETCLOTH_CHOICE(AirModel, "exchange", "sealed", "vented", "off")
+enum class AirForceDirection { Surface, Cloth };  // n_s; the cloth normal
+WETCLOTH_CHOICE(AirForceDirection, "surface", "cloth")
+enum class IntegratorType { SymplecticEuler, Xpbd, ImplicitEuler, ExplicitEuler };
+WETCLOTH_CHOICE(IntegratorType, "symplectic-euler", "xpbd", "implicit-euler", "explicit-euler")
+enum class UpAxis { Z, Y };  // of the files written: the simulation's z, or y
+WETCLOTH_CHOICE(UpAxis, "z", "y")
+#undef WETCLOTH_CHOICE
+
+// A choice's name in the scene file ("?" for a value no name has: the loader
+// then refuses it).
+template <class E>
+std::string to_string(E e) {
+  const auto k = static_cast<std::size_t>(e);
+  return k < ChoiceNames<E>::names.size() ? ChoiceNames<E>::names[k] : "?";
+}
+
 // How a scene pulls on the cloth (MODEL.md section 9).
 struct HandleParams {
-  std::string type = "force";   // force | move | pin
+  HandleType type = HandleType::Force;
   Vec2d at{0.5, 0.5};           // position on the cloth, (u, v) in [0, 1]
   Vec2d span{0, 0};             // the handle runs from `at` to `at + span`: an edge, a band
   long long patch = 0;          // half-width of the patch, in grid steps
@@ -34,7 +69,7 @@ struct Params {
     Vec2i resolution{51, 51};   // particles along u and v
     Vec2d size{0.3, 0.3};       // width (u) and height (v), m
     Vec3d center{0, 0, 0};      // centre of the cloth at t = 0, m
-    std::string orientation = "horizontal";  // horizontal (xy plane) | vertical (xz plane)
+    Orientation orientation = Orientation::Horizontal;
     double tilt = 0;                         // then turned about the x axis, degrees
     double humidity = 0.0;      // water saturation by weight ω, 0..1
     double areal_density = 0.12;  // dry ρ_A, kg/m²
@@ -91,7 +126,7 @@ struct Params {
   } ball;
 
   struct Contact {
-    std::string surface = "table";  // table | ball | none
+    SurfaceChoice surface = SurfaceChoice::Table;
     double bridge_height = 1e-3;    // liquid-bridge threshold h_th, m
   } contact;
 
@@ -105,18 +140,18 @@ struct Params {
 
   struct Friction {
     double mu = 0.3;
-    std::string normal = "contact";  // contact (adhesion + load) | adhesion (the paper's)
+    FrictionNormal normal = FrictionNormal::Contact;
   } friction;
 
   struct Air {
-    std::string model = "exchange";  // exchange | sealed | vented | off
+    AirModel model = AirModel::Exchange;
     double p_atm = 101325;            // Pa
     double d_delta = 1.0e-3;          // D_δ, m/(s·Pa)
     double k_delta = 0.9e-3;          // K_δ, m/(s·Pa)
     double breakthrough_pressure = 1000;  // P_b, Pa
     double band = 0.05;               // ball: air counted within this distance, m
     double film = 1e-4;               // air film a resting cloth keeps under it, m
-    std::string force_direction = "surface";  // surface (n_s) | cloth (the cloth normal)
+    AirForceDirection force_direction = AirForceDirection::Surface;
     bool paper_update_rule = false;
     double paper_threshold = 0.0;     // m³ of growth per step that triggers an update
   } air;
@@ -129,7 +164,7 @@ struct Params {
   } self_collision;
 
   struct Integrator {
-    std::string type = "symplectic-euler";  // symplectic-euler | xpbd | implicit-euler | explicit-euler
+    IntegratorType type = IntegratorType::SymplecticEuler;
     double dt = 5e-5;         // s (xpbd: 1/240 s in substeps)
     long long substeps = 0;   // xpbd: substeps a step (0: 10, and one per 10 particles past 101 along the longer side)
     double max_speed = 50;    // m/s; faster means the run has blown up
@@ -144,7 +179,7 @@ struct Params {
     double fps = 30;          // output frames per simulated second
     bool meshes = true;       // write frames/*.obj
     std::string exports;      // run.export: caches to write, "usd,pc2,vtk" or any of them
-    std::string up = "z";     // the up axis of the files written: z (the simulation's) or y
+    UpAxis up = UpAxis::Z;    // the up axis of the files written
   } run;
 
   std::map<std::string, HandleParams> handles;  // [handle.NAME]

@@ -87,8 +87,6 @@ struct SpringSet {
   std::size_t size() const { return a.size(); }
 };
 
-enum class HandleType { Force, Move, Pin };
-
 struct Handle {
   std::string name;
   HandleType type = HandleType::Force;

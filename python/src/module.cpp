@@ -186,9 +186,6 @@ py::dict metrics_dict(const Metrics& m) {
   return d;
 }
 
-const char* handle_type(HandleType t) {
-  return t == HandleType::Force ? "force" : t == HandleType::Move ? "move" : "pin";
-}
 
 class PySimulation {
  public:
@@ -440,7 +437,7 @@ the whole state of a run.)doc")
         py::dict d;
         for (const Handle& h : s.sim_.model().handles) {
           py::dict e;
-          e["type"] = handle_type(h.type);
+          e["type"] = to_string(h.type);
           e["particles"] = copy_of<int>(h.particles);
           e["force"] = py::make_tuple(h.force.x(), h.force.y(), h.force.z());
           e["velocity"] = py::make_tuple(h.velocity.x(), h.velocity.y(), h.velocity.z());

@@ -156,7 +156,7 @@ void update_vented(const Model& m, State& s, Workspace& w, double dt) {
 
 void update_air(const Model& m, State& s, Workspace& w, double dt) {
   const Params& p = m.params;
-  const std::string& model = p.air.model;
+  const AirModel model = p.air.model;
   s.pocket_air.clear();
   if (m.contact_surface == SurfaceKind::None) {  // no surface, no trapped air
     std::fill(s.pocket.begin(), s.pocket.end(), -1);
@@ -164,7 +164,7 @@ void update_air(const Model& m, State& s, Workspace& w, double dt) {
     s.inner_pressure = p.air.p_atm;
     return;
   }
-  if (model == "vented") {
+  if (model == AirModel::Vented) {
     update_vented(m, s, w, dt);
   } else {
     const auto [v_sum, a_sum, s_now] = ordered_sums<3>(m, w, [&](int j) {
@@ -178,11 +178,11 @@ void update_air(const Model& m, State& s, Workspace& w, double dt) {
       return sum;
     });
     const double grown = v_sum - s.air_volume;
-    if (model == "off" || s_now == 0) {
+    if (model == AirModel::Off || s_now == 0) {
       // Nothing is trapped while no part of the cloth touches the surface: the
       // air under it is open to the room.
       s.air_atm_volume = v_sum;
-    } else if (model == "exchange") {
+    } else if (model == AirModel::Exchange) {
       const bool update = !p.air.paper_update_rule || grown > p.air.paper_threshold;
       s.air_atm_volume =
           exchange(p, s.air_atm_volume, s.air_volume, v_sum, update ? a_sum : 0, dt, true);
@@ -195,11 +195,11 @@ void update_air(const Model& m, State& s, Workspace& w, double dt) {
     // area left for it to seep through, and blow up the first particle a
     // pull lifts. The excess escapes; a deficit (a flat cloth just starting
     // to peel) stays.
-    if (model != "off" && s_now > 0 && a_sum == 0)
+    if (model != AirModel::Off && s_now > 0 && a_sum == 0)
       s.air_atm_volume = std::min(s.air_atm_volume, v_sum);
-    const bool trapped = model != "off" && s_now > 0;
+    const bool trapped = model != AirModel::Off && s_now > 0;
     s.pocket_air.push_back(
-        trapped ? pocket_air(p, s.air_atm_volume, v_sum, a_sum, model == "exchange") : PocketAir{});
+        trapped ? pocket_air(p, s.air_atm_volume, v_sum, a_sum, model == AirModel::Exchange) : PocketAir{});
     s.air_volume = v_sum;
     s.inner_pressure = pressure(p, s.air_atm_volume, v_sum);
     for_each_particle(m, [&](int i) { s.pocket_pressure[i] = s.inner_pressure; });
@@ -225,9 +225,9 @@ void start_air(const Model& m, State& s, Workspace& w) {
 // gradient of the volume that sets the pressure: it pumps energy into lifted
 // flaps until a pulled cloth flutters and blows up (docs/model.md).
 void add_air_pressure(const Model& m, const State& s, Workspace& w) {
-  const bool off = m.params.air.model == "off" || m.contact_surface == SurfaceKind::None;
+  const bool off = m.params.air.model == AirModel::Off || m.contact_surface == SurfaceKind::None;
   const double p_atm = m.params.air.p_atm;
-  const bool along_cloth_normal = m.params.air.force_direction == "cloth";
+  const bool along_cloth_normal = m.params.air.force_direction == AirForceDirection::Cloth;
   for_each_particle(m, [&](int i) {
     if (off || s.contact[i] || !holds_air(m, w.distance[i])) {
       put(w.air_direction[i], Vec3::Zero());

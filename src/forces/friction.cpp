@@ -35,7 +35,7 @@ void apply_friction(const Model& m, State& s, const Workspace& w,
                     const std::vector<std::uint8_t>& touched, double dt) {
   const double mu = m.params.friction.mu;
   if (mu == 0) return;
-  const bool with_load = m.params.friction.normal == "contact";
+  const bool with_load = m.params.friction.normal == FrictionNormal::Contact;
   // On the contact surface, slow_down's arithmetic without a branch (a factor
   // of zero where it does not apply), over columns: a loop that vectorises.
   // w.force holds the step's forces, adhesion included (it is -adhesion·n_s).

@@ -396,6 +396,40 @@ const ParamDef* find_def(const std::string& key) {
   return nullptr;
 }
 
+// "unknown key", with the nearest key by edit distance where one is close: a
+// typo names what was meant ("did you mean cloth.humidity?").
+std::string unknown_key(const std::string& key) {
+  const auto distance = [](const std::string& a, const std::string& b) {
+    std::vector<std::size_t> row(b.size() + 1);
+    for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+    for (std::size_t i = 1; i <= a.size(); ++i) {
+      std::size_t diagonal = row[0];
+      row[0] = i;
+      for (std::size_t j = 1; j <= b.size(); ++j) {
+        const std::size_t up = row[j];
+        row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] != b[j - 1])});
+        diagonal = up;
+      }
+    }
+    return row[b.size()];
+  };
+  // A handle's keys compare by their part after the handle's name.
+  const bool in_handle = key.rfind("handle.", 0) == 0 && key.find('.', 7) != std::string::npos;
+  const std::string prefix = in_handle ? key.substr(0, key.find('.', 7) + 1) : "";
+  const std::string leaf = in_handle ? key.substr(prefix.size()) : key;
+  std::string best;
+  std::size_t best_distance = std::max<std::size_t>(2, leaf.size() / 4) + 1;
+  for (const ParamDef& d : param_defs()) {
+    const bool handle_key = d.key.rfind("handle.*.", 0) == 0;
+    if (handle_key != in_handle) continue;
+    const std::string candidate = handle_key ? d.key.substr(9) : d.key;
+    if (const std::size_t dist = distance(leaf, candidate); dist < best_distance)
+      best_distance = dist, best = prefix + candidate;
+  }
+  return "unknown key" + (best.empty() ? std::string() : " (did you mean " + best + "?)") +
+         " (wetcloth params lists the keys)";
+}
+
 // new_handles: whether the table may add handles (a scene file may; an
 // override may only change the scene's own, so that a misspelt name is an
 // error, not a second handle).
@@ -428,7 +462,7 @@ void apply_table(const toml::table& t, const std::string& prefix, Params& p, boo
         for (const auto& [hk, hv] : *ht) {
           const std::string full = hkey + "." + std::string(hk.str());
           const ParamDef* d = find_def("handle.*." + std::string(hk.str()));
-          if (!d) fail(hv, full, "unknown key (wetcloth params lists the keys)");
+          if (!d) fail(hv, full, unknown_key(full));
           d->set(p, std::string(name.str()), convert(hv, *d, full));
         }
       }
@@ -444,7 +478,7 @@ void apply_table(const toml::table& t, const std::string& prefix, Params& p, boo
     if (!d) {
       for (const auto& def : param_defs())
         if (def.key.rfind(key + ".", 0) == 0) fail(node, key, "expected a table, [" + key + "]");
-      fail(node, key, "unknown key (wetcloth params lists the keys)");
+      fail(node, key, unknown_key(key));
     }
     d->set(p, "", convert(node, *d, key));
   }
@@ -698,6 +732,20 @@ std::string to_toml(const Params& p) {
       o << d.key.substr(9) << " = " << format_value(d.get(p, name)) << "\n";
     }
   }
+  return o.str();
+}
+
+std::string params_text() {
+  // Columns padded by characters, not bytes: units and ranges hold °, ², −∞.
+  const auto pad = [](const std::string& text, std::size_t width) {
+    std::size_t chars = 0;
+    for (const unsigned char c : text) chars += (c & 0xC0) != 0x80;
+    return text + std::string(width > chars ? width - chars : 1, ' ');
+  };
+  std::ostringstream o;
+  for (const auto& d : param_defs())
+    o << pad(d.key, 29) << pad(d.unit, 11) << pad(d.default_text(), 23) << pad(d.range_text(), 23)
+      << d.meaning << "\n";
   return o.str();
 }
 

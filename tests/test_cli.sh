@@ -29,6 +29,7 @@ printf '[material]\nbending_rigidity = -7.2e-4\n' > "$T/material.toml"
 printf '[springs]\n\nbending_k = "stiff"\n' > "$T/springs.toml"
 expect_bad syntax     "syntax.toml:2"                   "$T/syntax.toml"
 expect_bad unknown    "unknown.toml:2: cloth.humidty"   "$T/unknown.toml"
+expect_bad nearest    "did you mean cloth.humidity?"    "$T/unknown.toml"
 expect_bad type       "type.toml:2: integrator.dt"      "$T/type.toml"
 expect_bad mass       "mass.toml:2: cloth.areal_density" "$T/mass.toml"
 expect_bad humidity   "humid.toml:3: cloth.humidity"    "$T/humid.toml"
@@ -180,6 +181,22 @@ grep -q '^bending_rigidity = 0.00072$' "$T/check.txt" && grep -q '^# structural_
   grep -q '^#   shear: k 30 N/m (set in \[springs\]); damping 0.01 N·s/m (from material.shear_damping)$' "$T/check.txt" &&
   ok "check: the material and the springs resolved on the grid" || bad "check springs: $(grep -A4 '^\[springs\]' "$T/check.txt")"
 "$W" run --help | grep -q -- "--humidity" && ok "run --help" || bad "run --help"
+# `wetcloth params` lines its columns up by characters (°, ², −∞ are several
+# bytes), and --json gives every parameter.
+"$W" params | python3 -c '
+import sys
+lines = [l.rstrip("\n") for l in sys.stdin]
+center = next(l for l in lines if l.startswith("cloth.center "))
+size = next(l for l in lines if l.startswith("cloth.size "))
+sys.exit(0 if center.index("centre") == size.index("width") else 1)' &&
+  ok "params: columns aligned by characters" || bad "params: columns not aligned"
+"$W" params --json | python3 -c '
+import json, sys
+d = json.load(sys.stdin)
+h = next(x for x in d if x["key"] == "cloth.humidity")
+sys.exit(0 if h["min"] == 0 and h["max"] == 1 and len(d) > 80 and any("choices" in x for x in d) else 1)' &&
+  ok "params --json" || bad "params --json"
+
 # The README's parameter table is the one `wetcloth params --markdown` prints.
 "$W" params --markdown > "$T/params.md"
 # Five cells a row: a "|" inside a cell ("table | ball") is escaped.

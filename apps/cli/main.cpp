@@ -3,6 +3,7 @@
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <iostream>
+#include <nlohmann/json.hpp>
 #include <optional>
 #include <unistd.h>
 
@@ -57,6 +58,8 @@ int main(int argc, char** argv) {
   bool markdown = false;
   auto* params = app.add_subcommand("params", "every scene parameter: key, unit, default, range, meaning");
   params->add_flag("--markdown", markdown, "as the README's Markdown table");
+  bool json = false;
+  params->add_flag("--json", json, "as JSON: key, unit, type, default, min, max, choices, meaning");
 
   auto sweep_command = cli::add_sweep_command(app);
   auto bench_command = cli::add_bench_command(app);
@@ -113,10 +116,18 @@ int main(int argc, char** argv) {
     if (*params) {
       if (markdown) {
         std::cout << params_markdown();
+      } else if (json) {
+        nlohmann::json all = nlohmann::json::array();
+        for (const auto& d : param_defs()) {
+          nlohmann::json j = {{"key", d.key}, {"unit", d.unit}, {"type", d.type_name()},
+                              {"default", d.default_text()}, {"meaning", d.meaning}};
+          if (d.min <= d.max) j["min"] = d.min, j["max"] = d.max;
+          if (!d.choices.empty()) j["choices"] = d.choices;
+          all.push_back(j);
+        }
+        std::cout << all.dump(2) << "\n";
       } else {
-        for (const auto& d : param_defs())
-          std::printf("%-28s %-10s %-22s %-22s %s\n", d.key.c_str(), d.unit.c_str(),
-                      d.default_text().c_str(), d.range_text().c_str(), d.meaning.c_str());
+        std::cout << params_text();
       }
       return 0;
     }

@@ -74,5 +74,7 @@ void check_params(const Params& p);
 
 // Markdown table of every parameter (the README's table).
 std::string params_markdown();
+// `wetcloth params`: a line a parameter, in aligned columns.
+std::string params_text();
 
 }  // namespace wetcloth

@@ -15,8 +15,9 @@
 using namespace wetcloth;
 
 // Allocations counted while g_count_allocations is set (Step.AllocatesNothingOnceWarm):
-// the test binary's operator new counts, then allocates with malloc as
-// libstdc++'s does (its operator delete, kept, frees with free).
+// the test binary's operator new counts, then allocates with malloc; its
+// operator delete frees with free, replaced alongside (AddressSanitizer
+// reports a malloc'd block freed by its own operator delete as a mismatch).
 std::atomic<bool> g_count_allocations{false};
 std::atomic<long> g_allocations{0};
 void* operator new(std::size_t size) {
@@ -24,6 +25,15 @@ void* operator new(std::size_t size) {
   if (void* p = std::malloc(size ? size : 1)) return p;
   throw std::bad_alloc();
 }
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmismatched-new-delete"  // GCC cannot see the pair is ours
+#endif
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic pop
+#endif
 
 namespace {
 

@@ -8,6 +8,11 @@ pkgs=(
   python3 python3-matplotlib
   libglfw3-dev libimgui-dev libepoxy-dev libegl-dev libgl1-mesa-dri xvfb xauth ffmpeg
 )
+# `install-deps.sh fuzz`: what `make fuzz` needs besides (clang's libFuzzer
+# and sanitizer runtimes, and its OpenMP).
+if [ "${1:-}" = fuzz ]; then
+  pkgs=(clang libclang-rt-14-dev libomp-dev)
+fi
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -108,5 +108,16 @@ kill -INT $pid; kill -INT $pid; wait $pid; code=$?
   ok "two SIGINTs: exit 130, rows whole, no temporary file" ||
   bad "two SIGINTs: exit $code, $(no_temporaries "$out"), $(rows_whole "$out/metrics.csv"): $(cat "$T/err")"
 
+# --- a sweep passes SIGINT on: its running case stops whole, no other starts.
+out="$T/sweep"
+"$W" sweep hang --humidity 0.1 0.5 0.9 --jobs 1 --duration 100 --no-plots --quiet --out "$out" \
+  >/dev/null 2>"$T/err" & pid=$!
+for _ in $(seq 200); do [ -s "$out/omega_0.10/metrics.csv" ] && break; sleep 0.05; done
+kill -INT $pid; wait $pid; code=$?
+[ $code -eq 130 ] && grep -q '^omega_0.10,.*,interrupted,' "$out/sweep.csv" && [ ! -e "$out/omega_0.50" ] &&
+  [ -z "$(rows_whole "$out/omega_0.10/metrics.csv")" ] && grep -q '"interrupted": true' "$out/omega_0.10/summary.json" &&
+  ok "sweep, SIGINT: exit 130, the case stopped whole, no other started" ||
+  bad "sweep, SIGINT: exit $code, $(cat "$out/sweep.csv" 2>&1) $(ls "$out") $(cat "$T/err")"
+
 echo "$passes passed, $fails failed"
 [ $fails -eq 0 ]

@@ -336,7 +336,10 @@ std::vector<RunResult> run_all(const std::vector<std::pair<Params, fs::path>>& r
   std::mutex lock;
   auto worker = [&] {
     for (std::size_t i; (i = next++) < runs.size();) {
-      try {  // an exception must not end the process from a worker thread
+      if (const int sig = stop_signal(); sig != 0) {  // interrupted: no case starts
+        results[i].code = 128 + sig;
+        results[i].message = std::string("not run: interrupted by ") + signal_name(sig);
+      } else try {  // an exception must not end the process from a worker thread
         results[i] = run_scene(runs[i].first, runs[i].second, false);
       } catch (const std::exception& e) {
         results[i].code = dynamic_cast<const SceneError*>(&e)    ? kBadInput

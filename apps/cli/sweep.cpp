@@ -71,7 +71,7 @@ std::string sweep_csv(const std::vector<Case>& cases) {
   o += "\n";
   for (const auto& c : cases) {
     o += c.name + "," + c.air_model + "," + format_number(c.humidity) + "," +
-         (c.result.code == kOk ? "ok" : "blew_up") + "," + format_number(c.result.peak_deficit_pa) +
+         (c.result.code == kOk ? "ok" : c.result.code > 128 ? "interrupted" : "blew_up") + "," + format_number(c.result.peak_deficit_pa) +
          "," + format_number(c.result.frame_peak_deficit_pa) + "," +
          format_number(c.result.time_to_5cm_s);
     for (double v : metrics_values(c.result.final)) o += "," + format_number(v);
@@ -142,7 +142,8 @@ std::function<int()> add_sweep_command(CLI::App& app) {
         c.params = load_on_grid(o->scene.scene, sets, o->scene.grid);
         cases.push_back(std::move(c));
       }
-    const fs::path out = o->out.empty() ? fs::path("out") / (base.name + "-sweep") : fs::path(o->out);
+    const fs::path out =
+        o->out.empty() ? fs::path("out") / folder_name(base.name + "-sweep") : fs::path(o->out);
     make_output_folder(out);
 
     std::vector<std::pair<Params, fs::path>> runs;
@@ -151,6 +152,7 @@ std::function<int()> add_sweep_command(CLI::App& app) {
     // list have been, so that the table reads in the order asked for.
     std::vector<bool> ended(cases.size(), false);
     std::size_t printed = 0;
+    install_stop_handlers();  // SIGINT / SIGTERM: every case stops at a step's end
     run_all(runs, o->jobs, [&](std::size_t i, const RunResult& r) {
       cases[i].result = r;
       ended[i] = true;
@@ -162,7 +164,7 @@ std::function<int()> add_sweep_command(CLI::App& app) {
         std::printf(
             "%-22s %s  handle %.4f m  contact %.5f m²  peak deficit (any step) %.1f Pa, "
             "over frames %.1f Pa  (%.1f s wall)\n",
-            c.name.c_str(), c.result.code == kOk ? "ok     " : "BLEW UP",
+            c.name.c_str(), c.result.code == kOk ? "ok     " : c.result.code > 128 ? "STOPPED" : "BLEW UP",
             c.result.final.handle_height_m, c.result.final.contact_area_m2,
             c.result.peak_deficit_pa, c.result.frame_peak_deficit_pa, c.result.wall_seconds);
       }
@@ -176,6 +178,7 @@ std::function<int()> add_sweep_command(CLI::App& app) {
         std::fprintf(stderr, "wetcloth: %s: %s\n", c.name.c_str(), c.result.message.c_str());
         code = kBlowUp;
       }
+    if (stop_signal() != 0) return 128 + stop_signal();  // what finished is in sweep.csv
     if (!o->no_plots) {
       const std::string python = fs::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
       const std::string cmdline = python + " '" + plot_script().string() + "' '" + out.string() + "'";

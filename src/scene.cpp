@@ -92,13 +92,17 @@ ParamDef optional_field(std::string key, std::string unit, double lo, double hi,
 #define H(path) [](HandleParams & h) -> auto& { return h.path; }
 
 std::vector<ParamDef> make_defs() {
-  const double inf = kNoLimit;
+  // Positions: at 1e14 m a double's step is 0.02 m, and metrics.csv got inf.
+  const double kFar = 1e4;
   return {
       field("name", "", 1, 0, "scene name (default output folder out/NAME)", P(name)),
       field("description", "", 1, 0, "one line about the scene", P(description)),
       field("cloth.resolution", "particles", 2, 2001, "grid nu × nv", P(cloth.resolution)),
       field("cloth.size", "m", 1e-4, 100, "width (u) and height (v) of the cloth", P(cloth.size)),
-      field("cloth.center", "m", -inf, inf, "centre of the cloth at t = 0", P(cloth.center)),
+      field("cloth.center", "m", -kFar, kFar,
+            "centre of the cloth at t = 0 (within 10 km: farther, positions lose the precision "
+            "the springs need)",
+            P(cloth.center)),
       field("cloth.orientation", "", 1, 0,
             "horizontal: in the xy plane; vertical: in the xz plane, v down", P(cloth.orientation),
             {"horizontal", "vertical"}),
@@ -170,9 +174,9 @@ std::vector<ParamDef> make_defs() {
       field("strain_limit.passes", "", 0, 100, "passes over the springs per step",
             P(strain_limit.passes)),
       field("table.enabled", "", 0, 0, "the table: the plane z = table.height", P(table.enabled)),
-      field("table.height", "m", -inf, inf, "height of the table", P(table.height)),
+      field("table.height", "m", -kFar, kFar, "height of the table", P(table.height)),
       field("ball.enabled", "", 0, 0, "a fixed ball", P(ball.enabled)),
-      field("ball.center", "m", -inf, inf, "centre of the ball", P(ball.center)),
+      field("ball.center", "m", -kFar, kFar, "centre of the ball", P(ball.center)),
       field("ball.radius", "m", 1e-4, 100, "radius of the ball", P(ball.radius)),
       field("contact.surface", "", 1, 0, "the surface the cloth sticks to and traps air against",
             P(contact.surface), {"table", "ball", "none"}),

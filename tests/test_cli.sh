@@ -122,6 +122,14 @@ expect_bad memory     "of memory, more than the" pull-straight --set 'cloth.reso
   --set self_collision.enabled=true --set self_collision.distance=1
 expect_bad disk       "with run.meshes) need about" hang --set run.fps=1000 --set integrator.dt=1e-3 \
   --set integrator.type=implicit-euler --duration 1e6
+# Positions so far out that they lose the springs' precision (1e14 m wrote inf).
+expect_bad center     "cloth.center: value 1e+14 is out of range [-10000, 10000]" hang --set 'cloth.center=[0,0,1e14]'
+# A stiff shear spring blows the explicit step up: the message says the step is
+# over the limit and gives the shear springs' constant.
+"$W" run hang --set springs.shear_k=1e7 --duration 0.01 --out "$T/shear" --quiet 2>"$T/err"; code=$?
+[ $code -eq 3 ] && grep -q "integrator.dt = 5e-05 s is too large for the springs (structural 200 N/m, shear 1e+07 N/m" "$T/err" &&
+  ok "shear_k = 1e7: exit 3, the step named over the limit with the shear constant" ||
+  bad "shear_k = 1e7: exit $code: $(cat "$T/err")"
 # A control character in a string reads back from the resolved scene.toml.
 printf 'description = "a\\u0001b\\u007f\\tc"\n' > "$T/control.toml"
 "$W" run "$T/control.toml" --duration 0.01 --out "$T/control" --quiet 2>"$T/err" &&

@@ -288,7 +288,14 @@ constexpr int kMaxNesting = 32;
 // outside strings and comments (TOML's bare keys are ASCII), and nesting
 // (brackets, braces and the parts of one dotted key) at most kMaxNesting.
 // A scene needs three levels.
-void guard_toml_text(const std::string& text, const std::string& source) {
+// toml++ 3.3's is_non_ascii_horizontal_whitespace is undefined (it reaches
+// __builtin_unreachable) for U+00A1-U+0499 and U+FB66-U+FEFE, and toml++
+// asks it of characters it reads ahead of a value, wherever they are (the
+// fuzzer found one past a quote that began no string): so no such character
+// reaches toml++. In a basic string it becomes its \uXXXX escape (the same
+// value), in a comment '?'; in a literal string it is refused. Returns the
+// text to parse (the same lines).
+std::string guard_toml_text(const std::string& text, const std::string& source) {
   const auto at = [&](long line) {
     return source.rfind("--set", 0) == 0 ? source : source + ":" + std::to_string(line);
   };
@@ -320,6 +327,34 @@ void guard_toml_text(const std::string& text, const std::string& source) {
       throw SceneError(at(line) + ": not valid UTF-8 (byte " + std::to_string(i + 1) + ")");
     i += static_cast<std::size_t>(len);
   }
+  // Where toml++ must not see a character: (offset, length, code point, '"'
+  // basic string, '\'' literal string, '#' comment).
+  struct Hidden {
+    std::size_t at;
+    int len;
+    unsigned cp;
+    char in;
+  };
+  std::vector<Hidden> hidden;
+  // At a byte inside a string or comment: its length, noting a character
+  // toml++ must not see.
+  const auto inside = [&](std::size_t i, char in) -> std::size_t {
+    if (s[i] < 0x80) return 1;
+    const int len = s[i] >= 0xF0 ? 4 : s[i] >= 0xE0 ? 3 : 2;  // valid: checked above
+    unsigned cp = s[i] & (len == 4 ? 0x07 : len == 3 ? 0x0F : 0x1F);
+    for (int k = 1; k < len; ++k) cp = (cp << 6) | (s[i + k] & 0x3F);
+    if ((cp >= 0xA1 && cp <= 0x499) || (cp >= 0xFB66 && cp <= 0xFEFE)) {
+      if (in == '\'') {
+        char u[16];
+        std::snprintf(u, sizeof u, "U+%04X", cp);
+        throw SceneError(at(line) + ": " + u +
+                         " in a literal string ('...'): the TOML library mishandles it; write "
+                         "the string in double quotes");
+      }
+      hidden.push_back({i, len, cp, in});
+    }
+    return static_cast<std::size_t>(len);
+  };
   line = 1;
   int depth = 0;      // open [ and {
   int parts = 0;      // parts of the dotted key (or number) being read
@@ -342,25 +377,26 @@ void guard_toml_text(const std::string& text, const std::string& source) {
       ++line, ++i;
       other();
     } else if (c == '#') {
-      while (i < n && s[i] != '\n') ++i;
+      while (i < n && s[i] != '\n') i += inside(i, '#');
       other();
     } else if (c == '"' || c == '\'') {
       const bool multi = i + 2 < n && s[i + 1] == c && s[i + 2] == c;
       i += multi ? 3 : 1;
       for (;;) {
-        if (i >= n) return;  // unterminated: toml++ says so
+        if (i >= n) break;  // unterminated: toml++ says so
         if (s[i] == '\n' && !multi) break;  // toml++ says so
         if (s[i] == '\n') ++line;
-        if (c == '"' && s[i] == '\\') {
-          if (i + 1 < n && s[i + 1] == '\n') ++line;
-          i += 2;
+        if (c == '"' && s[i] == '\\') {  // the escaped character is the string's
+          if (++i >= n) break;
+          if (s[i] == '\n') ++line;
+          i += inside(i, '"');
           continue;
         }
         if (s[i] == c && (!multi || (i + 2 < n && s[i + 1] == c && s[i + 2] == c))) {
           i += multi ? 3 : 1;
           break;
         }
-        ++i;
+        i += inside(i, c == '"' ? '"' : '\'');
       }
       part();
     } else if (c >= 0x80) {
@@ -390,6 +426,19 @@ void guard_toml_text(const std::string& text, const std::string& source) {
       other();
     }
   }
+  if (hidden.empty()) return text;
+  std::string safe;
+  safe.reserve(text.size() + 4 * hidden.size());
+  std::size_t from = 0;
+  for (const Hidden& h : hidden) {
+    safe.append(text, from, h.at - from);
+    char u[16];
+    std::snprintf(u, sizeof u, "\\u%04X", h.cp);
+    safe += h.in == '"' ? u : "?";
+    from = h.at + static_cast<std::size_t>(h.len);
+  }
+  safe.append(text, from, std::string::npos);
+  return safe;
 }
 
 // The source name of Params made in code (check_params).
@@ -551,9 +600,9 @@ toml::table parse_override(const std::string& text) {
       !value.empty() && std::all_of(value.begin(), value.end(), [](unsigned char c) {
         return std::isalpha(c) || c == '_' || c == '-';
       });
-  guard_toml_text(key + " = " + value, source);
+  const std::string text_safe = guard_toml_text(key + " = " + value, source);
   try {
-    return toml::parse(key + " = " + value, source);
+    return toml::parse(text_safe, source);
   } catch (const toml::parse_error& e) {
     if (!bare_word) throw SceneError(source + ": " + key + ": " + std::string(e.description()));
   }
@@ -759,10 +808,10 @@ std::string format_value(const ParamValue& v) {
 
 Params parse_scene(const std::string& text, const std::string& source,
                    const std::vector<std::string>& overrides) {
-  guard_toml_text(text, source);
+  const std::string safe = guard_toml_text(text, source);
   toml::table root;
   try {
-    root = toml::parse(text, source);
+    root = toml::parse(safe, source);
   } catch (const toml::parse_error& e) {
     throw SceneError(source + ":" + std::to_string(e.source().begin.line) + ": " +
                      std::string(e.description()));

@@ -607,7 +607,7 @@ toml::table parse_override(const std::string& text) {
     if (!bare_word) throw SceneError(source + ": " + key + ": " + std::string(e.description()));
   }
   try {
-    return toml::parse(key + " = \"" + value + "\"", source);
+    return toml::parse(guard_toml_text(key + " = \"" + value + "\"", source), source);
   } catch (const toml::parse_error& e) {
     throw SceneError(source + ": " + key + ": " + std::string(e.description()));
   }

@@ -5,7 +5,7 @@ BUILD    ?= build
 JOBS     ?= $(shell nproc)
 CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Release
 
-.PHONY: all deps build test test-clients demo validate bench clean readme-params
+.PHONY: all deps build test test-clients test-sanitize fuzz demo validate bench clean readme-params
 
 all: build
 
@@ -26,6 +26,36 @@ test: build
 test-clients: build
 	@tools/install-deps.sh clients
 	tests/test_clients.sh $(BUILD)/wetcloth $(CURDIR)
+# The unit tests, the fuzz corpus and a short run of every built-in scene on 1
+# and 2 threads, built with AddressSanitizer and UndefinedBehaviorSanitizer in
+# their own folder (any report fails it). Not in CI: it takes too long there (README).
+SAN_BUILD ?= build-sanitize
+SAN_FLAGS = -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
+SAN_ENV = ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:strict_string_checks=1 \
+          UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1
+test-sanitize: deps
+	cmake -S . -B $(SAN_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo "-DCMAKE_CXX_FLAGS=$(SAN_FLAGS)" \
+	  -DWETCLOTH_VIEWER=OFF -DWETCLOTH_BENCH=OFF -DWETCLOTH_BULLET=OFF
+	$(SAN_ENV) cmake --build $(SAN_BUILD) -j $(JOBS) --target wetcloth_tests wetcloth_cli fuzz_replay
+	cd $(SAN_BUILD) && $(SAN_ENV) ctest --output-on-failure -j $(JOBS) \
+	  -E '^(cli|install_and_find_package|plot_scripts|bench_peer_bullet)$$'
+	$(SAN_ENV) tests/sanitize_scenes.sh $(SAN_BUILD)/wetcloth
+
+# The scene loader's libFuzzer target (clang, ASan + UBSan, in build-fuzz), for
+# FUZZ_SECONDS; new inputs go to build-fuzz/corpus, crashes to build-fuzz/crashes
+# (add them to tests/fuzz-corpus, which `make test` replays).
+FUZZ_BUILD ?= build-fuzz
+FUZZ_SECONDS ?= 60
+fuzz:
+	@tools/install-deps.sh fuzz
+	CC=clang CXX=clang++ cmake -S . -B $(FUZZ_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+	  "-DCMAKE_CXX_FLAGS=-fsanitize=address,undefined,fuzzer-no-link -fno-sanitize-recover=all" \
+	  -DWETCLOTH_FUZZ=ON -DWETCLOTH_TESTS=OFF -DWETCLOTH_VIEWER=OFF -DWETCLOTH_BENCH=OFF -DWETCLOTH_BULLET=OFF
+	cmake --build $(FUZZ_BUILD) -j $(JOBS) --target wetcloth_fuzz
+	mkdir -p $(FUZZ_BUILD)/corpus $(FUZZ_BUILD)/crashes
+	$(FUZZ_BUILD)/wetcloth_fuzz -max_total_time=$(FUZZ_SECONDS) -timeout=10 -rss_limit_mb=4096 \
+	  -max_len=65536 -print_final_stats=1 -artifact_prefix=$(FUZZ_BUILD)/crashes/ \
+	  $(FUZZ_BUILD)/corpus tests/fuzz-corpus
 
 demo: build
 	$(BUILD)/wetcloth run pull-straight --humidity 0.7 --out out/demo

@@ -1,6 +1,7 @@
 #include "wetcloth/caches.hpp"
 
 #include <array>
+#include <cerrno>
 #include <cstdint>
 #include <cstring>
 #include <sstream>
@@ -190,7 +191,7 @@ CacheWriter::CacheWriter(const fs::path& dir, const Simulation& sim, ExportForma
   if (formats.pc2) {
     write_file_atomic(dir / "cloth_rest.obj", cloth_obj(m, sim.state(), up));
     pc2_.open(dir / "cloth.pc2", std::ios::binary | std::ios::in | std::ios::out | std::ios::trunc);
-    if (!pc2_) throw std::runtime_error((dir / "cloth.pc2").string() + ": cannot write");
+    if (!pc2_) throw_output_error(dir / "cloth.pc2", "cannot write", errno);
     write_pc2_header(pc2_, m.n, 0);
   }
   if (formats.vtk) {
@@ -229,7 +230,7 @@ void CacheWriter::add_frame(const Simulation& sim) {
     pc2_.write(reinterpret_cast<const char*>(xyz.data()),
                static_cast<std::streamsize>(xyz.size() * sizeof(float)));
     write_pc2_header(pc2_, static_cast<int>(f.points.size()), k + 1);
-    if (!pc2_.flush()) throw std::runtime_error((dir_ / "cloth.pc2").string() + ": cannot write");
+    if (!pc2_.flush()) throw_output_error(dir_ / "cloth.pc2", "cannot write", errno);
   }
   if (formats_.vtk) {
     char name[32];
@@ -331,9 +332,10 @@ void CacheWriter::finish() {
     }
     out << "}\n";
     if (!out.flush()) {
+      const int error = errno;
       out.close();
       fs::remove(tmp);
-      throw std::runtime_error(tmp.string() + ": cannot write");
+      throw_output_error(path, "cannot write", error);
     }
   }
   fs::rename(tmp, path);

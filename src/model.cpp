@@ -2,6 +2,7 @@
 #include <omp.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <cmath>
 #include <numbers>
 #include <unordered_map>
@@ -82,9 +83,21 @@ double detail::chain_stiffness(const Params& p) {
   return ks >= 4 * kb ? ks : (2 * ks + 4 * kb + ks * ks / (4 * kb)) / 4;
 }
 
+std::string detail::step_limit_springs_text(const Params& p) {
+  const ResolvedSprings r = resolve_springs(p);
+  char b[200];
+  std::snprintf(b, sizeof b, "structural %g N/m, shear %g N/m, bending %g N/m",
+                std::max(r.structural_u.k, r.structural_v.k), r.shear.k,
+                std::max({r.bending_u.k, r.bending_v.k, r.bending_diagonal.k}));
+  return b;
+}
+
 double explicit_step_limit(const Params& p) {
   const ResolvedSprings r = resolve_springs(p);
-  const double k = detail::chain_stiffness(p);
+  // The shear springs add to the stiffest mode as the structural ones do (a
+  // particle's four diagonal neighbours pull along its motion with k_shear / 2
+  // each): without them a stiff shear spring blew up "within the limit".
+  const double k = detail::chain_stiffness(p) + r.shear.k;
   const double m_min = particle_areal_mass(p) * r.du * r.dv / 4;  // a corner's
   return k > 0 ? 2.0 / std::sqrt(8.0 * k / m_min) : 1.0;
 }

@@ -1,6 +1,12 @@
 #include "wetcloth/output.hpp"
 
+#include <atomic>
+#include <cerrno>
 #include <charconv>
+#include <cstdlib>
+#include <cstring>
+#include <fcntl.h>
+#include <unistd.h>
 #include <cmath>
 #include <fstream>
 #include <numbers>
@@ -9,14 +15,161 @@
 
 namespace wetcloth {
 
-void write_file_atomic(const std::filesystem::path& path, const std::string& contents) {
-  const std::filesystem::path tmp = path.string() + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    out << contents;
-    if (!out.flush()) throw std::runtime_error(tmp.string() + ": cannot write");
+namespace {
+
+// The temporary files being written now, for remove_temporary_files (a signal
+// handler): a fixed table, no allocation, slots taken with an atomic flag.
+constexpr int kTempSlots = 64;
+constexpr std::size_t kTempPath = 4096;
+struct TempSlot {
+  std::atomic<bool> used{false};
+  std::atomic<bool> ready{false};
+  char path[kTempPath];
+};
+TempSlot g_temp[kTempSlots];
+
+struct TempRecord {
+  int slot = -1;
+  explicit TempRecord(const std::string& path) {
+    if (path.size() >= kTempPath) return;
+    for (int i = 0; i < kTempSlots; ++i) {
+      bool expected = false;
+      if (g_temp[i].used.compare_exchange_strong(expected, true)) {
+        std::memcpy(g_temp[i].path, path.c_str(), path.size() + 1);
+        g_temp[i].ready = true;
+        slot = i;
+        return;
+      }
+    }
   }
-  std::filesystem::rename(tmp, path);
+  ~TempRecord() {
+    if (slot < 0) return;
+    g_temp[slot].ready = false;
+    g_temp[slot].used = false;
+  }
+};
+
+// WETCLOTH_FAIL_AFTER_BYTES: bytes left before writes fail; < 0: no fault.
+std::atomic<long long>& fault_budget() {
+  static std::atomic<long long> budget = [] {
+    const char* v = std::getenv("WETCLOTH_FAIL_AFTER_BYTES");
+    return v && *v ? std::atoll(v) : -1LL;
+  }();
+  return budget;
+}
+
+// Writes all of `data` to fd; false with errno set where it could not.
+bool write_all(int fd, const char* data, std::size_t size) {
+  std::size_t allowed = size;
+  bool fault = false;
+  if (auto& b = fault_budget(); b.load() >= 0) {
+    const long long left = b.fetch_sub(static_cast<long long>(size));
+    allowed = left <= 0 ? 0 : std::min<std::size_t>(size, static_cast<std::size_t>(left));
+    fault = allowed < size;
+  }
+  while (allowed > 0) {
+    const ssize_t w = ::write(fd, data, allowed);
+    if (w < 0) {
+      if (errno == EINTR) continue;
+      return false;
+    }
+    data += w;
+    allowed -= static_cast<std::size_t>(w);
+    size -= static_cast<std::size_t>(w);
+  }
+  if (fault) {
+    errno = ENOSPC;
+    return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+bool write_fault_injected() { return fault_budget().load() >= 0; }
+
+void throw_output_error(const std::filesystem::path& path, const std::string& doing,
+                        int error_number) {
+  throw OutputError(path.string() + ": " + doing + ": " + std::strerror(error_number));
+}
+
+void remove_temporary_files() noexcept {
+  for (auto& t : g_temp)
+    if (t.ready.load()) ::unlink(t.path);
+}
+
+void write_file_atomic(const std::filesystem::path& path, const std::string& contents) {
+  const std::string tmp = path.string() + ".tmp";
+  TempRecord record(tmp);
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) throw_output_error(tmp, "cannot create", errno);
+  if (!write_all(fd, contents.data(), contents.size())) {
+    const int e = errno;
+    ::close(fd);
+    ::unlink(tmp.c_str());
+    throw_output_error(path, "cannot write", e);
+  }
+  if (::close(fd) != 0) {
+    const int e = errno;
+    ::unlink(tmp.c_str());
+    throw_output_error(path, "cannot write", e);
+  }
+  if (::rename(tmp.c_str(), path.c_str()) != 0) {
+    const int e = errno;
+    ::unlink(tmp.c_str());
+    throw_output_error(path, "cannot rename " + tmp + " to it", e);
+  }
+}
+
+std::string metrics_csv_header() {
+  std::string o;
+  const auto cols = metrics_columns();
+  for (std::size_t i = 0; i < cols.size(); ++i) o += (i ? "," : "") + cols[i];
+  return o + "\n";
+}
+
+std::string metrics_csv_row(const Metrics& m) {
+  std::string o;
+  const auto vals = metrics_values(m);
+  for (std::size_t i = 0; i < vals.size(); ++i) o += (i ? "," : "") + format_number(vals[i]);
+  return o + "\n";
+}
+
+MetricsFile::MetricsFile(const std::filesystem::path& path) : path_(path) {
+  const std::string header = metrics_csv_header();
+  write_file_atomic(path, header);
+  fd_ = ::open(path.c_str(), O_WRONLY | O_APPEND | O_CLOEXEC);
+  if (fd_ < 0) throw_output_error(path, "cannot open", errno);
+  size_ = static_cast<long long>(header.size());
+}
+
+MetricsFile::~MetricsFile() {
+  if (fd_ >= 0) ::close(fd_);
+}
+
+void MetricsFile::append(const Metrics& m) {
+  if (fd_ < 0) throw_output_error(path_, "cannot write", EBADF);
+  const std::string row = metrics_csv_row(m);
+  if (!write_all(fd_, row.data(), row.size())) {
+    const int e = errno;
+    // A row written in part is taken back: the file ends with a whole row.
+    if (::ftruncate(fd_, static_cast<off_t>(size_)) != 0) {
+    }
+    throw_output_error(path_, "cannot write", e);
+  }
+  size_ += static_cast<long long>(row.size());
+}
+
+void MetricsFile::close() {
+  if (fd_ < 0) return;
+  const int fd = fd_;
+  fd_ = -1;
+  if (::fsync(fd) != 0) {
+    const int e = errno;
+    ::close(fd);
+    throw_output_error(path_, "cannot write", e);
+  }
+  if (::close(fd) != 0) throw_output_error(path_, "cannot write", errno);
 }
 
 long long last_frame_index(double duration, double fps) {
@@ -114,15 +267,8 @@ std::string obstacles_obj(const Model& m, UpAxis up) {
 }
 
 std::string MetricsTable::csv() const {
-  std::string o;
-  const auto cols = metrics_columns();
-  for (std::size_t i = 0; i < cols.size(); ++i) o += (i ? "," : "") + cols[i];
-  o += "\n";
-  for (const auto& r : rows_) {
-    const auto vals = metrics_values(r);
-    for (std::size_t i = 0; i < vals.size(); ++i) o += (i ? "," : "") + format_number(vals[i]);
-    o += "\n";
-  }
+  std::string o = metrics_csv_header();
+  for (const auto& r : rows_) o += metrics_csv_row(r);
   return o;
 }
 

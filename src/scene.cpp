@@ -121,13 +121,17 @@ ParamDef optional_field(std::string key, std::string unit, double lo, double hi,
 #define H(path) [](HandleParams & h) -> auto& { return h.path; }
 
 std::vector<ParamDef> make_defs() {
-  const double inf = kNoLimit;
+  // Positions: at 1e14 m a double's step is 0.02 m, and metrics.csv got inf.
+  const double kFar = 1e4;
   return {
       field("name", "", 1, 0, "scene name (default output folder out/NAME)", P(name)),
       field("description", "", 1, 0, "one line about the scene", P(description)),
       field("cloth.resolution", "particles", 2, 2001, "grid nu × nv", P(cloth.resolution)),
       field("cloth.size", "m", 1e-4, 100, "width (u) and height (v) of the cloth", P(cloth.size)),
-      field("cloth.center", "m", -inf, inf, "centre of the cloth at t = 0", P(cloth.center)),
+      field("cloth.center", "m", -kFar, kFar,
+            "centre of the cloth at t = 0 (within 10 km: farther, positions lose the precision "
+            "the springs need)",
+            P(cloth.center)),
       field("cloth.orientation", "", 1, 0,
             "horizontal: in the xy plane; vertical: in the xz plane, v down", P(cloth.orientation)),
       field("cloth.tilt", "°", -90, 90,
@@ -198,9 +202,9 @@ std::vector<ParamDef> make_defs() {
       field("strain_limit.passes", "", 0, 100, "passes over the springs per step",
             P(strain_limit.passes)),
       field("table.enabled", "", 0, 0, "the table: the plane z = table.height", P(table.enabled)),
-      field("table.height", "m", -inf, inf, "height of the table", P(table.height)),
+      field("table.height", "m", -kFar, kFar, "height of the table", P(table.height)),
       field("ball.enabled", "", 0, 0, "a fixed ball", P(ball.enabled)),
-      field("ball.center", "m", -inf, inf, "centre of the ball", P(ball.center)),
+      field("ball.center", "m", -kFar, kFar, "centre of the ball", P(ball.center)),
       field("ball.radius", "m", 1e-4, 100, "radius of the ball", P(ball.radius)),
       field("contact.surface", "", 1, 0, "the surface the cloth sticks to and traps air against",
             P(contact.surface)),
@@ -306,6 +310,170 @@ std::vector<ParamDef> make_defs() {
 
 #undef P
 #undef H
+
+// Bounds on a scene's text (guard_toml_text).
+constexpr std::size_t kMaxSceneBytes = 1 << 20;
+constexpr int kMaxNesting = 32;
+
+// Scene text is untrusted input: toml++ 3.3 recurses once per level of
+// nesting (a 32 KB file of `[a.a.a...]` overflows the stack) and reaches
+// undefined behaviour on a non-ASCII byte outside a string or comment. So,
+// before toml++ sees it: a bounded size, valid UTF-8, no non-ASCII byte
+// outside strings and comments (TOML's bare keys are ASCII), and nesting
+// (brackets, braces and the parts of one dotted key) at most kMaxNesting.
+// A scene needs three levels.
+// toml++ 3.3's is_non_ascii_horizontal_whitespace is undefined (it reaches
+// __builtin_unreachable) for U+00A1-U+0499 and U+FB66-U+FEFE, and toml++
+// asks it of characters it reads ahead of a value, wherever they are (the
+// fuzzer found one past a quote that began no string): so no such character
+// reaches toml++. In a basic string it becomes its \uXXXX escape (the same
+// value), in a comment '?'; in a literal string it is refused. Returns the
+// text to parse (the same lines).
+std::string guard_toml_text(const std::string& text, const std::string& source) {
+  const auto at = [&](long line) {
+    return source.rfind("--set", 0) == 0 ? source : source + ":" + std::to_string(line);
+  };
+  if (text.size() > kMaxSceneBytes)
+    throw SceneError(source + ": " + std::to_string(text.size()) + " bytes, more than a scene's " +
+                     std::to_string(kMaxSceneBytes) + ": not a scene file");
+  const auto* s = reinterpret_cast<const unsigned char*>(text.data());
+  const std::size_t n = text.size();
+  long line = 1;
+  // Valid UTF-8: no overlong forms, no surrogates, nothing past U+10FFFF.
+  for (std::size_t i = 0; i < n;) {
+    const unsigned char c = s[i];
+    if (c == '\n') ++line;
+    if (c < 0x80) {
+      ++i;
+      continue;
+    }
+    int len = 0;
+    unsigned cp = 0, min = 0;
+    if ((c & 0xE0) == 0xC0) len = 2, cp = c & 0x1F, min = 0x80;
+    else if ((c & 0xF0) == 0xE0) len = 3, cp = c & 0x0F, min = 0x800;
+    else if ((c & 0xF8) == 0xF0) len = 4, cp = c & 0x07, min = 0x10000;
+    bool ok = len > 0 && i + static_cast<std::size_t>(len) <= n;
+    for (int k = 1; ok && k < len; ++k) {
+      ok = (s[i + k] & 0xC0) == 0x80;
+      cp = (cp << 6) | (s[i + k] & 0x3F);
+    }
+    if (!ok || cp < min || cp > 0x10FFFF || (cp >= 0xD800 && cp <= 0xDFFF))
+      throw SceneError(at(line) + ": not valid UTF-8 (byte " + std::to_string(i + 1) + ")");
+    i += static_cast<std::size_t>(len);
+  }
+  // Where toml++ must not see a character: (offset, length, code point, '"'
+  // basic string, '\'' literal string, '#' comment).
+  struct Hidden {
+    std::size_t at;
+    int len;
+    unsigned cp;
+    char in;
+  };
+  std::vector<Hidden> hidden;
+  // At a byte inside a string or comment: its length, noting a character
+  // toml++ must not see.
+  const auto inside = [&](std::size_t i, char in) -> std::size_t {
+    if (s[i] < 0x80) return 1;
+    const int len = s[i] >= 0xF0 ? 4 : s[i] >= 0xE0 ? 3 : 2;  // valid: checked above
+    unsigned cp = s[i] & (len == 4 ? 0x07 : len == 3 ? 0x0F : 0x1F);
+    for (int k = 1; k < len; ++k) cp = (cp << 6) | (s[i + k] & 0x3F);
+    if ((cp >= 0xA1 && cp <= 0x499) || (cp >= 0xFB66 && cp <= 0xFEFE)) {
+      if (in == '\'') {
+        char u[16];
+        std::snprintf(u, sizeof u, "U+%04X", cp);
+        throw SceneError(at(line) + ": " + u +
+                         " in a literal string ('...'): the TOML library mishandles it; write "
+                         "the string in double quotes");
+      }
+      hidden.push_back({i, len, cp, in});
+    }
+    return static_cast<std::size_t>(len);
+  };
+  line = 1;
+  int depth = 0;      // open [ and {
+  int parts = 0;      // parts of the dotted key (or number) being read
+  bool after_part = false, after_dot = false;
+  const auto part = [&] {
+    parts = after_dot ? parts + 1 : 1;
+    after_part = true;
+    after_dot = false;
+    if (parts > kMaxNesting)
+      throw SceneError(at(line) + ": a dotted key of more than " + std::to_string(kMaxNesting) +
+                       " parts: not a scene key");
+  };
+  const auto other = [&] { parts = 0, after_part = after_dot = false; };
+  const auto bare = [](unsigned char c) {
+    return std::isalnum(c) || c == '_' || c == '-' || c == '+';
+  };
+  for (std::size_t i = 0; i < n;) {
+    const unsigned char c = s[i];
+    if (c == '\n') {
+      ++line, ++i;
+      other();
+    } else if (c == '#') {
+      while (i < n && s[i] != '\n') i += inside(i, '#');
+      other();
+    } else if (c == '"' || c == '\'') {
+      const bool multi = i + 2 < n && s[i + 1] == c && s[i + 2] == c;
+      i += multi ? 3 : 1;
+      for (;;) {
+        if (i >= n) break;  // unterminated: toml++ says so
+        if (s[i] == '\n' && !multi) break;  // toml++ says so
+        if (s[i] == '\n') ++line;
+        if (c == '"' && s[i] == '\\') {  // the escaped character is the string's
+          if (++i >= n) break;
+          if (s[i] == '\n') ++line;
+          i += inside(i, '"');
+          continue;
+        }
+        if (s[i] == c && (!multi || (i + 2 < n && s[i + 1] == c && s[i + 2] == c))) {
+          i += multi ? 3 : 1;
+          break;
+        }
+        i += inside(i, c == '"' ? '"' : '\'');
+      }
+      part();
+    } else if (c >= 0x80) {
+      throw SceneError(at(line) + ": a non-ASCII character outside a string or comment (keys "
+                                  "are ASCII: letters, digits, _ and -)");
+    } else if (c == '[' || c == '{') {
+      if (++depth > kMaxNesting)
+        throw SceneError(at(line) + ": tables or arrays nested more than " +
+                         std::to_string(kMaxNesting) + " deep: not a scene file");
+      ++i;
+      other();
+    } else if (c == ']' || c == '}') {
+      depth = std::max(0, depth - 1);
+      ++i;
+      other();
+    } else if (c == '.') {
+      if (after_part) after_part = false, after_dot = true;
+      else other();
+      ++i;
+    } else if (c == ' ' || c == '\t') {
+      ++i;
+    } else if (bare(c)) {
+      while (i < n && bare(s[i])) ++i;
+      part();
+    } else {
+      ++i;
+      other();
+    }
+  }
+  if (hidden.empty()) return text;
+  std::string safe;
+  safe.reserve(text.size() + 4 * hidden.size());
+  std::size_t from = 0;
+  for (const Hidden& h : hidden) {
+    safe.append(text, from, h.at - from);
+    char u[16];
+    std::snprintf(u, sizeof u, "\\u%04X", h.cp);
+    safe += h.in == '"' ? u : "?";
+    from = h.at + static_cast<std::size_t>(h.len);
+  }
+  safe.append(text, from, std::string::npos);
+  return safe;
+}
 
 // The source name of Params made in code (check_params).
 const std::string kInCode = "Params";
@@ -468,16 +636,17 @@ void apply_table(const toml::table& t, const std::string& prefix, Params& p, boo
       }
       continue;
     }
-    if (const auto* sub = node.as_table()) {
-      if (!find_def(key)) {
-        apply_table(*sub, key, p, new_handles);
-        continue;
-      }
-    }
     const ParamDef* d = find_def(key);
+    bool section = false;  // some key is under this one: [cloth]
+    for (const auto& def : param_defs()) section = section || def.key.rfind(key + ".", 0) == 0;
+    if (const auto* sub = node.as_table(); sub && !d) {
+      // Only into a known section: the recursion is as deep as the keys are.
+      if (!section) fail(node, key, "unknown table (wetcloth params lists the keys)");
+      apply_table(*sub, key, p, new_handles);
+      continue;
+    }
     if (!d) {
-      for (const auto& def : param_defs())
-        if (def.key.rfind(key + ".", 0) == 0) fail(node, key, "expected a table, [" + key + "]");
+      if (section) fail(node, key, "expected a table, [" + key + "]");
       fail(node, key, unknown_key(key));
     }
     d->set(p, "", convert(node, *d, key));
@@ -489,19 +658,24 @@ toml::table parse_override(const std::string& text) {
   if (eq == std::string::npos || eq == 0)
     throw SceneError("--set '" + text + "': expected KEY=VALUE, e.g. cloth.humidity=0.5");
   const std::string key = text.substr(0, eq), value = text.substr(eq + 1);
-  const std::string source = "--set '" + text + "'";
+  // A long override (a fuzzer's 30 000-part key) is named by its start.
+  const std::string source =
+      "--set '" +
+      (text.size() <= 160 ? text : text.substr(0, 120) + "...' (" + std::to_string(text.size()) + " characters)") +
+      (text.size() <= 160 ? "'" : "");
   // Let a bare word stand for a string: --set air.model=sealed.
   const bool bare_word =
       !value.empty() && std::all_of(value.begin(), value.end(), [](unsigned char c) {
         return std::isalnum(c) || c == '_' || c == '-' || c == ',';
       });
+  const std::string text_safe = guard_toml_text(key + " = " + value, source);
   try {
-    return toml::parse(key + " = " + value, source);
+    return toml::parse(text_safe, source);
   } catch (const toml::parse_error& e) {
     if (!bare_word) throw SceneError(source + ": " + key + ": " + std::string(e.description()));
   }
   try {
-    return toml::parse(key + " = \"" + value + "\"", source);
+    return toml::parse(guard_toml_text(key + " = \"" + value + "\"", source), source);
   } catch (const toml::parse_error& e) {
     throw SceneError(source + ": " + key + ": " + std::string(e.description()));
   }
@@ -561,6 +735,18 @@ void check_consistency(const Params& p, const std::string& source,
                               " (cloth.center, cloth.tilt, " + keys + ")");
     }
   }
+  // A run that would take no step, or write frames between steps. Params
+  // made in code (check_params) may step to any time they like.
+  if (source != kInCode) {
+    if (p.run.duration > 0 && p.integrator.dt > p.run.duration * (1 + 1e-9))
+      bad("integrator.dt", "= " + shortest(p.integrator.dt) + " s is longer than run.duration = " +
+                               shortest(p.run.duration) +
+                               " s: the run would take no step (lower integrator.dt)");
+    if (p.run.fps * p.integrator.dt > 1 + 1e-9)
+      bad("run.fps", "= " + shortest(p.run.fps) + " frames/s is above the step rate, 1 / " +
+                         "integrator.dt = " + shortest(1 / p.integrator.dt) +
+                         " steps/s: frames would repeat steps (lower run.fps, or integrator.dt)");
+  }
   // A key that does nothing for a handle's type is a mistake, not a default.
   const auto nonzero = [](const Vec3d& v) { return v[0] != 0 || v[1] != 0 || v[2] != 0; };
   for (const auto& [name, h] : p.handles) {
@@ -583,9 +769,15 @@ void check_consistency(const Params& p, const std::string& source,
 std::string read_file(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw SceneError(path + ": cannot read the file");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
+  // No more than guard_toml_text takes, and one byte to say it was more.
+  std::string text(kMaxSceneBytes + 1, '\0');
+  in.read(text.data(), static_cast<std::streamsize>(text.size()));
+  if (in.bad()) throw SceneError(path + ": cannot read the file");
+  text.resize(static_cast<std::size_t>(in.gcount()));
+  if (text.size() > kMaxSceneBytes)
+    throw SceneError(path + ": more than a scene's " + std::to_string(kMaxSceneBytes) +
+                     " bytes: not a scene file");
+  return text;
 }
 
 }  // namespace
@@ -657,10 +849,24 @@ std::string format_value(const ParamValue& v) {
         if constexpr (std::is_same_v<T, long long>) return std::to_string(x);
         if constexpr (std::is_same_v<T, double>) return shortest(x);
         if constexpr (std::is_same_v<T, std::string>) {
+          // TOML's basic string: a control character (DEL too) only as an escape.
           std::string s = "\"";
-          for (char c : x) {
-            if (c == '"' || c == '\\') s += '\\';
-            s += c;
+          for (const char ch : x) {
+            const auto c = static_cast<unsigned char>(ch);
+            if (c == '"' || c == '\\') {
+              s += '\\';
+              s += ch;
+            } else if (c == '\n') {
+              s += "\\n";
+            } else if (c == '\t') {
+              s += "\\t";
+            } else if (c < 0x20 || c == 0x7F) {
+              char u[8];
+              std::snprintf(u, sizeof u, "\\u%04X", c);
+              s += u;
+            } else {
+              s += ch;
+            }
           }
           return s + "\"";
         }
@@ -675,9 +881,10 @@ std::string format_value(const ParamValue& v) {
 
 Params parse_scene(const std::string& text, const std::string& source,
                    const std::vector<std::string>& overrides) {
+  const std::string safe = guard_toml_text(text, source);
   toml::table root;
   try {
-    root = toml::parse(text, source);
+    root = toml::parse(safe, source);
   } catch (const toml::parse_error& e) {
     throw SceneError(source + ":" + std::to_string(e.source().begin.line) + ": " +
                      std::string(e.description()));

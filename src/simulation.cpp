@@ -540,8 +540,8 @@ std::string Simulation::blow_up_reason() const {
   }
   if (p.integrator.dt > limit) {
     o << lead << "integrator.dt = " << p.integrator.dt
-      << " s is too large for the springs (structural " << model_.stencil[0].k << " N/m, bending "
-      << model_.stencil[4].k << " N/m at this spacing) and the lightest particle (" << m_min
+      << " s is too large for the springs (" << detail::step_limit_springs_text(p)
+      << " at this spacing) and the lightest particle (" << m_min
       << " kg): the explicit limit is about " << limit
       << " s. Lower integrator.dt, or the stiffness (material.*, springs.*_k, self_collision.k).";
     return o.str();

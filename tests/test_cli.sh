@@ -96,6 +96,56 @@ echo keep > "$T/afile"
   [ "$(cat "$T/afile")" = keep ] && ok "--out a file: exit 2, named, untouched" ||
   bad "--out a file: exit $code, $(cat "$T/err")"
 
+# Scene files are untrusted: guarded before toml++ parses them (it overflows
+# the stack on deep nesting and reaches undefined behaviour on a stray
+# non-ASCII byte); every case is bad input, named, nothing written.
+printf 'name = "x"\n\xc3\xa9 = 1\n' > "$T/nonascii.toml"
+expect_bad nonascii   "nonascii.toml:2: a non-ASCII character outside a string or comment" "$T/nonascii.toml"
+printf 'name = "\xff"\n' > "$T/utf8.toml"
+expect_bad utf8       "utf8.toml:1: not valid UTF-8" "$T/utf8.toml"
+python3 -c "print('[' + '.'.join(['a'] * 20000) + ']')" > "$T/deepkey.toml"
+expect_bad deepkey    "deepkey.toml:1: a dotted key of more than 32 parts" "$T/deepkey.toml"
+python3 -c "print('a = ' + '[' * 20000 + ']' * 20000)" > "$T/deeparray.toml"
+expect_bad deeparray  "deeparray.toml:1: tables or arrays nested more than 32 deep" "$T/deeparray.toml"
+head -c 1100000 /dev/zero | tr '\0' '#' > "$T/huge.toml"
+expect_bad huge       "huge.toml: more than a scene's 1048576 bytes" "$T/huge.toml"
+expect_bad setdeep    "characters): a dotted key of more than 32 parts" \
+  hang --set "$(python3 -c "print('.'.join(['a'] * 30000))")=1"
+printf '[foo]\n' > "$T/emptytable.toml"
+expect_bad emptytable "emptytable.toml:1: foo: unknown table" "$T/emptytable.toml"
+printf '[cloth.foo.bar]\nx = 1\n' > "$T/subtable.toml"
+expect_bad subtable   "subtable.toml:1: cloth.foo: unknown table" "$T/subtable.toml"
+# Runs that would take no step, or repeat frames, or need more than the machine has.
+expect_bad dtlong     "integrator.dt: = 0.01 s is longer than run.duration = 0.001 s" \
+  hang --set integrator.type=implicit-euler --set integrator.dt=0.01 --set run.fps=10 --duration 0.001
+expect_bad fpshigh    "run.fps: = 1e+05 frames/s is above the step rate" hang --set run.fps=1e5
+expect_bad memory     "of memory, more than the" pull-straight --set 'cloth.resolution=[2001,2001]' \
+  --set self_collision.enabled=true --set self_collision.distance=1
+expect_bad disk       "with run.meshes) need about" hang --set run.fps=1000 --set integrator.dt=1e-3 \
+  --set integrator.type=implicit-euler --duration 1e6
+# Positions so far out that they lose the springs' precision (1e14 m wrote inf).
+expect_bad center     "cloth.center: value 1e+14 is out of range [-10000, 10000]" hang --set 'cloth.center=[0,0,1e14]'
+# A stiff shear spring blows the explicit step up: the message says the step is
+# over the limit and gives the shear springs' constant.
+"$W" run hang --set springs.shear_k=1e7 --duration 0.01 --out "$T/shear" --quiet 2>"$T/err"; code=$?
+[ $code -eq 3 ] && grep -q "integrator.dt = 5e-05 s is too large for the springs (structural 200 N/m, shear 1e+07 N/m" "$T/err" &&
+  ok "shear_k = 1e7: exit 3, the step named over the limit with the shear constant" ||
+  bad "shear_k = 1e7: exit $code: $(cat "$T/err")"
+# A control character in a string reads back from the resolved scene.toml.
+printf 'description = "a\\u0001b\\u007f\\tc"\n' > "$T/control.toml"
+"$W" run "$T/control.toml" --duration 0.01 --out "$T/control" --quiet 2>"$T/err" &&
+  "$W" check "$T/control/scene.toml" >/dev/null 2>>"$T/err" &&
+  grep -qF 'description = "a\u0001b\u007F\tc"' "$T/control/scene.toml" &&
+  ok "a control character in a string: escaped in scene.toml, which reads back" ||
+  bad "control character: $(cat "$T/err")"
+# A scene's name is a label: the default folder stays under out/.
+mkdir -p "$T/cwd/deeper"
+printf 'name = "../../escaped"\n' > "$T/cwd/deeper/name.toml"
+(cd "$T/cwd/deeper" && "$W" run name.toml --duration 0.01 --quiet 2>"$T/err")
+[ ! -e "$T/escaped" ] && [ ! -e "$T/cwd/escaped" ] && [ -s "$T/cwd/deeper/out/_._.._escaped/metrics.csv" ] &&
+  ok "name = \"../../escaped\": written under out/ ($(ls "$T/cwd/deeper/out"))" ||
+  bad "name with ..: $(ls "$T" "$T/cwd" "$T/cwd/deeper/out" 2>&1 | tr '\n' ' ') $(cat "$T/err")"
+
 # A run writes every output; its scene.toml reproduces it bit for bit.
 args=(--set cloth.resolution=[15,15] --duration 0.1 --quiet)
 "$W" run pull-straight --out "$T/a" "${args[@]}" || bad "run failed"

@@ -15,8 +15,9 @@
 using namespace wetcloth;
 
 // Allocations counted while g_count_allocations is set (Step.AllocatesNothingOnceWarm):
-// the test binary's operator new counts, then allocates with malloc as
-// libstdc++'s does (its operator delete, kept, frees with free).
+// the test binary's operator new counts, then allocates with malloc; its
+// operator delete frees with free, replaced alongside (AddressSanitizer
+// reports a malloc'd block freed by its own operator delete as a mismatch).
 std::atomic<bool> g_count_allocations{false};
 std::atomic<long> g_allocations{0};
 void* operator new(std::size_t size) {
@@ -24,6 +25,27 @@ void* operator new(std::size_t size) {
   if (void* p = std::malloc(size ? size : 1)) return p;
   throw std::bad_alloc();
 }
+// The other forms, as libstdc++'s own go through operator new (std::stable_sort's
+// buffer is nothrow): under ASan they would be its allocator's, freed by ours.
+void* operator new(std::size_t size, const std::nothrow_t&) noexcept {
+  if (g_count_allocations) ++g_allocations;
+  return std::malloc(size ? size : 1);
+}
+void* operator new[](std::size_t size) { return operator new(size); }
+void* operator new[](std::size_t size, const std::nothrow_t& t) noexcept { return operator new(size, t); }
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wmismatched-new-delete"  // GCC cannot see the pair is ours
+#endif
+void operator delete(void* p) noexcept { std::free(p); }
+void operator delete(void* p, std::size_t) noexcept { std::free(p); }
+void operator delete(void* p, const std::nothrow_t&) noexcept { std::free(p); }
+void operator delete[](void* p) noexcept { std::free(p); }
+void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
+void operator delete[](void* p, const std::nothrow_t&) noexcept { std::free(p); }
+#if defined(__GNUC__) && !defined(__clang__)
+#pragma GCC diagnostic pop
+#endif
 
 namespace {
 

@@ -10,7 +10,14 @@ pkgs=(
   libglfw3-dev libimgui-dev libepoxy-dev libegl-dev libgl1-mesa-dri xvfb xauth ffmpeg
 )
 # `install-deps.sh clients`: also the tools that read the caches (make test-clients).
-[ "${1:-}" = clients ] && pkgs+=(blender python3-vtk9)
+if [ "${1:-}" = clients ]; then
+  pkgs+=(blender python3-vtk9)
+fi
+# `install-deps.sh fuzz`: what `make fuzz` needs besides (clang's libFuzzer
+# and sanitizer runtimes, and its OpenMP).
+if [ "${1:-}" = fuzz ]; then
+  pkgs=(clang libclang-rt-14-dev libomp-dev)
+fi
 missing=()
 for p in "${pkgs[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -31,7 +31,7 @@ int main(int argc, char** argv) {
 
   cli::SceneOptions run_opts;
   std::string out_dir;
-  bool quiet = false;
+  bool quiet = false, force = false;
   auto* run = app.add_subcommand("run", "run a scene and write its results into a folder");
   run_opts.add_to(run);
   run->add_option("--out", out_dir, "output folder (default out/<scene name>)")
@@ -43,11 +43,16 @@ int main(int argc, char** argv) {
                   "DIR/cloth.pc2 with DIR/cloth_rest.obj; DIR/vtk/*.vtp with DIR/cloth.pvd");
   run->add_option("--up", up, "up axis of every file written, z (default) or y (= --set run.up=A)")
       ->check(CLI::IsMember({"z", "y"}));
+  run->add_flag("--force", force,
+                "run even where the memory or disk the run needs (estimated) is more than the "
+                "machine has");
   run->footer(
       "Writes DIR/metrics.csv (one row per frame, SI units in the header), DIR/frames/*.obj,\n"
       "DIR/obstacles.obj, DIR/scene.toml (every parameter, resolved) and DIR/summary.json.\n"
-      "Exit codes: 0 ok, 2 bad input (nothing written), 3 the simulation blew up (outputs so\n"
-      "far kept).");
+      "Exit codes: 0 ok, 2 bad input (nothing written; or DIR is in use by another run),\n"
+      "3 the simulation blew up (outputs so far kept), 4 an output could not be written\n"
+      "(full disk, read-only folder: the file and the reason named), 130 / 143 stopped by\n"
+      "SIGINT / SIGTERM at the end of a step (outputs whole, summary.json \"interrupted\").");
 
   auto* scenes = app.add_subcommand("scenes", "list the built-in scenes");
 
@@ -140,10 +145,18 @@ int main(int argc, char** argv) {
       if (exports) run_opts.sets.push_back("run.export=\"" + *exports + "\"");
       if (up) run_opts.sets.push_back("run.up=" + *up);
       const Params p = run_opts.load();
-      const fs::path out = out_dir.empty() ? fs::path("out") / p.name : fs::path(out_dir);
+      const fs::path out =
+          out_dir.empty() ? fs::path("out") / cli::folder_name(p.name) : fs::path(out_dir);
+      if (!force) cli::check_resources(p, out, run_opts.scene);
       cli::make_output_folder(out);
       const bool progress = !quiet && isatty(STDERR_FILENO);
+      cli::install_stop_handlers();
       const auto r = cli::run_scene(p, out, progress);
+      if (r.code > 128) {
+        std::fprintf(stderr, "wetcloth: %s\nresults so far (whole): %s\n", r.message.c_str(),
+                     out.c_str());
+        return r.code;
+      }
       if (r.code != cli::kOk) {
         std::fprintf(stderr, "wetcloth: %s\nresults so far: %s\n", r.message.c_str(), out.c_str());
         return r.code;
@@ -157,6 +170,9 @@ int main(int argc, char** argv) {
   } catch (const SceneError& e) {
     std::fprintf(stderr, "wetcloth: error: %s\n", e.what());
     return cli::kBadInput;
+  } catch (const OutputError& e) {
+    std::fprintf(stderr, "wetcloth: error: %s\n", e.what());
+    return cli::kOutputError;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "wetcloth: error: %s\n", e.what());
     return cli::kError;

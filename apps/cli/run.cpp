@@ -3,8 +3,14 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
+#include <cerrno>
 #include <cmath>
+#include <csignal>
 #include <cstdio>
+#include <fcntl.h>
+#include <sys/file.h>
+#include <sys/statvfs.h>
+#include <unistd.h>
 #include <mutex>
 #include <optional>
 #include <nlohmann/json.hpp>
@@ -39,23 +45,177 @@ nlohmann::json metrics_json(const Metrics& m) {
   return j;
 }
 
+// The signal that asked the run to stop (0: none). A second one ends the
+// process at once, removing the temporary file being written.
+std::atomic<int> g_stop{0};
+
+extern "C" void on_stop_signal(int sig) {
+  if (g_stop.exchange(sig) != 0) {
+    remove_temporary_files();
+    constexpr char msg[] = "\nwetcloth: stopped at once (second signal)\n";
+    [[maybe_unused]] const auto w = ::write(STDERR_FILENO, msg, sizeof msg - 1);
+    ::_exit(128 + sig);
+  }
+  constexpr char msg[] =
+      "\nwetcloth: stopping at the end of this step (again to stop at once)\n";
+  [[maybe_unused]] const auto w = ::write(STDERR_FILENO, msg, sizeof msg - 1);
+}
+
+// The output folder's lock: held (flock) while a run writes into it, released
+// by the system however the process ends. The file stays.
+class OutputLock {
+ public:
+  explicit OutputLock(const fs::path& out) {
+    const fs::path path = out / ".wetcloth.lock";
+    fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
+    if (fd_ < 0) throw_output_error(path, "cannot create the lock file", errno);
+    if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+      const int e = errno;
+      ::close(fd_);
+      if (e == EWOULDBLOCK)
+        throw SceneError("--out " + out.string() + ": another wetcloth run is writing into it (" +
+                         path.string() + " is locked); wait for it, or choose another --out");
+      throw_output_error(path, "cannot lock", e);
+    }
+  }
+  ~OutputLock() { ::close(fd_); }
+  OutputLock(const OutputLock&) = delete;
+  OutputLock& operator=(const OutputLock&) = delete;
+
+ private:
+  int fd_ = -1;
+};
+
 // Clears what an earlier run left, so a folder never mixes two runs.
 void clear_outputs(const fs::path& out) {
+  std::error_code ec;
   for (const char* f : {"metrics.csv", "summary.json", "scene.toml", "obstacles.obj"})
-    fs::remove(out / f);
-  if (fs::exists(out / "frames"))
-    for (const auto& e : fs::directory_iterator(out / "frames"))
-      if (e.path().extension() == ".obj") fs::remove(e.path());
+    if (fs::remove(out / f, ec); ec) throw_output_error(out / f, "cannot remove", ec.value());
+  const fs::path frames = out / "frames";
+  if (!fs::is_directory(frames, ec)) return;
+  for (fs::directory_iterator it(frames, ec), end; !ec && it != end; it.increment(ec))
+    if (it->path().extension() == ".obj")
+      if (std::error_code rec; fs::remove(it->path(), rec), rec)
+        throw_output_error(it->path(), "cannot remove", rec.value());
+  if (ec) throw_output_error(frames, "cannot list", ec.value());
+}
+
+// The first metric that is not a number, or empty: such a row is not written.
+std::string non_finite_metric(const Metrics& m) {
+  const auto cols = metrics_columns();
+  const auto vals = metrics_values(m);
+  for (std::size_t i = 0; i < vals.size(); ++i)
+    if (!std::isfinite(vals[i])) return cols[i] + " = " + format_number(vals[i]);
+  return {};
+}
+
+const char* signal_name(int sig) {
+  return sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : "a signal";
 }
 
 }  // namespace
 
+ResourceEstimate estimate_resources(const Params& p) {
+  ResourceEstimate e;
+  const double n = static_cast<double>(p.cloth.resolution[0]) * p.cloth.resolution[1];
+  // Measured (peak RSS of pull-straight at 101 x 101 and 301 x 301, 1.5 kB a
+  // particle; the 2001 x 2001 hang, 0.9 kB): about
+  // kBytesPerParticle a particle, and self-collision's pair lists, which grow
+  // with the particles within its distance (a disc of (distance / spacing)²).
+  const double spacing = std::min(p.cloth.size[0] / (p.cloth.resolution[0] - 1),
+                                  p.cloth.size[1] / (p.cloth.resolution[1] - 1));
+  const double near = p.self_collision.enabled
+                          ? std::min(n, 3.15 * std::pow(p.self_collision.distance / spacing, 2))
+                          : 0;
+  e.memory_bytes = 64e6 + n * (kBytesPerParticle + 16 * near);
+  const double frames = static_cast<double>(last_frame_index(p.run.duration, p.run.fps)) + 1;
+  // An OBJ frame: a position, a normal and two triangles a particle.
+  e.disk_bytes = frames * (300 + (p.run.meshes ? 140 * n : 0)) + 1e5;
+  return e;
+}
+
+namespace {
+
+std::string gigabytes(double bytes) {
+  char b[32];
+  std::snprintf(b, sizeof b, bytes < 1e9 ? "%.0f MB" : "%.1f GB", bytes < 1e9 ? bytes / 1e6 : bytes / 1e9);
+  return b;
+}
+
+// MemAvailable, or the cgroup's limit where it is lower; < 0: unknown.
+double available_memory() {
+  double avail = -1;
+  std::FILE* f = std::fopen("/proc/meminfo", "r");
+  if (f) {
+    char line[256];
+    while (std::fgets(line, sizeof line, f))
+      if (unsigned long long kb; std::sscanf(line, "MemAvailable: %llu kB", &kb) == 1)
+        avail = static_cast<double>(kb) * 1024;
+    std::fclose(f);
+  }
+  if (std::FILE* g = std::fopen("/sys/fs/cgroup/memory.max", "r")) {
+    if (unsigned long long limit; std::fscanf(g, "%llu", &limit) == 1) {
+      double used = 0;
+      if (std::FILE* c = std::fopen("/sys/fs/cgroup/memory.current", "r")) {
+        if (unsigned long long u; std::fscanf(c, "%llu", &u) == 1) used = static_cast<double>(u);
+        std::fclose(c);
+      }
+      const double left = static_cast<double>(limit) - used;
+      if (avail < 0 || left < avail) avail = left;
+    }
+    std::fclose(g);
+  }
+  return avail;
+}
+
+}  // namespace
+
+void check_resources(const Params& p, const fs::path& out, const std::string& source) {
+  const ResourceEstimate e = estimate_resources(p);
+  const double mem = available_memory();
+  const std::string force = "; --force runs it all the same";
+  if (mem >= 0 && e.memory_bytes > mem)
+    throw SceneError(source + ": cloth.resolution = [" + std::to_string(p.cloth.resolution[0]) +
+                     ", " + std::to_string(p.cloth.resolution[1]) + "] needs about " +
+                     gigabytes(e.memory_bytes) + " of memory, more than the " + gigabytes(mem) +
+                     " available" + force);
+  fs::path at = fs::absolute(out);
+  std::error_code ec;
+  while (!fs::exists(at, ec) && at.has_parent_path() && at != at.parent_path()) at = at.parent_path();
+  struct statvfs st {};
+  if (::statvfs(at.c_str(), &st) == 0 && st.f_blocks > 0) {  // /proc has none: not a disk
+    const double free = static_cast<double>(st.f_bavail) * static_cast<double>(st.f_frsize);
+    if (e.disk_bytes > free)
+      throw SceneError(source + ": the outputs (" + std::to_string(last_frame_index(p.run.duration, p.run.fps) + 1) +
+                       " frames of run.duration = " + format_number(p.run.duration) +
+                       " s at run.fps = " + format_number(p.run.fps) +
+                       (p.run.meshes ? ", with run.meshes" : "") + ") need about " +
+                       gigabytes(e.disk_bytes) + ", more than the " + gigabytes(free) + " free in " +
+                       at.string() + force);
+  }
+}
+
+void install_stop_handlers() {
+  struct sigaction sa {};
+  sa.sa_handler = on_stop_signal;
+  sigemptyset(&sa.sa_mask);
+  sa.sa_flags = SA_RESTART;
+  sigaction(SIGINT, &sa, nullptr);
+  sigaction(SIGTERM, &sa, nullptr);
+}
+
+int stop_signal() { return g_stop.load(); }
+
 RunResult run_scene(const Params& p, const fs::path& out, bool progress) {
   RunResult r;
   Simulation sim(p);
-  fs::create_directories(out);
+  if (std::error_code ec; fs::create_directories(out, ec), ec)
+    throw_output_error(out, "cannot make the folder", ec.value());
+  const OutputLock lock(out);
   clear_outputs(out);
-  if (p.run.meshes) fs::create_directories(out / "frames");
+  if (p.run.meshes)
+    if (std::error_code ec; fs::create_directories(out / "frames", ec), ec)
+      throw_output_error(out / "frames", "cannot make the folder", ec.value());
   write_file_atomic(out / "scene.toml", "# resolved by wetcloth " WETCLOTH_VERSION
                                         "; `wetcloth run` this file to reproduce the run\n" +
                                             to_toml(p));
@@ -65,7 +225,7 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress) {
   std::optional<CacheWriter> caches;
   if (formats.any()) caches.emplace(out, sim, formats, up, p.run.fps);
 
-  MetricsTable table;
+  MetricsFile metrics(out / "metrics.csv");
   const long long frames = last_frame_index(p.run.duration, p.run.fps);
   const auto start = std::chrono::steady_clock::now();
   auto wall = [&] {
@@ -74,12 +234,42 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress) {
   // Time to 5 cm is a pulled handle's: a pin (measured when there are only
   // pins) sits at its height from the start.
   const bool pulled = sim.model().measures_a_pull();
+  const double dt = p.integrator.dt;
+  long long written_at_step = -1;  // the step of the last row written
+  bool any_row = false;
   for (long long f = 0; f <= frames; ++f) {
     const double t = frame_time(f, p.run.duration, p.run.fps);
-    const bool ok = sim.advance_to(t);
+    // Simulation::advance_to, a step at a time: a signal stops the run at
+    // the end of the step it arrived in.
+    bool ok = true;
+    const auto target = static_cast<long long>(std::llround(t / dt));
+    while (sim.state().steps < target && stop_signal() == 0) {
+      sim.step();
+      if (!sim.blow_up_reason().empty()) break;
+    }
+    ok = sim.blow_up_reason().empty();
+    const int sig = stop_signal();
+    if (sig != 0 && sim.state().steps == written_at_step) {  // the last row is this state's
+      r.code = 128 + sig;
+      break;
+    }
     const Metrics m = sim.metrics();
-    table.add(m);
-    write_file_atomic(out / "metrics.csv", table.csv());
+    if (const std::string bad = non_finite_metric(m); !bad.empty()) {
+      r.code = kBlowUp;
+      r.message = "the simulation left the range of numbers at t = " +
+                  format_number(sim.state().time) + " s (" + bad +
+                  "; not written to metrics.csv). " +
+                  (ok ? "Look at positions and sizes far from the origin (cloth.center, "
+                        "ball.center, table.height, cloth.size) and the forces."
+                      : sim.blow_up_reason());
+      break;
+    }
+    metrics.append(m);
+    written_at_step = sim.state().steps;
+    if (!any_row) r.first = m;
+    any_row = true;
+    r.final = m;
+    r.frame_peak_deficit_pa = std::max(r.frame_peak_deficit_pa, p.air.p_atm - m.inner_pressure_pa);
     if (p.run.meshes) {
       char name[32];
       std::snprintf(name, sizeof name, "frame_%05lld.obj", f);
@@ -93,22 +283,30 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress) {
       r.message = sim.blow_up_reason();
       break;
     }
+    if (sig != 0) {
+      r.code = 128 + sig;
+      break;
+    }
   }
   if (progress) std::fprintf(stderr, "\n");
+  metrics.close();
   if (caches) caches->finish();
-  r.first = table.rows().front();
-  r.final = table.rows().back();
+  if (!any_row) r.first = r.final = sim.metrics();
   r.peak_deficit_pa = sim.state().peak_deficit;
-  for (const Metrics& row : table.rows())
-    r.frame_peak_deficit_pa =
-        std::max(r.frame_peak_deficit_pa, p.air.p_atm - row.inner_pressure_pa);
   r.steps = sim.state().steps;
   r.wall_seconds = wall();
+  r.simulated_seconds = sim.state().time;
+  const bool interrupted = r.code > 128;
+  if (interrupted)
+    r.message = std::string("interrupted by ") + signal_name(r.code - 128) + " at t = " +
+                format_number(sim.state().time) + " s";
 
   nlohmann::json s;
   s["scene"] = p.name;
   s["version"] = WETCLOTH_VERSION;
-  s["status"] = r.code == kOk ? "ok" : "blew up";
+  s["status"] = r.code == kOk ? "ok" : interrupted ? "interrupted" : "blew up";
+  s["interrupted"] = interrupted;
+  if (interrupted) s["signal"] = signal_name(r.code - 128);
   if (r.code != kOk) s["message"] = r.message;
   s["steps"] = r.steps;
   s["substeps"] = sim.stats().substeps;  // more than steps where implicit Euler halved some
@@ -125,6 +323,7 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress) {
   s["wall_seconds"] = r.wall_seconds;
   s["realtime_factor"] = r.wall_seconds > 0 ? sim.state().time / r.wall_seconds : 0.0;
   s["peak_pressure_deficit_pa"] = r.peak_deficit_pa;
+  if (!non_finite_metric(r.final).empty()) r.final = r.first;  // JSON has no inf
   s["final"] = metrics_json(r.final);
   write_file_atomic(out / "summary.json", s.dump(2) + "\n");
   return r;
@@ -145,10 +344,15 @@ std::vector<RunResult> run_all(const std::vector<std::pair<Params, fs::path>>& r
   std::mutex lock;
   auto worker = [&] {
     for (std::size_t i; (i = next++) < runs.size();) {
-      try {  // an exception must not end the process from a worker thread
+      if (const int sig = stop_signal(); sig != 0) {  // interrupted: no case starts
+        results[i].code = 128 + sig;
+        results[i].message = std::string("not run: interrupted by ") + signal_name(sig);
+      } else try {  // an exception must not end the process from a worker thread
         results[i] = run_scene(runs[i].first, runs[i].second, false);
       } catch (const std::exception& e) {
-        results[i].code = dynamic_cast<const SceneError*>(&e) ? kBadInput : kError;
+        results[i].code = dynamic_cast<const SceneError*>(&e)    ? kBadInput
+                          : dynamic_cast<const OutputError*>(&e) ? kOutputError
+                                                                 : kError;
         results[i].message = e.what();
       }
       std::lock_guard<std::mutex> hold(lock);

@@ -11,7 +11,8 @@
 
 namespace wetcloth::cli {
 
-enum ExitCode { kOk = 0, kError = 1, kBadInput = 2, kBlowUp = 3 };
+// 128 + the signal where one stopped a run (130 SIGINT, 143 SIGTERM).
+enum ExitCode { kOk = 0, kError = 1, kBadInput = 2, kBlowUp = 3, kOutputError = 4 };
 
 struct RunResult {
   int code = kOk;
@@ -22,8 +23,29 @@ struct RunResult {
   double time_to_5cm_s = -1;  // first time the handle is 5 cm up; -1: never
   long long steps = 0;
   double wall_seconds = 0;
+  double simulated_seconds = 0;
 };
 
+// SIGINT and SIGTERM ask runs to stop at the end of the step they are in
+// (run_scene then writes that state's row and frame, and summary.json says
+// "interrupted"); a second signal ends the process at once, removing the
+// temporary file being written. Exit 128 + the signal.
+void install_stop_handlers();
+
+// What a run of P will take: memory from the resolution (and self-collision's
+// reach), disk from the frames (and their meshes).
+struct ResourceEstimate {
+  double memory_bytes = 0, disk_bytes = 0;
+};
+constexpr double kBytesPerParticle = 1200;
+ResourceEstimate estimate_resources(const Params& p);
+// Throws SceneError, naming SOURCE and the estimate, where P would need more
+// memory than is available or more disk than is free where OUT is.
+void check_resources(const Params& p, const std::filesystem::path& out, const std::string& source);
+int stop_signal();  // the signal that asked to stop, or 0
+
+// Runs P into OUT (made if missing, locked while the run writes: a second run
+// into it throws SceneError). Throws OutputError where a file cannot be written.
 RunResult run_scene(const Params& p, const std::filesystem::path& out, bool progress);
 
 // The override that shares the cores between `jobs` runs at once, put first

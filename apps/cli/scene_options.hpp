@@ -65,6 +65,18 @@ inline CLI::Validator in_range_of(const std::string& key) {
       def->range_text());
 }
 
+// A scene's name as one folder under out/ (the default output folder): a name
+// is a label, not a path, so '/', '\\' and control characters become '_', and
+// a leading '.' too (no "..", no hidden folder); an empty name is "scene".
+inline std::string folder_name(const std::string& name) {
+  std::string f;
+  for (const char c : name) {
+    const auto u = static_cast<unsigned char>(c);
+    f += (c == '/' || c == '\\' || u < 0x20 || u == 0x7F || (f.empty() && c == '.')) ? '_' : c;
+  }
+  return f.empty() ? "scene" : f;
+}
+
 // An --out that is empty (an unset shell variable) is a mistake, not "the default".
 inline CLI::Validator a_path() {
   return CLI::Validator(

@@ -74,6 +74,7 @@ std::string cases_csv(const sweep::Plan& plan) {
 sweep::Outcome outcome_of(const RunResult& r) {
   sweep::Outcome o;
   o.ok = r.code == kOk;
+  o.interrupted = r.code > 128;
   o.peak_deficit_pa = r.peak_deficit_pa;
   o.frame_peak_deficit_pa = r.frame_peak_deficit_pa;
   o.time_to_5cm_s = r.time_to_5cm_s;
@@ -299,7 +300,8 @@ std::function<int()> add_sweep_command(CLI::App& app) {
     if (o->case_index && (*o->case_index < 0 || static_cast<std::size_t>(*o->case_index) >= n))
       throw SceneError("--case " + std::to_string(*o->case_index) + ": the sweep has " + std::to_string(n) +
                        " cases, 0 to " + std::to_string(n - 1) + " (--list prints them)");
-    const fs::path out = o->out.empty() ? fs::path("out") / (scene.name + "-sweep") : fs::path(o->out);
+    const fs::path out =
+        o->out.empty() ? fs::path("out") / folder_name(scene.name + "-sweep") : fs::path(o->out);
     make_output_folder(out);
     write_shared(out / kCasesFile, cases_csv(plan));
 
@@ -316,11 +318,12 @@ std::function<int()> add_sweep_command(CLI::App& app) {
     std::size_t printed = 0;
     {
       ProgressLine progress(runs.size(), jobs, !o->quiet && isatty(STDERR_FILENO));
+      install_stop_handlers();  // SIGINT / SIGTERM: every case stops at a step's end
       run_all(runs, jobs, [&](std::size_t k, const RunResult& r) {
         const std::size_t i = chosen[k];
         results[i] = r;
         ended[k] = true;
-        if (r.code == kOk || r.code == kBlowUp) {  // a row: it ran
+        if (r.code == kOk || r.code == kBlowUp || r.code > 128) {  // a row: it ran
           rows[i] = sweep::csv_row(plan.cases[i], outcome_of(r));
           write_shared(out / plan.cases[i].name / kRowFile, sweep::csv_header(plan) + rows[i]);
         }
@@ -334,7 +337,8 @@ std::function<int()> add_sweep_command(CLI::App& app) {
           std::printf(
               "%-22s %s  handle %.4f m  contact %.5f m²  peak deficit (any step) %.1f Pa, "
               "over frames %.1f Pa  (%.1f s wall)\n",
-              plan.cases[c].name.c_str(), cr.code == kOk ? "ok     " : "BLEW UP", cr.final.handle_height_m,
+              plan.cases[c].name.c_str(), cr.code == kOk ? "ok     " : cr.code > 128 ? "STOPPED" : "BLEW UP",
+              cr.final.handle_height_m,
               cr.final.contact_area_m2, cr.peak_deficit_pa, cr.frame_peak_deficit_pa, cr.wall_seconds);
         }
         std::fflush(stdout);
@@ -349,11 +353,12 @@ std::function<int()> add_sweep_command(CLI::App& app) {
       }
     if (o->case_index) {
       if (!o->quiet) std::printf("results: %s\n", (out / plan.cases[chosen[0]].name).c_str());
-      return code;
+      return stop_signal() != 0 ? 128 + stop_signal() : code;
     }
     std::string csv = sweep::csv_header(plan);
     for (const auto& r : rows) csv += r;
     write_file_atomic(out / "sweep.csv", csv);
+    if (stop_signal() != 0) return 128 + stop_signal();  // what finished is in sweep.csv
     if (!o->no_plots && !plot(out) && code == kOk) code = kError;
     bool sheet = false;
     if (o->render) {

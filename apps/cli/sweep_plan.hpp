@@ -265,6 +265,7 @@ inline std::string csv_header(const Plan& plan) {
 // What a case's run gave, as sweep.csv has it.
 struct Outcome {
   bool ok = true;
+  bool interrupted = false;  // stopped by a signal at a step's end
   double peak_deficit_pa = 0, frame_peak_deficit_pa = 0, time_to_5cm_s = -1;
   Metrics final;
 };
@@ -273,7 +274,7 @@ inline std::string csv_row(const Case& c, const Outcome& r) {
   std::string o = csv_field(c.name);
   for (const auto& v : c.columns) o += "," + csv_field(v);
   o += "," + csv_field(c.air_model) + "," + format_number(c.humidity) + "," +
-       (r.ok ? "ok" : "blew_up") + "," + format_number(r.peak_deficit_pa) + "," +
+       (r.ok ? "ok" : r.interrupted ? "interrupted" : "blew_up") + "," + format_number(r.peak_deficit_pa) + "," +
        format_number(r.frame_peak_deficit_pa) + "," + format_number(r.time_to_5cm_s);
   for (double v : metrics_values(r.final)) o += "," + format_number(v);
   return o + "\n";

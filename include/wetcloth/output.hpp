@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <filesystem>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -12,7 +13,48 @@
 
 namespace wetcloth {
 
+// An output file or folder that could not be written: the message names it and
+// the system's reason ("out/x/metrics.csv: cannot write: No space left on
+// device"). The CLI exits 4 on it.
+struct OutputError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+[[noreturn]] void throw_output_error(const std::filesystem::path& path, const std::string& doing,
+                                     int error_number);
+
+// Writes PATH.tmp, then renames it to PATH: a reader sees the old file or the
+// new one, whole. On any failure the .tmp is removed and OutputError thrown.
 void write_file_atomic(const std::filesystem::path& path, const std::string& contents);
+
+// Removes the temporary files being written at this moment (by any thread).
+// Async-signal-safe: a signal handler that ends the process calls it.
+void remove_temporary_files() noexcept;
+
+// A test hook: with WETCLOTH_FAIL_AFTER_BYTES=N in the environment, the
+// output files (write_file_atomic, MetricsFile) take N bytes in all and then
+// fail as a full disk does (ENOSPC), part way through a write.
+bool write_fault_injected();
+
+// metrics.csv grown a row at a time, so that a run's I/O is linear in its
+// frames: the header is written whole (write_file_atomic), then each row is
+// appended with one write; a write that fails part way is cut back, so that
+// the file always ends with a whole row.
+class MetricsFile {
+ public:
+  explicit MetricsFile(const std::filesystem::path& path);
+  ~MetricsFile();
+  MetricsFile(const MetricsFile&) = delete;
+  MetricsFile& operator=(const MetricsFile&) = delete;
+  void append(const Metrics& m);
+  void close();  // flushed to the disk (fsync); the destructor closes without
+
+ private:
+  std::filesystem::path path_;
+  int fd_ = -1;
+  long long size_ = 0;
+};
+std::string metrics_csv_header();
+std::string metrics_csv_row(const Metrics& m);
 
 // The files' up axis (run.up): y turns (x, y, z) -> (x, z, -y), as Houdini, Maya
 // and Blender's OBJ importer expect by default.

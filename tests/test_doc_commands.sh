@@ -9,6 +9,7 @@
 #   ```python blocks                       run by PYTHON (default /usr/bin/python3)
 #       with PYTHONPATH=PYTHON_DIR, the module's Simulation on 9 x 9 and
 #       advance_to at most 0.05 s, sweep alike; skipped without PYTHON_DIR.
+# A command that appears twice (after the changes above) runs once.
 # The commands run in a scratch folder in which build/wetcloth is W and
 # examples/ and scenes/ are the checkout's, so relative paths (out/...) work
 # as the docs say and nothing is written into the checkout.
@@ -158,6 +159,7 @@ _w.Simulation, _w.sweep = _Small, _small_sweep
 '''
 
 targets = makefile_targets()
+seen = {}
 python_ok = bool(PYDIR) and subprocess.run(
     [PY, "-c", "import wetcloth"], env=dict(os.environ, PYTHONPATH=PYDIR),
     capture_output=True).returncode == 0
@@ -212,13 +214,17 @@ for doc in DOCS:
                 print(f"skip  {where}: {text}: {note}")
                 counts["skipped"] += 1
                 continue
+            shown = "wetcloth " + shlex.join(args)
+            if shown in seen:  # the same command, already run: the same outputs
+                print(f"ok    {where}: {shown} (as at {seen[shown]})")
+                continue
+            seen[shown] = where
             t0 = time.time()
             try:
                 code, out = runs(args)
             except subprocess.TimeoutExpired:
                 code, out = "timeout", ""
             counts["ran"] += 1
-            shown = "wetcloth " + shlex.join(args)
             if code in codes:
                 print(f"ok    {where}: {shown}{note} ({time.time() - t0:.1f} s)")
             else:

@@ -5,7 +5,7 @@ BUILD    ?= build
 JOBS     ?= $(shell nproc)
 CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Release
 
-.PHONY: all deps build test test-clients test-sanitize fuzz demo validate bench clean readme-params
+.PHONY: all deps build test test-clients test-sanitize fuzz demo validate bench clean docs-params readme-params
 
 all: build
 
@@ -81,9 +81,12 @@ bench: build
 	  echo "this build has no Bullet (libbullet-dev not found): no 'wetcloth bench --peer bullet'"; \
 	fi
 
-# Regenerate the README's parameter table from the loader's own definitions.
-readme-params: build
-	tools/update-readme-params.sh $(BUILD)/wetcloth
+# Regenerate the user guide's parameter table (docs/guide.md) from the
+# loader's own definitions; readme-params is its old name.
+docs-params: build
+	tools/update-docs-params.sh $(BUILD)/wetcloth
+
+readme-params: docs-params
 
 clean:
 	rm -rf $(BUILD)

@@ -215,7 +215,7 @@ grep -q "integrator.dt" "$T/err" && ok "blow-up message names integrator.dt" || 
 [ $code -eq 3 ] && grep -q 'Likely cause: integrator.type = "explicit-euler"' "$T/err" &&
   ok "forward Euler's blow-up names the integrator" || bad "explicit-euler blow-up: exit $code, $(cat "$T/err")"
 
-# The README's example scenes stay valid and run.
+# The example scenes stay valid and run.
 for f in "$SRC"/examples/scenes/*.toml; do
   "$W" run "$f" --duration 0.02 --out "$T/example" --quiet 2>"$T/err" && ok "example $(basename "$f") runs" ||
     bad "example $(basename "$f"): $(cat "$T/err")"
@@ -247,15 +247,15 @@ h = next(x for x in d if x["key"] == "cloth.humidity")
 sys.exit(0 if h["min"] == 0 and h["max"] == 1 and len(d) > 80 and any("choices" in x for x in d) else 1)' &&
   ok "params --json" || bad "params --json"
 
-# The README's parameter table is the one `wetcloth params --markdown` prints.
+# The user guide's parameter table is the one `wetcloth params --markdown` prints.
 "$W" params --markdown > "$T/params.md"
 # Five cells a row: a "|" inside a cell ("table | ball") is escaped.
 [ -z "$(awk -F'(^|[^\\\\])[|]' 'NF != 7' "$T/params.md")" ] && ok "params table: five cells a row" ||
   bad "params table rows with a stray |: $(awk -F'(^|[^\\\\])[|]' 'NF != 7' "$T/params.md" | head -2)"
-if awk '/<!-- params:begin -->/{f=1;next}/<!-- params:end -->/{f=0}f' "$SRC/README.md" | cmp -s - "$T/params.md"; then
-  ok "README parameter table is current"
+if awk '/<!-- params:begin -->/{f=1;next}/<!-- params:end -->/{f=0}f' "$SRC/docs/guide.md" | cmp -s - "$T/params.md"; then
+  ok "docs/guide.md parameter table is current"
 else
-  bad "README parameter table differs from 'wetcloth params --markdown' (run: make readme-params)"
+  bad "docs/guide.md parameter table differs from 'wetcloth params --markdown' (run: make docs-params)"
 fi
 
 # bench: one small grid, JSON out; bad input and a blow-up write nothing. No timing checks.

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# The README's install line, without the network: a venv (Debian's NumPy
+# The install line of docs/guide.md, without the network: a venv (Debian's NumPy
 # through --system-site-packages), `pip install --no-build-isolation` of a copy
 # of the checkout's setup.py and python/ (this build's module: WETCLOTH_BUILD_DIR),
 # then the one-liner from another folder. The venv is made without

@@ -62,7 +62,7 @@ int main(int argc, char** argv) {
 
   bool markdown = false;
   auto* params = app.add_subcommand("params", "every scene parameter: key, unit, default, range, meaning");
-  params->add_flag("--markdown", markdown, "as the README's Markdown table");
+  params->add_flag("--markdown", markdown, "as the Markdown table of docs/guide.md");
   bool json = false;
   params->add_flag("--json", json, "as JSON: key, unit, type, default, min, max, choices, meaning");
 

@@ -72,7 +72,7 @@ std::string springs_text(const Params& p);
 // SceneError naming the key: "Params: cloth.humidity: value 3.0 is out of range [0, 1]".
 void check_params(const Params& p);
 
-// Markdown table of every parameter (the README's table).
+// Markdown table of every parameter (the table in docs/guide.md).
 std::string params_markdown();
 // `wetcloth params`: a line a parameter, in aligned columns.
 std::string params_text();

@@ -114,15 +114,16 @@ std::vector<Vec3> uvs(const Model& m) {  // (u, v, 0): the grid's own coordinate
 
 std::string polydata(const std::vector<Vec3>& points, const std::vector<std::array<int, 3>>& tris,
                      const std::string& point_data) {
-  std::string o = "<?xml version=\"1.0\"?>\n"
-                  "<VTKFile type=\"PolyData\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
-                  "<PolyData>\n<Piece NumberOfPoints=\"" +
-                  std::to_string(points.size()) + "\" NumberOfPolys=\"" +
-                  std::to_string(tris.size()) + "\">\n" + point_data +
-                  "<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" "
-                  "format=\"ascii\">\n" +
-                  flat(points) + "\n</DataArray>\n</Points>\n<Polys>\n" +
-                  "<DataArray type=\"Int32\" Name=\"connectivity\" format=\"ascii\">\n";
+  std::string o =
+      "<?xml version=\"1.0\"?>\n"
+      "<VTKFile type=\"PolyData\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
+      "<PolyData>\n<Piece NumberOfPoints=\"" +
+      std::to_string(points.size()) + "\" NumberOfPolys=\"" + std::to_string(tris.size()) +
+      "\">\n" + point_data +
+      "<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" "
+      "format=\"ascii\">\n" +
+      flat(points) + "\n</DataArray>\n</Points>\n<Polys>\n" +
+      "<DataArray type=\"Int32\" Name=\"connectivity\" format=\"ascii\">\n";
   for (std::size_t k = 0; k < tris.size(); ++k)
     o += (k ? " " : "") + std::to_string(tris[k][0]) + " " + std::to_string(tris[k][1]) + " " +
          std::to_string(tris[k][2]);
@@ -206,9 +207,9 @@ CacheWriter::CacheWriter(const fs::path& dir, const Simulation& sim, ExportForma
     write_file_atomic(dir / "vtk" / "obstacles.vtp", polydata(points, tris, ""));
   }
   if (formats.usd)
-    for (const char* d : {"point3f[] points", "normal3f[] normals", "float3[] extent",
-                          "float[] primvars:contact", "float[] primvars:pressure",
-                          "float[] primvars:adhesion", "float primvars:humidity"}) {
+    for (const char* d :
+         {"point3f[] points", "normal3f[] normals", "float3[] extent", "float[] primvars:contact",
+          "float[] primvars:pressure", "float[] primvars:adhesion", "float primvars:humidity"}) {
       spools_.push_back(std::make_unique<Spool>());
       spools_.back()->declaration = d;
       if (!spools_.back()->file)
@@ -251,8 +252,9 @@ void CacheWriter::add_frame(const Simulation& sim) {
         "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n";
     for (std::size_t q = 0; q < vtk_times_.size(); ++q) {
       char line[128];
-      std::snprintf(line, sizeof line, "<DataSet timestep=\"%.9g\" file=\"vtk/cloth_%05zu.vtp\"/>\n",
-                    vtk_times_[q], q);
+      std::snprintf(line, sizeof line,
+                    "<DataSet timestep=\"%.9g\" file=\"vtk/cloth_%05zu.vtp\"/>\n", vtk_times_[q],
+                    q);
       pvd += line;
     }
     write_file_atomic(dir_ / "cloth.pvd", pvd + "</Collection>\n</VTKFile>\n");
@@ -304,7 +306,8 @@ void CacheWriter::finish() {
     put(st, uv.y());
     st += ")";
   }
-  o += "        texCoord2f[] primvars:st = [" + st + "] (\n            interpolation = \"vertex\"\n        )\n";
+  o += "        texCoord2f[] primvars:st = [" + st +
+       "] (\n            interpolation = \"vertex\"\n        )\n";
   o += "        normal3f[] normals (\n            interpolation = \"vertex\"\n        )\n";
   for (const char* name : {"contact", "pressure", "adhesion"})
     o += std::string("        float[] primvars:") + name +

@@ -2,8 +2,8 @@
 #include <omp.h>
 
 #include <algorithm>
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <numbers>
 #include <unordered_map>
 
@@ -217,8 +217,10 @@ Model build_model(const Params& p) {
       if (!fresh) m.triangle_pairs.push_back({it->second, t});
     }
 
-  if (p.contact.surface == SurfaceChoice::Table && p.table.enabled) m.contact_surface = SurfaceKind::Table;
-  if (p.contact.surface == SurfaceChoice::Ball && p.ball.enabled) m.contact_surface = SurfaceKind::Ball;
+  if (p.contact.surface == SurfaceChoice::Table && p.table.enabled)
+    m.contact_surface = SurfaceKind::Table;
+  if (p.contact.surface == SurfaceChoice::Ball && p.ball.enabled)
+    m.contact_surface = SurfaceKind::Ball;
 
   for (const auto& [name, hp] : p.handles) {
     Handle h;

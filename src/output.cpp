@@ -1,13 +1,14 @@
 #include "wetcloth/output.hpp"
 
+#include <fcntl.h>
+#include <unistd.h>
+
 #include <atomic>
 #include <cerrno>
 #include <charconv>
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
-#include <fcntl.h>
-#include <unistd.h>
-#include <cmath>
 #include <fstream>
 #include <numbers>
 #include <sstream>

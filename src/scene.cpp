@@ -1,7 +1,6 @@
 // Scene files: one table of parameter definitions, used to load, check, print and
 // document every key.
 #include "wetcloth/scene.hpp"
-#include "wetcloth/caches.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -12,8 +11,11 @@
 #include <fstream>
 #include <limits>
 #include <sstream>
+
+#include "wetcloth/caches.hpp"
 #define TOML_HEADER_ONLY 1
 #include <toml++/toml.h>
+
 #include <tuple>
 #include <type_traits>
 
@@ -117,8 +119,10 @@ ParamDef optional_field(std::string key, std::string unit, double lo, double hi,
   return d;
 }
 
-#define P(path) [](Params & p) -> auto& { return p.path; }
-#define H(path) [](HandleParams & h) -> auto& { return h.path; }
+#define P(path) \
+  [](Params & p) -> auto& { return p.path; }
+#define H(path) \
+  [](HandleParams & h) -> auto& { return h.path; }
 
 std::vector<ParamDef> make_defs() {
   // Positions: at 1e14 m a double's step is 0.02 m, and metrics.csv got inf.
@@ -349,9 +353,12 @@ std::string guard_toml_text(const std::string& text, const std::string& source) 
     }
     int len = 0;
     unsigned cp = 0, min = 0;
-    if ((c & 0xE0) == 0xC0) len = 2, cp = c & 0x1F, min = 0x80;
-    else if ((c & 0xF0) == 0xE0) len = 3, cp = c & 0x0F, min = 0x800;
-    else if ((c & 0xF8) == 0xF0) len = 4, cp = c & 0x07, min = 0x10000;
+    if ((c & 0xE0) == 0xC0)
+      len = 2, cp = c & 0x1F, min = 0x80;
+    else if ((c & 0xF0) == 0xE0)
+      len = 3, cp = c & 0x0F, min = 0x800;
+    else if ((c & 0xF8) == 0xF0)
+      len = 4, cp = c & 0x07, min = 0x10000;
     bool ok = len > 0 && i + static_cast<std::size_t>(len) <= n;
     for (int k = 1; ok && k < len; ++k) {
       ok = (s[i + k] & 0xC0) == 0x80;
@@ -390,8 +397,8 @@ std::string guard_toml_text(const std::string& text, const std::string& source) 
     return static_cast<std::size_t>(len);
   };
   line = 1;
-  int depth = 0;      // open [ and {
-  int parts = 0;      // parts of the dotted key (or number) being read
+  int depth = 0;  // open [ and {
+  int parts = 0;  // parts of the dotted key (or number) being read
   bool after_part = false, after_dot = false;
   const auto part = [&] {
     parts = after_dot ? parts + 1 : 1;
@@ -417,7 +424,7 @@ std::string guard_toml_text(const std::string& text, const std::string& source) 
       const bool multi = i + 2 < n && s[i + 1] == c && s[i + 2] == c;
       i += multi ? 3 : 1;
       for (;;) {
-        if (i >= n) break;  // unterminated: toml++ says so
+        if (i >= n) break;                  // unterminated: toml++ says so
         if (s[i] == '\n' && !multi) break;  // toml++ says so
         if (s[i] == '\n') ++line;
         if (c == '"' && s[i] == '\\') {  // the escaped character is the string's
@@ -434,8 +441,9 @@ std::string guard_toml_text(const std::string& text, const std::string& source) 
       }
       part();
     } else if (c >= 0x80) {
-      throw SceneError(at(line) + ": a non-ASCII character outside a string or comment (keys "
-                                  "are ASCII: letters, digits, _ and -)");
+      throw SceneError(at(line) +
+                       ": a non-ASCII character outside a string or comment (keys "
+                       "are ASCII: letters, digits, _ and -)");
     } else if (c == '[' || c == '{') {
       if (++depth > kMaxNesting)
         throw SceneError(at(line) + ": tables or arrays nested more than " +
@@ -447,8 +455,10 @@ std::string guard_toml_text(const std::string& text, const std::string& source) 
       ++i;
       other();
     } else if (c == '.') {
-      if (after_part) after_part = false, after_dot = true;
-      else other();
+      if (after_part)
+        after_part = false, after_dot = true;
+      else
+        other();
       ++i;
     } else if (c == ' ' || c == '\t') {
       ++i;
@@ -506,7 +516,7 @@ double number(const toml::node& n, const ParamDef& d, const std::string& key) {
     v = f->get();
   else
     fail(n, key, "expected a number");
-  if (d.min <= d.max && (v < d.min || v > d.max) )
+  if (d.min <= d.max && (v < d.min || v > d.max))
     fail(n, key, "value " + shortest(v) + " is out of range " + d.range_text());
   if (!std::isfinite(v)) fail(n, key, "value is not finite");
   return v;
@@ -515,8 +525,7 @@ double number(const toml::node& n, const ParamDef& d, const std::string& key) {
 template <std::size_t N, class T>
 std::array<T, N> array_of(const toml::node& n, const ParamDef& d, const std::string& key) {
   const auto* a = n.as_array();
-  if (!a || a->size() != N)
-    fail(n, key, "expected an array of " + std::to_string(N) + " numbers");
+  if (!a || a->size() != N) fail(n, key, "expected an array of " + std::to_string(N) + " numbers");
   std::array<T, N> out{};
   for (std::size_t i = 0; i < N; ++i) {
     const toml::node& e = *a->get(i);
@@ -603,7 +612,8 @@ std::string unknown_key(const std::string& key) {
 // error, not a second handle).
 void apply_table(const toml::table& t, const std::string& prefix, Params& p, bool new_handles) {
   for (const auto& [k, node] : t) {
-    const std::string key = prefix.empty() ? std::string(k.str()) : prefix + "." + std::string(k.str());
+    const std::string key =
+        prefix.empty() ? std::string(k.str()) : prefix + "." + std::string(k.str());
     if (prefix.empty() && k.str() == "handle") {
       const auto* handles = node.as_table();
       if (!handles) fail(node, key, "expected a table of handles, [handle.NAME]");
@@ -623,7 +633,8 @@ void apply_table(const toml::table& t, const std::string& prefix, Params& p, boo
           std::string names;
           for (const auto& [n, unused] : p.handles) names += (names.empty() ? "" : ", ") + n;
           fail(h, hkey,
-               "the scene has no such handle (" + (names.empty() ? "it has none" : "its handles: " + names) +
+               "the scene has no such handle (" +
+                   (names.empty() ? "it has none" : "its handles: " + names) +
                    "); add a handle in a scene file");
         }
         p.handles[std::string(name.str())];  // a handle with every key at its default
@@ -661,7 +672,9 @@ toml::table parse_override(const std::string& text) {
   // A long override (a fuzzer's 30 000-part key) is named by its start.
   const std::string source =
       "--set '" +
-      (text.size() <= 160 ? text : text.substr(0, 120) + "...' (" + std::to_string(text.size()) + " characters)") +
+      (text.size() <= 160
+           ? text
+           : text.substr(0, 120) + "...' (" + std::to_string(text.size()) + " characters)") +
       (text.size() <= 160 ? "'" : "");
   // Let a bare word stand for a string: --set air.model=sealed.
   const bool bare_word =
@@ -717,9 +730,8 @@ void check_consistency(const Params& p, const std::string& source,
       bad("wind.region_min", "must not exceed wind.region_max");
   // A cloth that starts inside the table or the ball would be flung out of it
   // at the first step (a tilted or lowered cloth makes that easy to do).
-  for (const auto& [kind, name, on] :
-       {std::tuple{SurfaceKind::Table, "table", p.table.enabled},
-        std::tuple{SurfaceKind::Ball, "ball", p.ball.enabled}}) {
+  for (const auto& [kind, name, on] : {std::tuple{SurfaceKind::Table, "table", p.table.enabled},
+                                       std::tuple{SurfaceKind::Ball, "ball", p.ball.enabled}}) {
     if (!on) continue;
     double deepest = 0;
     for (int j = 0; j < p.cloth.resolution[1]; ++j)
@@ -739,8 +751,8 @@ void check_consistency(const Params& p, const std::string& source,
   // made in code (check_params) may step to any time they like.
   if (source != kInCode) {
     if (p.run.duration > 0 && p.integrator.dt > p.run.duration * (1 + 1e-9))
-      bad("integrator.dt", "= " + shortest(p.integrator.dt) + " s is longer than run.duration = " +
-                               shortest(p.run.duration) +
+      bad("integrator.dt", "= " + shortest(p.integrator.dt) +
+                               " s is longer than run.duration = " + shortest(p.run.duration) +
                                " s: the run would take no step (lower integrator.dt)");
     if (p.run.fps * p.integrator.dt > 1 + 1e-9)
       bad("run.fps", "= " + shortest(p.run.fps) + " frames/s is above the step rate, 1 / " +
@@ -872,7 +884,8 @@ std::string format_value(const ParamValue& v) {
         }
         if constexpr (std::is_same_v<T, Vec2i>)
           return "[" + std::to_string(x[0]) + ", " + std::to_string(x[1]) + "]";
-        if constexpr (std::is_same_v<T, Vec2d>) return "[" + shortest(x[0]) + ", " + shortest(x[1]) + "]";
+        if constexpr (std::is_same_v<T, Vec2d>)
+          return "[" + shortest(x[0]) + ", " + shortest(x[1]) + "]";
         if constexpr (std::is_same_v<T, Vec3d>)
           return "[" + shortest(x[0]) + ", " + shortest(x[1]) + ", " + shortest(x[2]) + "]";
       },
@@ -991,7 +1004,8 @@ Params at_resolution(Params p, long long grid) {
         std::llround(std::ceil(static_cast<double>(p.integrator.substeps) * scale));
   // The particles get lighter as the spacing squared; bending springs stiffer
   // (B / l²), and from about 101 x 101 on a 0.3 m cloth they set the limit.
-  if (p.integrator.type != IntegratorType::ImplicitEuler && p.integrator.type != IntegratorType::Xpbd && scale > 1) {
+  if (p.integrator.type != IntegratorType::ImplicitEuler &&
+      p.integrator.type != IntegratorType::Xpbd && scale > 1) {
     p.integrator.dt /= scale;
     const double k_after = detail::chain_stiffness(p);
     if (k_after > k_before) p.integrator.dt *= std::sqrt(k_before / k_after);

@@ -42,7 +42,7 @@ void detail::compute_normals(const Model& m, const double* X, Vec3Array& normal,
   for_each_row_block(m, [&](int j0, int j1, int) {
     const int q1 = std::min(j1, nv - 1);  // quad rows j0 .. q1 - 1
     if (j0 >= q1) return;
-    // Up to the last row's slot nu - 1, whose corners run past the grid.
+      // Up to the last row's slot nu - 1, whose corners run past the grid.
 #pragma GCC ivdep
     for (int a = j0 * nu; a < q1 * nu - 1; ++a) {
       // Corners a, b = a + 1, cc = a + nu + 1, d = a + nu. Even quads split
@@ -104,9 +104,14 @@ void compute_normals(const Model& m, const Vec3Array& x, Vec3Array& normal) {
 Workspace& detail_workspace(const Simulation& sim) { return *sim.ws_; }
 
 Simulation::Simulation(const Simulation& o)
-    : model_(o.model_), state_(o.state_), ws_(std::make_unique<Workspace>(*o.ws_)),
-      grab_particle_(o.grab_particle_), grab_target_(o.grab_target_), grab_k_(o.grab_k_),
-      touched_(o.touched_), threads_(o.threads_) {}
+    : model_(o.model_),
+      state_(o.state_),
+      ws_(std::make_unique<Workspace>(*o.ws_)),
+      grab_particle_(o.grab_particle_),
+      grab_target_(o.grab_target_),
+      grab_k_(o.grab_k_),
+      touched_(o.touched_),
+      threads_(o.threads_) {}
 Simulation& Simulation::operator=(const Simulation& o) {
   if (this != &o) *this = Simulation(o);
   return *this;
@@ -238,8 +243,7 @@ void Simulation::step() {
   // A trial times each count for 2 ms (two substeps at least); the faster is
   // kept for 0.25 s of stepping, a trial's cost under 2 %.
   constexpr double kTrialSeconds = 2e-3, kKeepSeconds = 0.25;
-  if (c.phase < 2 ? c.seconds < kTrialSeconds || c.substeps < 2 : c.seconds < kKeepSeconds)
-    return;
+  if (c.phase < 2 ? c.seconds < kTrialSeconds || c.substeps < 2 : c.seconds < kKeepSeconds) return;
   if (c.phase < 2) c.per_substep[c.phase] = c.seconds / static_cast<double>(c.substeps);
   c.phase = (c.phase + 1) % 3;
   c.seconds = 0;
@@ -256,70 +260,70 @@ void Simulation::take_step() {
   const IntegratorType integrator = m.params.integrator.type;
 
   switch (integrator) {
-  case IntegratorType::Xpbd:
-    xpbd_step();
-    break;
-  case IntegratorType::ImplicitEuler: {
-    // Baraff & Witkin's step control (their section 5.5): a substep whose
-    // springs change too much for their linearisation is taken again at half
-    // the size. Where they double the size after every substep that held, the
-    // next one here tries twice the size only when this one's springs changed
-    // by at most half the limit: a spring's change grows at least in
-    // proportion to the substep, so a larger one would fail, and a failed try
-    // costs a whole solve (on the pulls, one solve in three was thrown away).
-    // Substeps are dt / 2^k and start on a multiple of their size, so they end
-    // exactly on the step.
-    constexpr long long kWhole = 1LL << kMostHalvings;
-    long long done = 0;  // in units of dt / 2^kMostHalvings
-    while (done < kWhole) {
-      int k = s.halvings;
-      while (done % (kWhole >> k) != 0) ++k;
-      const int tried = k;
-      accumulate_forces(true);
-      double strain = 0;
-      const double h = implicit_substep(dt, k, strain);
-      const bool room = strain <= 0.5 * m.params.integrator.max_step_strain;
-      s.halvings = k == tried && room ? std::max(0, k - 1) : k;
-      done += kWhole >> k;
-      s.time = (static_cast<double>(s.steps) + static_cast<double>(done) / kWhole) * dt;
-      finish_step(h);
-    }
-    break;
-  }
-  case IntegratorType::ExplicitEuler:
-  case IntegratorType::SymplecticEuler:
-    accumulate_forces(false);
-    if (integrator == IntegratorType::ExplicitEuler) {
-      for (int i = 0; i < m.n; ++i) {
-        add(s.x[i], dt * s.v[i]);
-        add(s.v[i], (dt * m.inv_mass[i]) * w.force[i]);
+    case IntegratorType::Xpbd:
+      xpbd_step();
+      break;
+    case IntegratorType::ImplicitEuler: {
+      // Baraff & Witkin's step control (their section 5.5): a substep whose
+      // springs change too much for their linearisation is taken again at half
+      // the size. Where they double the size after every substep that held, the
+      // next one here tries twice the size only when this one's springs changed
+      // by at most half the limit: a spring's change grows at least in
+      // proportion to the substep, so a larger one would fail, and a failed try
+      // costs a whole solve (on the pulls, one solve in three was thrown away).
+      // Substeps are dt / 2^k and start on a multiple of their size, so they end
+      // exactly on the step.
+      constexpr long long kWhole = 1LL << kMostHalvings;
+      long long done = 0;  // in units of dt / 2^kMostHalvings
+      while (done < kWhole) {
+        int k = s.halvings;
+        while (done % (kWhole >> k) != 0) ++k;
+        const int tried = k;
+        accumulate_forces(true);
+        double strain = 0;
+        const double h = implicit_substep(dt, k, strain);
+        const bool room = strain <= 0.5 * m.params.integrator.max_step_strain;
+        s.halvings = k == tried && room ? std::max(0, k - 1) : k;
+        done += kWhole >> k;
+        s.time = (static_cast<double>(s.steps) + static_cast<double>(done) / kWhole) * dt;
+        finish_step(h);
       }
-      correct_air_implicitly(m, s, w, dt);
-    } else {  // symplectic Euler
-      // The damping is taken at the end of the step: the viscous drag on each
-      // particle's own velocity, v += Δt F / (m + Δt c A), then the springs'
-      // (apply_spring_damping). Explicit, the 0.01 N·s/m of a particle's
-      // springs is unstable at Δt = 5e-5 s from 51 × 51 up: h Σk_d / m ≈ 2.
-      const double c = m.params.forces.viscous_damping;
-      for_each_particle_block(m, [&](int first, int end) {
-        const double *__restrict fx = w.force.column(0), *__restrict fy = w.force.column(1),
-                                     *__restrict fz = w.force.column(2);
-        double* __restrict vx = s.v.column(0), * __restrict vy = s.v.column(1), * __restrict vz = s.v.column(2);
-#pragma GCC ivdep
-        for (int i = first; i < end; ++i) {
-          const double h = dt * m.inv_mass[i], own = 1 + h * c * m.area[i], scale = h / own;
-          vx[i] += scale * fx[i];
-          vy[i] += scale * fy[i];
-          vz[i] += scale * fz[i];
-        }
-      });
-      apply_spring_damping(m, s, w, dt);
-      move_at_new_velocities(dt);
+      break;
     }
-    s.time = (s.steps + 1) * dt;  // no drift from summing dt
-    ++w.substeps;
-    finish_step(dt);
-    break;
+    case IntegratorType::ExplicitEuler:
+    case IntegratorType::SymplecticEuler:
+      accumulate_forces(false);
+      if (integrator == IntegratorType::ExplicitEuler) {
+        for (int i = 0; i < m.n; ++i) {
+          add(s.x[i], dt * s.v[i]);
+          add(s.v[i], (dt * m.inv_mass[i]) * w.force[i]);
+        }
+        correct_air_implicitly(m, s, w, dt);
+      } else {  // symplectic Euler
+        // The damping is taken at the end of the step: the viscous drag on each
+        // particle's own velocity, v += Δt F / (m + Δt c A), then the springs'
+        // (apply_spring_damping). Explicit, the 0.01 N·s/m of a particle's
+        // springs is unstable at Δt = 5e-5 s from 51 × 51 up: h Σk_d / m ≈ 2.
+        const double c = m.params.forces.viscous_damping;
+        for_each_particle_block(m, [&](int first, int end) {
+          const double *__restrict fx = w.force.column(0), *__restrict fy = w.force.column(1),
+                                     *__restrict fz = w.force.column(2);
+          double* __restrict vx = s.v.column(0), * __restrict vy = s.v.column(1), * __restrict vz = s.v.column(2);
+#pragma GCC ivdep
+          for (int i = first; i < end; ++i) {
+            const double h = dt * m.inv_mass[i], own = 1 + h * c * m.area[i], scale = h / own;
+            vx[i] += scale * fx[i];
+            vy[i] += scale * fy[i];
+            vz[i] += scale * fz[i];
+          }
+        });
+        apply_spring_damping(m, s, w, dt);
+        move_at_new_velocities(dt);
+      }
+      s.time = (s.steps + 1) * dt;  // no drift from summing dt
+      ++w.substeps;
+      finish_step(dt);
+      break;
   }
   ++s.steps;
 }
@@ -378,8 +382,7 @@ void Simulation::xpbd_step() {
     collide_with_friction(m, s, w, touched_, h);
     // The paper's damping -k_f v of colliding particles, implicit.
     const double k_f = m.params.self_collision.damping;
-    for (const int q : w.colliding_particles)
-      s.v[q] *= 1.0 / (1.0 + h * k_f * m.inv_mass[q]);
+    for (const int q : w.colliding_particles) s.v[q] *= 1.0 / (1.0 + h * k_f * m.inv_mass[q]);
     hold_stopped_handles(m, s);
     // The rig holds its patch against the external forces (apply_handle_constraints)
     // and the constraints' pull: J / h² on each particle it holds.
@@ -499,7 +502,8 @@ std::string Simulation::blow_up_reason() const {
   // Within the explicit limit, a force handle that alone would have driven
   // its patch past max_speed by now is the likelier cause than the step: a
   // single particle of a few mg takes 1 N as 1e5 m/s².
-  const bool explicit_step = p.integrator.type != IntegratorType::ImplicitEuler && p.integrator.type != IntegratorType::Xpbd;
+  const bool explicit_step = p.integrator.type != IntegratorType::ImplicitEuler &&
+                             p.integrator.type != IntegratorType::Xpbd;
   const char* lead = " Likely cause: ";
   if (p.integrator.type == IntegratorType::ExplicitEuler && p.integrator.dt <= limit) {
     // Forward Euler grows every oscillation a little each step, whatever the
@@ -539,10 +543,9 @@ std::string Simulation::blow_up_reason() const {
     return o.str();
   }
   if (p.integrator.dt > limit) {
-    o << lead << "integrator.dt = " << p.integrator.dt
-      << " s is too large for the springs (" << detail::step_limit_springs_text(p)
-      << " at this spacing) and the lightest particle (" << m_min
-      << " kg): the explicit limit is about " << limit
+    o << lead << "integrator.dt = " << p.integrator.dt << " s is too large for the springs ("
+      << detail::step_limit_springs_text(p) << " at this spacing) and the lightest particle ("
+      << m_min << " kg): the explicit limit is about " << limit
       << " s. Lower integrator.dt, or the stiffness (material.*, springs.*_k, self_collision.k).";
     return o.str();
   }

@@ -21,17 +21,16 @@ struct CollisionPair {
   Sym block{};  // implicit Euler: its h² k_t u uᵀ
 };
 
-
 // Scratch arrays, reused every step: nothing is allocated per step.
 struct Workspace {
   Vec3Array force, normal, surface_normal;
   std::vector<Vec3> x_before;
-  std::vector<double> quad_normals;   // compute_normals' scratch
-  std::vector<double> distance;       // signed distance to the contact surface
-  std::vector<double> adhesion;       // |adhesion force| per particle, N
-  std::vector<std::uint8_t> border;   // border of the contact region
-  std::vector<double> pocket_sums;    // scratch for the implicit air correction
-  Vec3Array air_direction;            // A_i n_i of eq. 3 (zero where no air force)
+  std::vector<double> quad_normals;  // compute_normals' scratch
+  std::vector<double> distance;      // signed distance to the contact surface
+  std::vector<double> adhesion;      // |adhesion force| per particle, N
+  std::vector<std::uint8_t> border;  // border of the contact region
+  std::vector<double> pocket_sums;   // scratch for the implicit air correction
+  Vec3Array air_direction;           // A_i n_i of eq. 3 (zero where no air force)
   // Springs (forces/springs.cpp): a zero row, then per thread its ring of
   // edge rows.
   std::vector<double> spring_rows;

@@ -25,9 +25,8 @@ namespace wetcloth::detail {
 // infinitely heavy.
 void xpbd_begin_substep(const Model& m, const State& s, Workspace& w) {
   w.free_inv_mass.resize(m.n);
-  for_each_particle(m, [&](int i) {
-    w.free_inv_mass[i] = m.driven[i] || s.held[i] ? 0.0 : m.inv_mass[i];
-  });
+  for_each_particle(
+      m, [&](int i) { w.free_inv_mass[i] = m.driven[i] || s.held[i] ? 0.0 : m.inv_mass[i]; });
   // The measured handle's particles while it holds them (a move or pin
   // handle, a force handle stopped at its cap): the constraints' impulses on
   // them are part of the rig's force.
@@ -57,8 +56,8 @@ template <Projection kind>
 void spring_corrections(const SpringRow& r, const double* __restrict gate, int count, double rest,
                         double max_len, double alpha, double gamma, double* __restrict cx,
                         double* __restrict cy, double* __restrict cz) {
-  const double *__restrict x = r.x, *__restrict y = r.y, *__restrict z = r.z;
-  const double *__restrict px = r.px, *__restrict py = r.py, *__restrict pz = r.pz;
+  const double* __restrict x = r.x, * __restrict y = r.y, * __restrict z = r.z;
+  const double* __restrict px = r.px, * __restrict py = r.py, * __restrict pz = r.pz;
   const double* __restrict inv = r.inv;
   const int off = r.off;
 #pragma omp simd
@@ -111,7 +110,7 @@ void project_springs(const Model& m, State& s, Workspace& w, double h, bool limi
   double* const cz = cy + n;
   double *const X = s.x.column(0), *const Y = s.x.column(1), *const Z = s.x.column(2);
   const double *const PX = w.x_prev.column(0), *const PY = w.x_prev.column(1),
-               *const PZ = w.x_prev.column(2);
+                      *const PZ = w.x_prev.column(2);
   const double* const inv = w.free_inv_mass.data();
   w.class_gate.resize(5 * std::size_t(nu));
   for (int g = 0; g < 5; ++g)
@@ -143,11 +142,11 @@ void project_springs(const Model& m, State& s, Workspace& w, double h, bool limi
         const SpringRow r{X + a0, Y + a0, Z + a0, PX + a0, PY + a0, PZ + a0, inv + a0, off};
         // The class along the row: 1 where i's parity (after the shift) is c.
         const double* gate = w.class_gate.data() + (by_row ? 4 : 2 * shift + c) * nu + lo;
-        (limit_only          ? spring_corrections<Projection::LimitOnly>
+        (limit_only       ? spring_corrections<Projection::LimitOnly>
          : max_len < 1e30 ? spring_corrections<Projection::SpringLimited>
-                          : spring_corrections<Projection::Spring>)(
-            r, gate, hi - lo, rest, max_len, alpha, gamma,
-                           cx + a0, cy + a0, cz + a0);
+                          : spring_corrections<Projection::Spring>)(r, gate, hi - lo, rest, max_len,
+                                                                    alpha, gamma, cx + a0, cy + a0,
+                                                                    cz + a0);
       });
       // The impulses on the particles a handle holds (their reaction force).
       const auto edge_at = [&](int a) {
@@ -215,7 +214,7 @@ void collide_with_friction(const Model& m, State& s, Workspace& w,
   const double inv_h = 1.0 / h;
   for_each_particle_block(m, [&](int first, int end) {
     for (int k = 0; k < 3; ++k) {
-      const double *__restrict x = s.x.column(k), *__restrict p = w.x_prev.column(k);
+      const double* __restrict x = s.x.column(k), * __restrict p = w.x_prev.column(k);
       double* __restrict v = s.v.column(k);
 #pragma omp simd
       for (int i = first; i < end; ++i) v[i] = (x[i] - p[i]) * inv_h;
@@ -235,10 +234,8 @@ void collide_with_friction(const Model& m, State& s, Workspace& w,
   };
   const double load_scale = with_load ? inv_h * inv_h : 0.0, dv_scale = mu * h;
   for_each_particle_block(m, [&](int first, int end) {
-    double *__restrict xx = s.x.column(0), *__restrict xy = s.x.column(1),
-                       *__restrict xz = s.x.column(2);
-    double *__restrict vx = s.v.column(0), *__restrict vy = s.v.column(1),
-                       *__restrict vz = s.v.column(2);
+    double* __restrict xx = s.x.column(0), * __restrict xy = s.x.column(1), * __restrict xz = s.x.column(2);
+    double* __restrict vx = s.v.column(0), * __restrict vy = s.v.column(1), * __restrict vz = s.v.column(2);
     const double *__restrict bx = w.x_before_collide.column(0),
                              *__restrict by = w.x_before_collide.column(1),
                              *__restrict bz = w.x_before_collide.column(2);

@@ -271,15 +271,15 @@ TEST(Air, VentedPatchRingedByContactOnTheBallIsSealed) {
         const bool patch = std::abs(i - m.nu / 2) <= 2 && std::abs(j - m.nv / 2) <= 2;
         const int k = m.index(i, j);
         const double above = k == mid ? p.air.band + 0.01 : (patch ? lift : 0.0);
-        s.x[k] = c + (to_vec(p.cloth.center) + Vec3(0.3 * i / (m.nu - 1) - 0.15,
-                                                   0.3 * j / (m.nv - 1) - 0.15, 0) - c)
+        s.x[k] = c + (to_vec(p.cloth.center) +
+                      Vec3(0.3 * i / (m.nu - 1) - 0.15, 0.3 * j / (m.nv - 1) - 0.15, 0) - c)
                              .normalized() *
                          (p.ball.radius + above);
       }
   };
   wrap(0.005);
   detail::update_contact(m, s, w);
-  detail::start_air(m, s, w);  // atmospheric in the new pocket
+  detail::start_air(m, s, w);    // atmospheric in the new pocket
   EXPECT_EQ(s.pocket[mid], -1);  // beyond the band: no air of its own
   const int pocket = s.pocket[mid + 1];
   ASSERT_GE(pocket, 0);

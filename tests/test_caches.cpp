@@ -132,7 +132,8 @@ TEST(Caches, UsdHasOneTimeSampleAFrameWithTheRunsValues) {
   // The topology: a count and three indices a triangle.
   const auto counts_at = usd.find("int[] faceVertexCounts = [");
   ASSERT_NE(counts_at, std::string::npos);
-  const auto counts = numbers(usd.substr(counts_at + 26, usd.find(']', counts_at + 26) - counts_at - 26));
+  const auto counts =
+      numbers(usd.substr(counts_at + 26, usd.find(']', counts_at + 26) - counts_at - 26));
   EXPECT_EQ(counts.size(), r.triangles.size());
   // points: 5 samples at codes 0..4, each 81 points equal to the run's frame.
   const auto at = usd.find("point3f[] points.timeSamples = {");
@@ -147,7 +148,8 @@ TEST(Caches, UsdHasOneTimeSampleAFrameWithTheRunsValues) {
     EXPECT_EQ(v[0], f);
     for (int i = 0; i < 81; ++i)
       for (int q = 0; q < 3; ++q)
-        EXPECT_EQ(static_cast<float>(v[1 + 3 * i + q]), static_cast<float>(r.frames[f].points[i][q]));
+        EXPECT_EQ(static_cast<float>(v[1 + 3 * i + q]),
+                  static_cast<float>(r.frames[f].points[i][q]));
   }
   // Contact, per vertex: the last frame lies on the table.
   const auto c = usd.find("float[] primvars:contact.timeSamples = {");
@@ -177,7 +179,8 @@ TEST(Caches, VtkHasAPolyDataAFrameAndACollection) {
   EXPECT_NE(vtp.find("NumberOfPoints=\"81\""), std::string::npos);
   EXPECT_NE(vtp.find("NumberOfPolys=\"" + std::to_string(r.triangles.size()) + "\""),
             std::string::npos);
-  for (const char* field : {"\"contact\"", "\"pressure_pa\"", "\"adhesion_n\"", "\"humidity\"", "\"uv\""})
+  for (const char* field :
+       {"\"contact\"", "\"pressure_pa\"", "\"adhesion_n\"", "\"humidity\"", "\"uv\""})
     EXPECT_NE(vtp.find(field), std::string::npos) << field;
   const auto p = vtp.find("<Points>");
   const auto start = vtp.find('>', vtp.find("<DataArray", p)) + 1;

@@ -21,7 +21,8 @@ std::vector<Metrics> final_metrics(const std::string& scene, std::vector<std::st
     s.push_back("cloth.humidity=" + std::to_string(w));
     Params p = test::coarse(scene, s);
     Simulation sim(p);
-    EXPECT_TRUE(sim.advance_to(p.run.duration)) << scene << " ω=" << w << ": " << sim.blow_up_reason();
+    EXPECT_TRUE(sim.advance_to(p.run.duration))
+        << scene << " ω=" << w << ": " << sim.blow_up_reason();
     out.push_back(sim.metrics());
   }
   return out;
@@ -66,13 +67,16 @@ std::vector<Hand> driven(const std::string& scene) {
 
 TEST(Experiments, StraightPullHeightAndBaseFallWithHumidity) {
   const auto ms = final_metrics("pull-straight");
-  expect_falling(ms, [](const Metrics& m) { return m.handle_height_m; }, "handle height");
-  expect_falling(ms, [](const Metrics& m) { return m.base_diagonal_m; }, "base diagonal");
+  expect_falling(
+      ms, [](const Metrics& m) { return m.handle_height_m; }, "handle height");
+  expect_falling(
+      ms, [](const Metrics& m) { return m.base_diagonal_m; }, "base diagonal");
 }
 
 TEST(Experiments, CornerPullLiftsLessWithHumidity) {
   const auto ms = final_metrics("pull-corner");
-  expect_falling(ms, [](const Metrics& m) { return m.lifted_area_m2; }, "lifted area");
+  expect_falling(
+      ms, [](const Metrics& m) { return m.lifted_area_m2; }, "lifted area");
 }
 
 // Section 1: a wetter cloth takes more force to drag, and slides less as a whole.
@@ -101,7 +105,8 @@ TEST(Experiments, SealedAirHoldsALargerDeficitThanExchange) {
   double deficit[2];
   int k = 0;
   for (const char* model : {"exchange", "sealed"}) {
-    Params p = test::coarse("pull-straight", {std::string("air.model=") + model, "run.duration=1.0"});
+    Params p =
+        test::coarse("pull-straight", {std::string("air.model=") + model, "run.duration=1.0"});
     Simulation sim(p);
     ASSERT_TRUE(sim.advance_to(p.run.duration)) << sim.blow_up_reason();
     deficit[k++] = p.air.p_atm - sim.state().inner_pressure;

@@ -164,7 +164,8 @@ TEST(SceneLoader, OverridesUseDottedKeysAndNameThemselves) {
 }
 
 TEST(SceneLoader, ResolvedTomlReadsBackToTheSameParameters) {
-  Params p = load_scene("pull-straight", {"cloth.humidity=0.1234567890123", "wind.velocity=[1e-7, 2, 3]"});
+  Params p =
+      load_scene("pull-straight", {"cloth.humidity=0.1234567890123", "wind.velocity=[1e-7, 2, 3]"});
   const Params q = parse_scene(to_toml(p), "resolved.toml");
   EXPECT_EQ(to_toml(p), to_toml(q));
   EXPECT_EQ(q.cloth.humidity, 0.1234567890123);
@@ -268,9 +269,11 @@ TEST(SceneLoader, GuardsNestingAndBytesBeforeParsing) {
   for (int i = 0; i < 100000; ++i) deep += ".a";
   EXPECT_NE(error_of(deep + "]\n").find("bad.toml:1: a dotted key of more than 32 parts"),
             std::string::npos);
-  EXPECT_NE(error_of("a = " + std::string(50000, '[') + std::string(50000, ']')).find("nested more than 32"),
+  EXPECT_NE(error_of("a = " + std::string(50000, '[') + std::string(50000, ']'))
+                .find("nested more than 32"),
             std::string::npos);
-  EXPECT_NE(error_of("b = 1\n\xc3\xa9 = 1\n").find("bad.toml:2: a non-ASCII character"), std::string::npos);
+  EXPECT_NE(error_of("b = 1\n\xc3\xa9 = 1\n").find("bad.toml:2: a non-ASCII character"),
+            std::string::npos);
   EXPECT_NE(error_of("name = \"\xc3\x28\"\n").find("not valid UTF-8"), std::string::npos);
   EXPECT_NE(error_of("", {deep.substr(1) + "=1"}).find("a dotted key of more than 32 parts"),
             std::string::npos);
@@ -280,14 +283,17 @@ TEST(SceneLoader, GuardsNestingAndBytesBeforeParsing) {
   // toml++ 3.3 is undefined on U+00A1-U+0499 and U+FB66-U+FEFE where it reads
   // ahead: in a basic string they are passed escaped (the same value), in a
   // literal string refused.
-  EXPECT_EQ(parse_scene("description = \"\xc3\xa9\xd0\x96\xef\xbb\x9f\" # \xc3\xa9\n", "u.toml").description,
+  EXPECT_EQ(parse_scene("description = \"\xc3\xa9\xd0\x96\xef\xbb\x9f\" # \xc3\xa9\n", "u.toml")
+                .description,
             "\xc3\xa9\xd0\x96\xef\xbb\x9f");
-  EXPECT_NE(error_of("description = '\xc3\xa9'\n").find("U+00E9 in a literal string"), std::string::npos);
+  EXPECT_NE(error_of("description = '\xc3\xa9'\n").find("U+00E9 in a literal string"),
+            std::string::npos);
   EXPECT_NE(error_of("name = 0b1'\xef\xbb\x9f\n").find("bad.toml:1"), std::string::npos);
 }
 
 TEST(SceneLoader, ResolvedTomlEscapesControlCharacters) {
   const Params p = parse_scene("description = \"a\\u0001b\\u007f\\n\\\"q\\\"\"\n", "c.toml");
-  EXPECT_EQ(p.description, std::string("a\x01" "b\x7f\n\"q\""));
+  EXPECT_EQ(p.description, std::string("a\x01"
+                                       "b\x7f\n\"q\""));
   EXPECT_EQ(parse_scene(to_toml(p), "resolved.toml").description, p.description);
 }

@@ -112,7 +112,7 @@ TEST(Scenes, HandleColumnsMeasureOneHandle) {
   Simulation sim(p);
   ASSERT_EQ(sim.model().handles.front().name, "a_later");
   ASSERT_TRUE(sim.advance_to(0.3)) << sim.blow_up_reason();
-  EXPECT_EQ(sim.metrics().handle_force_n, 0.0);   // not acting yet
+  EXPECT_EQ(sim.metrics().handle_force_n, 0.0);    // not acting yet
   EXPECT_LT(sim.metrics().handle_height_m, 1e-3);  // its corner still on the table
   ASSERT_TRUE(sim.advance_to(0.6)) << sim.blow_up_reason();
   const double pull = std::hypot(later.force[0], later.force[1], later.force[2]);
@@ -205,8 +205,8 @@ TEST(Scenes, PinAlongAnEdge) {
 // A tilted cloth starts turned about the x axis and lands edge first; with
 // `vented` air, whose pocket is open at the cloth's free sides, it lies flat.
 TEST(Scenes, TiltedDropLandsEdgeFirstAndLiesFlat) {
-  Params p = test::coarse("drop-table", {"cloth.tilt=20", "cloth.center=[0, 0, 0.08]",
-                                         "air.model=\"vented\""});
+  Params p = test::coarse("drop-table",
+                          {"cloth.tilt=20", "cloth.center=[0, 0, 0.08]", "air.model=\"vented\""});
   Simulation sim(p);
   const Model& m = sim.model();
   double lowest = 1e9, highest = -1e9;

@@ -1,4 +1,5 @@
-// Self-collision (eq. 15, MODEL.md section 7): the spatial hash, the candidates, the layers kept apart.
+// Self-collision (eq. 15, MODEL.md section 7): the spatial hash, the candidates, the layers kept
+// apart.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -56,7 +57,8 @@ TEST(SelfCollision, CandidatesSearchedAroundMoversAreTheWholeSearch) {
     sim.step();
     const Workspace& w = detail::workspace(sim);
     const auto& a = w.candidates_anchor;
-    const bool moved = !w.candidate_movers.empty() && 4 * w.candidate_movers.size() <= std::size_t(m.n);
+    const bool moved =
+        !w.candidate_movers.empty() && 4 * w.candidate_movers.size() <= std::size_t(m.n);
     partial += moved;
     // Particles anchored again in earlier steps are still out of the hash.
     with_stale += moved && w.hash_stale.size() > w.candidate_movers.size();

@@ -4,7 +4,6 @@
 #include <gtest/gtest.h>
 
 #include <cstring>
-
 #include <filesystem>
 #include <fstream>
 
@@ -62,16 +61,18 @@ const std::string kImplicit = "integrator.type=\"implicit-euler\"";
 const std::string kXpbd = "integrator.type=\"xpbd\"";
 const std::string kLarge = "integrator.dt=0.004166666666666667";
 
-INSTANTIATE_TEST_SUITE_P(
-    Scenes, Restore,
-    ::testing::Values(Case{"pull-straight", {}, 0.1, 0.2},                      // exchange air
-                      Case{"drape-ball", {}, 0.2, 0.3},                         // vented air, ball
-                      Case{"pull-oblique", {}, 0.1, 0.2},                       // a move handle
-                      Case{"hang", {"self_collision.enabled=true"}, 0.2, 0.3},  // pins, self-collision
-                      Case{"pull-straight", {kImplicit, kLarge}, 0.1, 0.2},
-                      Case{"drape-ball", {kImplicit, kLarge}, 0.2, 0.3},
-                      Case{"pull-straight", {kXpbd, kLarge}, 0.1, 0.2},
-                      Case{"drape-ball", {kXpbd, kLarge}, 0.2, 0.3}));
+INSTANTIATE_TEST_SUITE_P(Scenes, Restore,
+                         ::testing::Values(Case{"pull-straight", {}, 0.1, 0.2},  // exchange air
+                                           Case{"drape-ball", {}, 0.2, 0.3},     // vented air, ball
+                                           Case{"pull-oblique", {}, 0.1, 0.2},   // a move handle
+                                           Case{"hang",
+                                                {"self_collision.enabled=true"},
+                                                0.2,
+                                                0.3},  // pins, self-collision
+                                           Case{"pull-straight", {kImplicit, kLarge}, 0.1, 0.2},
+                                           Case{"drape-ball", {kImplicit, kLarge}, 0.2, 0.3},
+                                           Case{"pull-straight", {kXpbd, kLarge}, 0.1, 0.2},
+                                           Case{"drape-ball", {kXpbd, kLarge}, 0.2, 0.3}));
 
 TEST(Restore, RefusesAStateOfAnotherGrid) {
   Simulation small(test::bare(3)), large(test::bare(4));

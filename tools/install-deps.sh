@@ -2,7 +2,7 @@
 # Installs the Debian packages wetcloth needs, only those that are missing.
 set -euo pipefail
 pkgs=(
-  cmake g++ make pkg-config
+  cmake g++ make pkg-config clang-format
   libeigen3-dev libtomlplusplus-dev libcli11-dev nlohmann-json3-dev libstb-dev
   libgtest-dev libgmock-dev libbenchmark-dev libbullet-dev
   python3 python3-matplotlib

@@ -201,8 +201,8 @@ int run_bench(const Options& o) {
       "wetcloth %s bench: scene %s, integrator %s, dt %g s (first grid), %g s simulated per run, "
       "%d repetitions, "
       "%u threads\nmachine: %u cores, %s\n\n",
-      WETCLOTH_VERSION, p0.name.c_str(), to_string(p0.integrator.type).c_str(), dt, o.duration, o.repetitions,
-      threads, cores, cpu.c_str());
+      WETCLOTH_VERSION, p0.name.c_str(), to_string(p0.integrator.type).c_str(), dt, o.duration,
+      o.repetitions, threads, cores, cpu.c_str());
   std::printf(
       " grid  particles  springs  dt µs   steps  substeps/step    wall s    µs/step  "
       "ns/particle-step  real-time ×  peak MB  B/particle\n");
@@ -304,8 +304,8 @@ int run_peer(const Options& o, const std::vector<Grid>& grids, unsigned threads,
       "adhesion, self-collision, wind or damping), dt 1/600 s, Bullet's defaults otherwise, "
       "one thread\nmachine: %u cores, %s\n\n",
       WETCLOTH_VERSION, version.c_str(), o.repetitions, o.duration, p0.name.c_str(),
-      to_string(p0.integrator.type).c_str(), threads, threads == 1 ? "" : "s", p0.integrator.dt, cores,
-      cpu.c_str());
+      to_string(p0.integrator.type).c_str(), threads, threads == 1 ? "" : "s", p0.integrator.dt,
+      cores, cpu.c_str());
   std::printf(
       "       ------------------- ours -------------------   ------------- Bullet --------------\n"
       " grid  particles  springs  dt µs   µs/step  real-time ×    "

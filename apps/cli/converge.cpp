@@ -117,7 +117,8 @@ std::function<int()> add_converge_command(CLI::App& app) {
     for (const auto& c : cases) {
       values.push_back(metrics_values(c.result.final));
       const Metrics &a = c.result.first, &b = c.result.final;
-      const double slide = std::hypot(b.centroid_x_m - a.centroid_x_m, b.centroid_y_m - a.centroid_y_m);
+      const double slide =
+          std::hypot(b.centroid_x_m - a.centroid_x_m, b.centroid_y_m - a.centroid_y_m);
       values.back().push_back(std::round(slide * 1e9) / 1e9);
     }
 

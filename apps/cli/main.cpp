@@ -1,11 +1,12 @@
 // wetcloth: the command-line program. Thin: it parses options, loads scenes and
 // calls the library.
+#include <unistd.h>
+
 #include <CLI/CLI.hpp>
 #include <cstdio>
 #include <iostream>
 #include <nlohmann/json.hpp>
 #include <optional>
-#include <unistd.h>
 
 #include "bench.hpp"
 #include "converge.hpp"
@@ -20,7 +21,6 @@
 
 using namespace wetcloth;
 namespace fs = std::filesystem;
-
 
 int main(int argc, char** argv) {
   CLI::App app{"wetcloth " WETCLOTH_VERSION
@@ -61,7 +61,8 @@ int main(int argc, char** argv) {
   check_opts.add_to(check);
 
   bool markdown = false;
-  auto* params = app.add_subcommand("params", "every scene parameter: key, unit, default, range, meaning");
+  auto* params =
+      app.add_subcommand("params", "every scene parameter: key, unit, default, range, meaning");
   params->add_flag("--markdown", markdown, "as the Markdown table of docs/guide.md");
   bool json = false;
   params->add_flag("--json", json, "as JSON: key, unit, type, default, min, max, choices, meaning");
@@ -115,7 +116,8 @@ int main(int argc, char** argv) {
     if (const int code = bench_command(); code >= 0) return code;
     if (const int code = converge_command(); code >= 0) return code;
     if (*scenes) {
-      for (const auto& s : builtin_scenes()) std::printf("%-14s %s\n", s.name.c_str(), s.description.c_str());
+      for (const auto& s : builtin_scenes())
+        std::printf("%-14s %s\n", s.name.c_str(), s.description.c_str());
       return 0;
     }
     if (*params) {
@@ -124,8 +126,11 @@ int main(int argc, char** argv) {
       } else if (json) {
         nlohmann::json all = nlohmann::json::array();
         for (const auto& d : param_defs()) {
-          nlohmann::json j = {{"key", d.key}, {"unit", d.unit}, {"type", d.type_name()},
-                              {"default", d.default_text()}, {"meaning", d.meaning}};
+          nlohmann::json j = {{"key", d.key},
+                              {"unit", d.unit},
+                              {"type", d.type_name()},
+                              {"default", d.default_text()},
+                              {"meaning", d.meaning}};
           if (d.min <= d.max) j["min"] = d.min, j["max"] = d.max;
           if (!d.choices.empty()) j["choices"] = d.choices;
           all.push_back(j);
@@ -162,9 +167,9 @@ int main(int argc, char** argv) {
         return r.code;
       }
       if (!quiet)
-        std::printf("%s: %lld steps in %.2f s wall (%.2fx real time); results in %s\n", p.name.c_str(),
-                    r.steps, r.wall_seconds, r.wall_seconds > 0 ? r.final.time_s / r.wall_seconds : 0.0,
-                    out.c_str());
+        std::printf("%s: %lld steps in %.2f s wall (%.2fx real time); results in %s\n",
+                    p.name.c_str(), r.steps, r.wall_seconds,
+                    r.wall_seconds > 0 ? r.final.time_s / r.wall_seconds : 0.0, out.c_str());
       return 0;
     }
   } catch (const SceneError& e) {

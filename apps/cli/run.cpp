@@ -1,19 +1,20 @@
 #include "run.hpp"
 
-#include <algorithm>
-#include <atomic>
-#include <chrono>
-#include <cerrno>
-#include <cmath>
-#include <csignal>
-#include <cstdio>
 #include <fcntl.h>
 #include <sys/file.h>
 #include <sys/statvfs.h>
 #include <unistd.h>
+
+#include <algorithm>
+#include <atomic>
+#include <cerrno>
+#include <chrono>
+#include <cmath>
+#include <csignal>
+#include <cstdio>
 #include <mutex>
-#include <optional>
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <thread>
 
 #include "scene_options.hpp"
@@ -56,8 +57,7 @@ extern "C" void on_stop_signal(int sig) {
     [[maybe_unused]] const auto w = ::write(STDERR_FILENO, msg, sizeof msg - 1);
     ::_exit(128 + sig);
   }
-  constexpr char msg[] =
-      "\nwetcloth: stopping at the end of this step (again to stop at once)\n";
+  constexpr char msg[] = "\nwetcloth: stopping at the end of this step (again to stop at once)\n";
   [[maybe_unused]] const auto w = ::write(STDERR_FILENO, msg, sizeof msg - 1);
 }
 
@@ -138,7 +138,8 @@ namespace {
 
 std::string gigabytes(double bytes) {
   char b[32];
-  std::snprintf(b, sizeof b, bytes < 1e9 ? "%.0f MB" : "%.1f GB", bytes < 1e9 ? bytes / 1e6 : bytes / 1e9);
+  std::snprintf(b, sizeof b, bytes < 1e9 ? "%.0f MB" : "%.1f GB",
+                bytes < 1e9 ? bytes / 1e6 : bytes / 1e9);
   return b;
 }
 
@@ -181,17 +182,19 @@ void check_resources(const Params& p, const fs::path& out, const std::string& so
                      " available" + force);
   fs::path at = fs::absolute(out);
   std::error_code ec;
-  while (!fs::exists(at, ec) && at.has_parent_path() && at != at.parent_path()) at = at.parent_path();
+  while (!fs::exists(at, ec) && at.has_parent_path() && at != at.parent_path())
+    at = at.parent_path();
   struct statvfs st {};
   if (::statvfs(at.c_str(), &st) == 0 && st.f_blocks > 0) {  // /proc has none: not a disk
     const double free = static_cast<double>(st.f_bavail) * static_cast<double>(st.f_frsize);
     if (e.disk_bytes > free)
-      throw SceneError(source + ": the outputs (" + std::to_string(last_frame_index(p.run.duration, p.run.fps) + 1) +
+      throw SceneError(source + ": the outputs (" +
+                       std::to_string(last_frame_index(p.run.duration, p.run.fps) + 1) +
                        " frames of run.duration = " + format_number(p.run.duration) +
                        " s at run.fps = " + format_number(p.run.fps) +
                        (p.run.meshes ? ", with run.meshes" : "") + ") need about " +
-                       gigabytes(e.disk_bytes) + ", more than the " + gigabytes(free) + " free in " +
-                       at.string() + force);
+                       gigabytes(e.disk_bytes) + ", more than the " + gigabytes(free) +
+                       " free in " + at.string() + force);
   }
 }
 
@@ -256,12 +259,12 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress) {
     const Metrics m = sim.metrics();
     if (const std::string bad = non_finite_metric(m); !bad.empty()) {
       r.code = kBlowUp;
-      r.message = "the simulation left the range of numbers at t = " +
-                  format_number(sim.state().time) + " s (" + bad +
-                  "; not written to metrics.csv). " +
-                  (ok ? "Look at positions and sizes far from the origin (cloth.center, "
-                        "ball.center, table.height, cloth.size) and the forces."
-                      : sim.blow_up_reason());
+      r.message =
+          "the simulation left the range of numbers at t = " + format_number(sim.state().time) +
+          " s (" + bad + "; not written to metrics.csv). " +
+          (ok ? "Look at positions and sizes far from the origin (cloth.center, "
+                "ball.center, table.height, cloth.size) and the forces."
+              : sim.blow_up_reason());
       break;
     }
     metrics.append(m);
@@ -298,8 +301,8 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress) {
   r.simulated_seconds = sim.state().time;
   const bool interrupted = r.code > 128;
   if (interrupted)
-    r.message = std::string("interrupted by ") + signal_name(r.code - 128) + " at t = " +
-                format_number(sim.state().time) + " s";
+    r.message = std::string("interrupted by ") + signal_name(r.code - 128) +
+                " at t = " + format_number(sim.state().time) + " s";
 
   nlohmann::json s;
   s["scene"] = p.name;
@@ -347,14 +350,15 @@ std::vector<RunResult> run_all(const std::vector<std::pair<Params, fs::path>>& r
       if (const int sig = stop_signal(); sig != 0) {  // interrupted: no case starts
         results[i].code = 128 + sig;
         results[i].message = std::string("not run: interrupted by ") + signal_name(sig);
-      } else try {  // an exception must not end the process from a worker thread
-        results[i] = run_scene(runs[i].first, runs[i].second, false);
-      } catch (const std::exception& e) {
-        results[i].code = dynamic_cast<const SceneError*>(&e)    ? kBadInput
-                          : dynamic_cast<const OutputError*>(&e) ? kOutputError
-                                                                 : kError;
-        results[i].message = e.what();
-      }
+      } else
+        try {  // an exception must not end the process from a worker thread
+          results[i] = run_scene(runs[i].first, runs[i].second, false);
+        } catch (const std::exception& e) {
+          results[i].code = dynamic_cast<const SceneError*>(&e)    ? kBadInput
+                            : dynamic_cast<const OutputError*>(&e) ? kOutputError
+                                                                   : kError;
+          results[i].message = e.what();
+        }
       std::lock_guard<std::mutex> hold(lock);
       done(i, results[i]);
     }

@@ -16,11 +16,11 @@ enum ExitCode { kOk = 0, kError = 1, kBadInput = 2, kBlowUp = 3, kOutputError = 
 
 struct RunResult {
   int code = kOk;
-  std::string message;  // why it stopped, when it failed
-  Metrics first, final;  // the first and last frames
+  std::string message;               // why it stopped, when it failed
+  Metrics first, final;              // the first and last frames
   double peak_deficit_pa = 0;        // p_atm - p_in at any step
   double frame_peak_deficit_pa = 0;  // over the output frames, as the plots show it
-  double time_to_5cm_s = -1;  // first time the handle is 5 cm up; -1: never
+  double time_to_5cm_s = -1;         // first time the handle is 5 cm up; -1: never
   long long steps = 0;
   double wall_seconds = 0;
   double simulated_seconds = 0;

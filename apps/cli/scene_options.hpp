@@ -85,7 +85,8 @@ inline CLI::Validator a_path() {
 
 // Throws SceneError (bad input) when `out`, or the nearest part of it that
 // exists, is not a folder: checked before anything runs or is written.
-inline void check_output_folder(const std::filesystem::path& out, const std::string& option = "--out") {
+inline void check_output_folder(const std::filesystem::path& out,
+                                const std::string& option = "--out") {
   namespace fs = std::filesystem;
   for (fs::path at = out; !at.empty() && at != at.parent_path(); at = at.parent_path()) {
     std::error_code ec;
@@ -99,7 +100,8 @@ inline void check_output_folder(const std::filesystem::path& out, const std::str
 
 // check_output_folder, then makes the folder: one that cannot be made (no
 // permission, a read-only place) is bad input too.
-inline void make_output_folder(const std::filesystem::path& out, const std::string& option = "--out") {
+inline void make_output_folder(const std::filesystem::path& out,
+                               const std::string& option = "--out") {
   check_output_folder(out, option);
   std::error_code ec;
   std::filesystem::create_directories(out, ec);
@@ -115,7 +117,8 @@ struct SceneOptions {
   bool all_cores = false;  // with add_to: no --threads means 0, chosen as the step runs
 
   void add_to(CLI::App* app, bool scene_required = true) {
-    auto* s = app->add_option("scene", scene, "scene: a TOML file, or a built-in name (wetcloth scenes)");
+    auto* s =
+        app->add_option("scene", scene, "scene: a TOML file, or a built-in name (wetcloth scenes)");
     if (scene_required) s->required();
     app->add_option("--set", sets,
                     "override a parameter, KEY=VALUE in TOML syntax, e.g. "
@@ -142,7 +145,8 @@ struct SceneOptions {
 
   std::vector<std::string> overrides() const {
     std::vector<std::string> all;
-    if (threads || all_cores) all.push_back("integrator.threads=" + std::to_string(threads.value_or(0)));
+    if (threads || all_cores)
+      all.push_back("integrator.threads=" + std::to_string(threads.value_or(0)));
     all.insert(all.end(), sets.begin(), sets.end());
     if (humidity) all.push_back("cloth.humidity=" + format_number(*humidity));
     if (duration) all.push_back("run.duration=" + format_number(*duration));

@@ -1,5 +1,7 @@
 #include "sweep.hpp"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <atomic>
 #include <chrono>
@@ -11,7 +13,6 @@
 #include <optional>
 #include <sstream>
 #include <thread>
-#include <unistd.h>
 
 #include "run.hpp"
 #include "scene_options.hpp"
@@ -66,7 +67,8 @@ std::string cases_csv(const sweep::Plan& plan) {
   for (std::size_t i = 0; i < plan.cases.size(); ++i) {
     std::string sets;
     for (const auto& s : plan.cases[i].sets) sets += (sets.empty() ? "" : " ") + s;
-    o += std::to_string(i) + "," + sweep::csv_field(plan.cases[i].name) + "," + sweep::csv_field(sets) + "\n";
+    o += std::to_string(i) + "," + sweep::csv_field(plan.cases[i].name) + "," +
+         sweep::csv_field(sets) + "\n";
   }
   return o;
 }
@@ -96,8 +98,9 @@ bool plot(const fs::path& out) {
 // missing, 1 otherwise.
 int gather(const fs::path& dir, bool no_plots, bool quiet) {
   if (!fs::exists(dir / kCasesFile))
-    throw SceneError("--gather " + dir.string() + ": no " + kCasesFile +
-                     " (not a sweep folder: `wetcloth sweep ... --out DIR` or `--list`/`--case` writes it)");
+    throw SceneError(
+        "--gather " + dir.string() + ": no " + kCasesFile +
+        " (not a sweep folder: `wetcloth sweep ... --out DIR` or `--list`/`--case` writes it)");
   std::istringstream in(read_text(dir / kCasesFile));
   std::string line, header, rows;
   std::vector<std::string> missing;
@@ -112,9 +115,12 @@ int gather(const fs::path& dir, bool no_plots, bool quiet) {
       std::string unq;
       std::size_t k = 1;
       for (; k < name.size(); ++k) {
-        if (name[k] == '"' && k + 1 < name.size() && name[k + 1] == '"') unq += name[++k];
-        else if (name[k] == '"') break;
-        else unq += name[k];
+        if (name[k] == '"' && k + 1 < name.size() && name[k + 1] == '"')
+          unq += name[++k];
+        else if (name[k] == '"')
+          break;
+        else
+          unq += name[k];
       }
       name = unq;
     } else {
@@ -127,15 +133,21 @@ int gather(const fs::path& dir, bool no_plots, bool quiet) {
       continue;
     }
     if (header.empty()) header = h;
-    if (h != header) throw SceneError(dir.string() + "/" + name + "/" + kRowFile + ": its header differs from the other cases'");
+    if (h != header)
+      throw SceneError(dir.string() + "/" + name + "/" + kRowFile +
+                       ": its header differs from the other cases'");
     rows += r + "\n";
     ++found;
   }
-  if (found == 0) throw SceneError("--gather " + dir.string() + ": none of its " + std::to_string(total) + " cases has finished");
+  if (found == 0)
+    throw SceneError("--gather " + dir.string() + ": none of its " + std::to_string(total) +
+                     " cases has finished");
   write_file_atomic(dir / "sweep.csv", header + "\n" + rows);
-  if (!quiet) std::printf("gathered %zu of %zu cases into %s\n", found, total, (dir / "sweep.csv").c_str());
+  if (!quiet)
+    std::printf("gathered %zu of %zu cases into %s\n", found, total, (dir / "sweep.csv").c_str());
   if (!missing.empty()) {
-    std::fprintf(stderr, "wetcloth: missing %zu of %zu cases (index and name):\n", missing.size(), total);
+    std::fprintf(stderr, "wetcloth: missing %zu of %zu cases (index and name):\n", missing.size(),
+                 total);
     for (const auto& m : missing) std::fprintf(stderr, "  %s\n", m.c_str());
   }
   bool plots_ok = true;
@@ -147,7 +159,8 @@ int gather(const fs::path& dir, bool no_plots, bool quiet) {
 class ProgressLine {
  public:
   ProgressLine(std::size_t total, unsigned jobs, bool on) : total_(total), jobs_(jobs), on_(on) {
-    if (on_) ticker_ = std::thread([this] {
+    if (on_)
+      ticker_ = std::thread([this] {
         std::unique_lock<std::mutex> hold(lock_);
         while (!stop_) {
           draw();
@@ -182,12 +195,14 @@ class ProgressLine {
 
  private:
   void draw() {
-    const double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
+    const double wall =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start_).count();
     const std::size_t running = std::min<std::size_t>(jobs_, total_ - done_);
     char left[64] = "?";
     if (done_ > 0) std::snprintf(left, sizeof left, "%.0f s", wall / done_ * (total_ - done_));
-    std::fprintf(stderr, "\r\033[Ksweep: %zu/%zu cases done, %zu running, %.0f s wall, time left ~%s", done_,
-                 total_, running, wall, left);
+    std::fprintf(stderr,
+                 "\r\033[Ksweep: %zu/%zu cases done, %zu running, %.0f s wall, time left ~%s",
+                 done_, total_, running, wall, left);
     std::fflush(stderr);
   }
   std::size_t total_, done_ = 0;
@@ -212,49 +227,61 @@ std::function<int()> add_sweep_command(CLI::App& app) {
     bool render = false, quiet = false, no_plots = false, list = false;
   };
   auto o = std::make_shared<Options>();
-  auto* cmd = app.add_subcommand(
-      "sweep", "run a scene over the cartesian product of parameter values, in parallel or one case at a time");
+  auto* cmd = app.add_subcommand("sweep",
+                                 "run a scene over the cartesian product of parameter values, in "
+                                 "parallel or one case at a time");
   cmd->add_option("scene", o->scene.scene, "scene: a TOML file, or a built-in name");
-  cmd->add_option("--vary", o->vary,
-                  "KEY=V1,V2,...: run every value of the parameter KEY (TOML values; repeatable: the "
-                  "cartesian product), e.g. --vary material.stretch_stiffness=100,200 --vary "
-                  "cloth.resolution=[25,25],[51,51]")
+  cmd->add_option(
+         "--vary", o->vary,
+         "KEY=V1,V2,...: run every value of the parameter KEY (TOML values; repeatable: the "
+         "cartesian product), e.g. --vary material.stretch_stiffness=100,200 --vary "
+         "cloth.resolution=[25,25],[51,51]")
       ->allow_extra_args(false);
-  cmd->add_option("--humidity", o->humidities, "humidities ω to run, e.g. 0,0.3,0.5,0.7,1 (= --vary cloth.humidity=...)")
+  cmd->add_option("--humidity", o->humidities,
+                  "humidities ω to run, e.g. 0,0.3,0.5,0.7,1 (= --vary cloth.humidity=...)")
       ->delimiter(',')
       ->check(in_range_of("cloth.humidity"));
-  cmd->add_option("--air-models", o->air_models,
-                  "air models to compare, e.g. exchange,sealed (paper Fig. 8; = --vary air.model=...)")
+  cmd->add_option(
+         "--air-models", o->air_models,
+         "air models to compare, e.g. exchange,sealed (paper Fig. 8; = --vary air.model=...)")
       ->delimiter(',')
       ->check(CLI::IsMember(std::vector<std::string>(ChoiceNames<AirModel>::names.begin(),
                                                      ChoiceNames<AirModel>::names.end())));
-  cmd->add_option("--set", o->scene.sets, "override a parameter in every case, KEY=VALUE (repeatable)")
+  cmd->add_option("--set", o->scene.sets,
+                  "override a parameter in every case, KEY=VALUE (repeatable)")
       ->allow_extra_args(false);
   cmd->add_option("--duration", o->scene.duration, "simulated time per case, s")
       ->check(in_range_of("run.duration"));
-  cmd->add_option("--threads", o->scene.threads,
-                  "threads of each case's step (default: the cores shared between --jobs; 0: chosen "
-                  "as it runs)")
+  cmd->add_option(
+         "--threads", o->scene.threads,
+         "threads of each case's step (default: the cores shared between --jobs; 0: chosen "
+         "as it runs)")
       ->check(in_range_of("integrator.threads"));
   o->scene.add_grid_to(cmd);
   cmd->add_option("--out", o->out, "output folder (default out/<scene>-sweep)")->check(a_path());
-  cmd->add_option("--jobs", o->jobs, "cases run at once (default: all cores)")->check(CLI::PositiveNumber);
-  cmd->add_flag("--list", o->list, "print the cases, one a line: index, folder name, overrides; run nothing");
-  cmd->add_option("--case", o->case_index,
-                  "run case I alone (from --list; 0-based) into DIR/<case>: one task of a job array. "
-                  "`--gather DIR` makes sweep.csv once they have run");
+  cmd->add_option("--jobs", o->jobs, "cases run at once (default: all cores)")
+      ->check(CLI::PositiveNumber);
+  cmd->add_flag("--list", o->list,
+                "print the cases, one a line: index, folder name, overrides; run nothing");
+  cmd->add_option(
+      "--case", o->case_index,
+      "run case I alone (from --list; 0-based) into DIR/<case>: one task of a job array. "
+      "`--gather DIR` makes sweep.csv once they have run");
   cmd->add_option("--gather", o->gather,
                   "make DIR/sweep.csv and the plots from the case folders of DIR that have run "
                   "(--case), and list the missing ones (exit 1 if any)")
       ->check(a_path());
-  cmd->add_flag("--render", o->render, "also render a contact sheet of the last frames (contact_sheet.png)");
+  cmd->add_flag("--render", o->render,
+                "also render a contact sheet of the last frames (contact_sheet.png)");
   cmd->add_flag("--no-plots", o->no_plots, "skip the plots");
   cmd->add_flag("--quiet", o->quiet, "print nothing but errors");
   cmd->footer(
       "Writes DIR/<case>/ (the outputs of `run`, and its row of sweep.csv) for every case, named\n"
       "from its values (omega_0.70, sealed_omega_0.70, omega_0.70_stretch_stiffness=100),\n"
-      "DIR/cases.csv (the cases in order), DIR/sweep.csv (one row per case: a column per varied key\n"
-      "besides air_model and humidity, final metrics, peak pressure deficit at any step and over the\n"
+      "DIR/cases.csv (the cases in order), DIR/sweep.csv (one row per case: a column per varied "
+      "key\n"
+      "besides air_model and humidity, final metrics, peak pressure deficit at any step and over "
+      "the\n"
       "output frames, time until the handle first reaches 5 cm)\n"
       "and the plots that mean something for the scene: fig7 (pulled height and base diagonal\n"
       "against humidity), pressure, contact_area and handle_height over time (for a driven\n"
@@ -264,8 +291,8 @@ std::function<int()> add_sweep_command(CLI::App& app) {
   return [cmd, o]() -> int {
     if (!*cmd) return -1;
     if (!o->gather.empty()) {
-      if (!o->scene.scene.empty() || o->case_index || o->list || !o->vary.empty() || !o->humidities.empty() ||
-          !o->air_models.empty())
+      if (!o->scene.scene.empty() || o->case_index || o->list || !o->vary.empty() ||
+          !o->humidities.empty() || !o->air_models.empty())
         throw SceneError("--gather DIR takes no scene and no cases (it reads DIR/cases.csv)");
       return gather(o->gather, o->no_plots, o->quiet);
     }
@@ -298,8 +325,9 @@ std::function<int()> add_sweep_command(CLI::App& app) {
       return kOk;
     }
     if (o->case_index && (*o->case_index < 0 || static_cast<std::size_t>(*o->case_index) >= n))
-      throw SceneError("--case " + std::to_string(*o->case_index) + ": the sweep has " + std::to_string(n) +
-                       " cases, 0 to " + std::to_string(n - 1) + " (--list prints them)");
+      throw SceneError("--case " + std::to_string(*o->case_index) + ": the sweep has " +
+                       std::to_string(n) + " cases, 0 to " + std::to_string(n - 1) +
+                       " (--list prints them)");
     const fs::path out =
         o->out.empty() ? fs::path("out") / folder_name(scene.name + "-sweep") : fs::path(o->out);
     make_output_folder(out);
@@ -337,9 +365,12 @@ std::function<int()> add_sweep_command(CLI::App& app) {
           std::printf(
               "%-22s %s  handle %.4f m  contact %.5f m²  peak deficit (any step) %.1f Pa, "
               "over frames %.1f Pa  (%.1f s wall)\n",
-              plan.cases[c].name.c_str(), cr.code == kOk ? "ok     " : cr.code > 128 ? "STOPPED" : "BLEW UP",
-              cr.final.handle_height_m,
-              cr.final.contact_area_m2, cr.peak_deficit_pa, cr.frame_peak_deficit_pa, cr.wall_seconds);
+              plan.cases[c].name.c_str(),
+              cr.code == kOk  ? "ok     "
+              : cr.code > 128 ? "STOPPED"
+                              : "BLEW UP",
+              cr.final.handle_height_m, cr.final.contact_area_m2, cr.peak_deficit_pa,
+              cr.frame_peak_deficit_pa, cr.wall_seconds);
         }
         std::fflush(stdout);
         progress.redraw();
@@ -348,7 +379,8 @@ std::function<int()> add_sweep_command(CLI::App& app) {
     int code = kOk;
     for (std::size_t i : chosen)
       if (results[i].code != kOk) {
-        std::fprintf(stderr, "wetcloth: %s: %s\n", plan.cases[i].name.c_str(), results[i].message.c_str());
+        std::fprintf(stderr, "wetcloth: %s: %s\n", plan.cases[i].name.c_str(),
+                     results[i].message.c_str());
         code = kBlowUp;
       }
     if (o->case_index) {
@@ -364,8 +396,9 @@ std::function<int()> add_sweep_command(CLI::App& app) {
     if (o->render) {
 #ifdef WETCLOTH_VIEWER
       std::vector<std::pair<std::string, fs::path>> tiles;
-      const bool several = std::any_of(varied.begin(), varied.end(),
-                                       [](const auto& v) { return v.key == "air.model" && v.values.size() > 1; });
+      const bool several = std::any_of(varied.begin(), varied.end(), [](const auto& v) {
+        return v.key == "air.model" && v.values.size() > 1;
+      });
       for (const auto& c : plan.cases) {
         // "omega", spelt out: the sheet's font is ASCII, it drew ω as 'w'.
         char label[96];

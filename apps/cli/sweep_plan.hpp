@@ -85,18 +85,24 @@ inline std::string value_text(const Params& p, const std::string& key) {
   std::string handle;
   const ParamDef* d = def_of(key, &handle);
   if (!d) throw SceneError(key + ": unknown key (wetcloth params lists the keys)");
-  if (!handle.empty() && !p.handles.count(handle)) throw SceneError(key + ": the scene has no such handle");
+  if (!handle.empty() && !p.handles.count(handle))
+    throw SceneError(key + ": the scene has no such handle");
   // Numbers in their shortest exact text (100, not 100.0), strings unquoted.
   return std::visit(
       [](const auto& x) -> std::string {
         using T = std::decay_t<decltype(x)>;
-        if constexpr (std::is_same_v<T, std::string>) return x;
-        else if constexpr (std::is_same_v<T, bool>) return x ? "true" : "false";
-        else if constexpr (std::is_same_v<T, double>) return format_number(x);
-        else if constexpr (std::is_same_v<T, long long>) return std::to_string(x);
+        if constexpr (std::is_same_v<T, std::string>)
+          return x;
+        else if constexpr (std::is_same_v<T, bool>)
+          return x ? "true" : "false";
+        else if constexpr (std::is_same_v<T, double>)
+          return format_number(x);
+        else if constexpr (std::is_same_v<T, long long>)
+          return std::to_string(x);
         else {
           std::string o = "[";
-          for (const auto& e : x) o += (o.size() > 1 ? ", " : "") + format_number(static_cast<double>(e));
+          for (const auto& e : x)
+            o += (o.size() > 1 ? ", " : "") + format_number(static_cast<double>(e));
           return o + "]";
         }
       },
@@ -174,7 +180,8 @@ inline Plan plan(const std::vector<Varied>& varied,
       const std::string text = value_text(cs.params, varied[k].key);
       read[k][at[k]] = text;
       if (varied[k].key == "cloth.humidity") omegas[k][at[k]] = cs.params.cloth.humidity;
-      if (varied[k].key != "cloth.humidity" && varied[k].key != "air.model") cs.columns.push_back(text);
+      if (varied[k].key != "cloth.humidity" && varied[k].key != "air.model")
+        cs.columns.push_back(text);
     }
     cs.humidity = cs.params.cloth.humidity;
     cs.air_model = to_string(cs.params.air.model);
@@ -242,7 +249,8 @@ inline Plan plan(const std::vector<Varied>& varied,
   }
   std::set<std::string> names;
   for (const Case& cs : plan.cases)
-    if (!names.insert(cs.name).second) throw SceneError("two cases would share the folder " + cs.name);
+    if (!names.insert(cs.name).second)
+      throw SceneError("two cases would share the folder " + cs.name);
   return plan;
 }
 
@@ -274,8 +282,11 @@ inline std::string csv_row(const Case& c, const Outcome& r) {
   std::string o = csv_field(c.name);
   for (const auto& v : c.columns) o += "," + csv_field(v);
   o += "," + csv_field(c.air_model) + "," + format_number(c.humidity) + "," +
-       (r.ok ? "ok" : r.interrupted ? "interrupted" : "blew_up") + "," + format_number(r.peak_deficit_pa) + "," +
-       format_number(r.frame_peak_deficit_pa) + "," + format_number(r.time_to_5cm_s);
+       (r.ok            ? "ok"
+        : r.interrupted ? "interrupted"
+                        : "blew_up") +
+       "," + format_number(r.peak_deficit_pa) + "," + format_number(r.frame_peak_deficit_pa) + "," +
+       format_number(r.time_to_5cm_s);
   for (double v : metrics_values(r.final)) o += "," + format_number(v);
   return o + "\n";
 }

@@ -97,8 +97,7 @@ Legend cloth_mesh(const Simulation& sim, ColorBy mode, float& scale, ClothMesh& 
       if (!(top > 0)) {
         float peak = 0;
         for (int i = 0; i < na; ++i)
-          if (std::isfinite(adhesion[i]))
-            peak = std::max(peak, static_cast<float>(adhesion[i]));
+          if (std::isfinite(adhesion[i])) peak = std::max(peak, static_cast<float>(adhesion[i]));
         top = scale = follow(scale, peak, 1e-9f);
       }
       legend = {"adhesion force per particle, N", 0, top, false, false};

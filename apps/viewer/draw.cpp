@@ -417,8 +417,9 @@ Camera frame_scene(const Params& p, float aspect) {
   // The cloth's box: v along y (horizontal) or z (vertical), turned by the tilt.
   const float t = static_cast<float>(p.cloth.tilt * std::numbers::pi / 180);
   const float along = sv / 2 * std::abs(std::cos(t)), across = sv / 2 * std::abs(std::sin(t));
-  Vec3f half = p.cloth.orientation == Orientation::Vertical ? Vec3f(su / 2, std::max(0.02f, across), along)
-                                                 : Vec3f(su / 2, along, across);
+  Vec3f half = p.cloth.orientation == Orientation::Vertical
+                   ? Vec3f(su / 2, std::max(0.02f, across), along)
+                   : Vec3f(su / 2, along, across);
   Vec3f lo = center - half, hi = center + half;
   // Room above a flat cloth for the tent a pulling handle raises.
   const float lift = std::max(su, sv) * 0.4f;
@@ -445,7 +446,7 @@ Stage stage_from(const Params& p) {
   // side we see would be the dark one.
   const Camera view = scene_view(p);
   s.light = p.cloth.orientation == Orientation::Vertical ? direction(view.yaw_deg - 45, 35)
-                                              : direction(view.yaw_deg - 95, 53);
+                                                         : direction(view.yaw_deg - 95, 53);
   s.table = p.table.enabled;
   s.table_center = {static_cast<float>(p.cloth.center[0]), static_cast<float>(p.cloth.center[1])};
   s.table_half = static_cast<float>(std::max(p.cloth.size[0], p.cloth.size[1]) * 2);
@@ -459,7 +460,8 @@ Stage stage_from(const Params& p) {
     // (a hanging cloth's lower edge is half its height below its centre; a little
     // more below it, as much as it stretches and swings, or a big empty floor shows).
     float low = static_cast<float>(p.cloth.center[2]);
-    if (p.cloth.orientation == Orientation::Vertical) low -= static_cast<float>(p.cloth.size[1]) * 0.75f;
+    if (p.cloth.orientation == Orientation::Vertical)
+      low -= static_cast<float>(p.cloth.size[1]) * 0.75f;
     if (s.ball) low = std::min(low, s.ball_center.z() - s.ball_radius);
     s.ground_z = low - (p.cloth.orientation == Orientation::Vertical ? 0.0f : 0.1f);
   }

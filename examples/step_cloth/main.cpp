@@ -13,8 +13,8 @@ int main() {
       return 3;
     }
     const wetcloth::Metrics m = sim.metrics();
-    std::printf("t = %.1f s  height %.4f m  contact area %.4f m²  kinetic energy %.2e J\n", m.time_s,
-                m.max_height_m, m.contact_area_m2, m.kinetic_energy_j);
+    std::printf("t = %.1f s  height %.4f m  contact area %.4f m²  kinetic energy %.2e J\n",
+                m.time_s, m.max_height_m, m.contact_area_m2, m.kinetic_energy_j);
   }
   return 0;
 }

@@ -17,10 +17,10 @@ using Vec2i = std::array<long long, 2>;
 // order of the enum's values). The loader parses them once.
 template <class E>
 struct ChoiceNames;
-#define WETCLOTH_CHOICE(E, ...)                                    \
-  template <>                                                      \
-  struct ChoiceNames<E> {                                          \
-    static constexpr std::array names = {__VA_ARGS__};             \
+#define WETCLOTH_CHOICE(E, ...)                        \
+  template <>                                          \
+  struct ChoiceNames<E> {                              \
+    static constexpr std::array names = {__VA_ARGS__}; \
   };
 enum class HandleType { Force, Move, Pin };
 WETCLOTH_CHOICE(HandleType, "force", "move", "pin")
@@ -51,14 +51,14 @@ std::string to_string(E e) {
 // How a scene pulls on the cloth (MODEL.md section 9).
 struct HandleParams {
   HandleType type = HandleType::Force;
-  Vec2d at{0.5, 0.5};           // position on the cloth, (u, v) in [0, 1]
-  Vec2d span{0, 0};             // the handle runs from `at` to `at + span`: an edge, a band
-  long long patch = 0;          // half-width of the patch, in grid steps
-  Vec3d force{0, 0, 0};         // force: total force on the patch, N
-  Vec3d velocity{0, 0, 0};      // move: driving velocity, m/s
-  double max_height = 0;        // force: height cap above the table, m (0: none)
-  double max_travel = 0;        // force, move: distance the hand travels before it stops, m (0: none)
-  double start = 0;             // time the handle starts acting, s (a late pin holds where it is then)
+  Vec2d at{0.5, 0.5};       // position on the cloth, (u, v) in [0, 1]
+  Vec2d span{0, 0};         // the handle runs from `at` to `at + span`: an edge, a band
+  long long patch = 0;      // half-width of the patch, in grid steps
+  Vec3d force{0, 0, 0};     // force: total force on the patch, N
+  Vec3d velocity{0, 0, 0};  // move: driving velocity, m/s
+  double max_height = 0;    // force: height cap above the table, m (0: none)
+  double max_travel = 0;    // force, move: distance the hand travels before it stops, m (0: none)
+  double start = 0;         // time the handle starts acting, s (a late pin holds where it is then)
 };
 
 struct Params {
@@ -66,14 +66,14 @@ struct Params {
   std::string description;
 
   struct Cloth {
-    Vec2i resolution{51, 51};   // particles along u and v
-    Vec2d size{0.3, 0.3};       // width (u) and height (v), m
-    Vec3d center{0, 0, 0};      // centre of the cloth at t = 0, m
+    Vec2i resolution{51, 51};  // particles along u and v
+    Vec2d size{0.3, 0.3};      // width (u) and height (v), m
+    Vec3d center{0, 0, 0};     // centre of the cloth at t = 0, m
     Orientation orientation = Orientation::Horizontal;
-    double tilt = 0;                         // then turned about the x axis, degrees
-    double humidity = 0.0;      // water saturation by weight ω, 0..1
+    double tilt = 0;              // then turned about the x axis, degrees
+    double humidity = 0.0;        // water saturation by weight ω, 0..1
     double areal_density = 0.12;  // dry ρ_A, kg/m²
-    double water_ratio = 1.0;   // water held at ω = 1 per unit dry mass r_w
+    double water_ratio = 1.0;     // water held at ω = 1 per unit dry mass r_w
   } cloth;
 
   // The fabric (MODEL.md section 1): constants of the material, the same at
@@ -102,21 +102,21 @@ struct Params {
   } forces;
 
   struct Wind {
-    Vec3d velocity{0, 0, 0};    // m/s
-    double k = 1.0;             // normal drag coefficient per unit area, N·s/m³
-    Vec2d region_min{0, 0};     // (u, v) box the wind acts in
+    Vec3d velocity{0, 0, 0};  // m/s
+    double k = 1.0;           // normal drag coefficient per unit area, N·s/m³
+    Vec2d region_min{0, 0};   // (u, v) box the wind acts in
     Vec2d region_max{1, 1};
   } wind;
 
   struct StrainLimit {
     bool enabled = true;
-    double tau = 0.10;          // allowed stretch τ_c
+    double tau = 0.10;  // allowed stretch τ_c
     long long passes = 2;
   } strain_limit;
 
   struct Table {
     bool enabled = true;
-    double height = 0.0;        // z of the plane, m
+    double height = 0.0;  // z of the plane, m
   } table;
 
   struct Ball {
@@ -127,7 +127,7 @@ struct Params {
 
   struct Contact {
     SurfaceChoice surface = SurfaceChoice::Table;
-    double bridge_height = 1e-3;    // liquid-bridge threshold h_th, m
+    double bridge_height = 1e-3;  // liquid-bridge threshold h_th, m
   } contact;
 
   struct Adhesion {
@@ -145,51 +145,52 @@ struct Params {
 
   struct Air {
     AirModel model = AirModel::Exchange;
-    double p_atm = 101325;            // Pa
-    double d_delta = 1.0e-3;          // D_δ, m/(s·Pa)
-    double k_delta = 0.9e-3;          // K_δ, m/(s·Pa)
+    double p_atm = 101325;                // Pa
+    double d_delta = 1.0e-3;              // D_δ, m/(s·Pa)
+    double k_delta = 0.9e-3;              // K_δ, m/(s·Pa)
     double breakthrough_pressure = 1000;  // P_b, Pa
-    double band = 0.05;               // ball: air counted within this distance, m
-    double film = 1e-4;               // air film a resting cloth keeps under it, m
+    double band = 0.05;                   // ball: air counted within this distance, m
+    double film = 1e-4;                   // air film a resting cloth keeps under it, m
     AirForceDirection force_direction = AirForceDirection::Surface;
     bool paper_update_rule = false;
-    double paper_threshold = 0.0;     // m³ of growth per step that triggers an update
+    double paper_threshold = 0.0;  // m³ of growth per step that triggers an update
   } air;
 
   struct SelfCollision {
     bool enabled = true;
-    double distance = 5e-3;   // d_t, m
-    double k = 200;           // k_t, N/m
-    double damping = 5e-3;    // k_f, N·s/m
+    double distance = 5e-3;  // d_t, m
+    double k = 200;          // k_t, N/m
+    double damping = 5e-3;   // k_f, N·s/m
   } self_collision;
 
   struct Integrator {
     IntegratorType type = IntegratorType::SymplecticEuler;
-    double dt = 5e-5;         // s (xpbd: 1/240 s in substeps)
-    long long substeps = 0;   // xpbd: substeps a step (0: 10, and one per 10 particles past 101 along the longer side)
-    double max_speed = 50;    // m/s; faster means the run has blown up
-    long long threads = 1;    // threads of the step; 0: chosen as it runs (the CLI's default)
-    double cg_tolerance = 1e-4;          // implicit-euler: largest velocity error, m/s
-    long long cg_max_iterations = 300;   // implicit-euler
-    double max_step_strain = 0.025;      // implicit-euler: a step is halved past this (Baraff & Witkin)
+    double dt = 5e-5;            // s (xpbd: 1/240 s in substeps)
+    long long substeps = 0;      // xpbd: substeps a step (0: 10, and one per 10 particles past 101
+                                 // along the longer side)
+    double max_speed = 50;       // m/s; faster means the run has blown up
+    long long threads = 1;       // threads of the step; 0: chosen as it runs (the CLI's default)
+    double cg_tolerance = 1e-4;  // implicit-euler: largest velocity error, m/s
+    long long cg_max_iterations = 300;  // implicit-euler
+    double max_step_strain = 0.025;  // implicit-euler: a step is halved past this (Baraff & Witkin)
   } integrator;
 
   struct Run {
-    double duration = 2.0;    // s
-    double fps = 30;          // output frames per simulated second
-    bool meshes = true;       // write frames/*.obj
-    std::string exports;      // run.export: caches to write, "usd,pc2,vtk" or any of them
-    UpAxis up = UpAxis::Z;    // the up axis of the files written
+    double duration = 2.0;  // s
+    double fps = 30;        // output frames per simulated second
+    bool meshes = true;     // write frames/*.obj
+    std::string exports;    // run.export: caches to write, "usd,pc2,vtk" or any of them
+    UpAxis up = UpAxis::Z;  // the up axis of the files written
   } run;
 
   std::map<std::string, HandleParams> handles;  // [handle.NAME]
 };
 
 // Humidity-dependent quantities (MODEL.md sections 1, 4, 6).
-double particle_areal_mass(const Params& p);   // ρ_A (1 + r_w ω), kg/m²
-double permeability(const Params& p);          // δ(ω), eq. 5, m/(s·Pa)
-double adhesion_pressure(const Params& p);     // ω γ (cos θa + cos θb) / h, Pa (eq. 13, area part)
-double adhesion_edge_tension(const Params& p); // ω γ sin θa, N/m (eq. 13, edge part per √S)
+double particle_areal_mass(const Params& p);  // ρ_A (1 + r_w ω), kg/m²
+double permeability(const Params& p);         // δ(ω), eq. 5, m/(s·Pa)
+double adhesion_pressure(const Params& p);  // ω γ (cos θa + cos θb) / h, Pa (eq. 13, area part)
+double adhesion_edge_tension(const Params& p);  // ω γ sin θa, N/m (eq. 13, edge part per √S)
 double adhesion_total(const Params& p, double contact_area);  // eq. 13, N
 
 // The constants of every spring of the grid (MODEL.md section 1), from the

@@ -24,10 +24,10 @@ struct ParamDef {
   std::string key;
   std::string unit;
   std::string meaning;
-  double min = 0, max = 0;            // range for numbers (inclusive); min > max: none
-  std::vector<std::string> choices;   // allowed strings
-  ParamValue default_value;           // an optional number unset: NaN
-  bool optional = false;              // a number that may be left unset (get gives NaN)
+  double min = 0, max = 0;           // range for numbers (inclusive); min > max: none
+  std::vector<std::string> choices;  // allowed strings
+  ParamValue default_value;          // an optional number unset: NaN
+  bool optional = false;             // a number that may be left unset (get gives NaN)
   std::function<ParamValue(const Params&, const std::string& handle)> get;
   std::function<void(Params&, const std::string& handle, const ParamValue&)> set;
 

@@ -8,9 +8,9 @@
 #include <Eigen/Geometry>
 #include <algorithm>
 #include <array>
-#include <memory>
 #include <cstdint>
 #include <initializer_list>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -161,10 +161,10 @@ struct State {
   double time = 0;
   long long steps = 0;
   Vec3Array x, v;
-  std::vector<std::uint8_t> contact;  // 1: within h_th of the contact surface
-  std::vector<std::uint8_t> held;     // 1: held by its handle: where a capped force handle
-                                      // stopped, on a late pin's or move handle's path
-  std::vector<Vec3> held_at;          // where it was taken (a late handle's path starts there)
+  std::vector<std::uint8_t> contact;    // 1: within h_th of the contact surface
+  std::vector<std::uint8_t> held;       // 1: held by its handle: where a capped force handle
+                                        // stopped, on a late pin's or move handle's path
+  std::vector<Vec3> held_at;            // where it was taken (a late handle's path starts there)
   double air_atm_volume = 0;            // trapped air at atmospheric pressure V_atm, m³
   double air_volume = 0;                // V_sum, m³
   double inner_pressure = 0;            // P_in, Pa (mean over pockets for `vented`)

@@ -14,8 +14,8 @@
 #include <vector>
 
 #include "sweep_plan.hpp"  // apps/cli: the cases of a sweep, as `wetcloth sweep` makes them
-#include "wetcloth/output.hpp"
 #include "wetcloth/checkpoint.hpp"
+#include "wetcloth/output.hpp"
 #include "wetcloth/scene.hpp"
 #include "wetcloth/simulation.hpp"
 
@@ -94,8 +94,10 @@ std::string toml_value(const std::string& key, py::handle v, bool top = true) {
     for (py::handle e : value) s += (s.size() > 1 ? ", " : "") + toml_value(key, e, false);
     return s + "]";
   }
-  throw py::type_error(key + ": a value of type " + py::str(py::type::of(value).attr("__name__")).cast<std::string>() +
-                       " cannot be a parameter (a number, a string, True/False or a list of numbers)");
+  throw py::type_error(
+      key + ": a value of type " +
+      py::str(py::type::of(value).attr("__name__")).cast<std::string>() +
+      " cannot be a parameter (a number, a string, True/False or a list of numbers)");
 }
 
 // Overrides from a dict and keywords, as KEY=VALUE texts (later ones win);
@@ -107,7 +109,8 @@ std::vector<std::string> override_texts(const py::object& overrides, const py::d
     if (!py::isinstance<py::str>(k)) throw py::type_error("a parameter key must be a str");
     const std::string raw = k.cast<std::string>();
     if (raw == "grid" && grid) {
-      if (!PyLong_Check(v.ptr()) || py::isinstance<py::bool_>(v)) throw py::type_error("grid: expected an int");
+      if (!PyLong_Check(v.ptr()) || py::isinstance<py::bool_>(v))
+        throw py::type_error("grid: expected an int");
       *grid = v.cast<long long>();
       return;
     }
@@ -130,13 +133,15 @@ struct Scene {
 
 // SCENE (a built-in name, a path, or a Scene) with overrides; with a grid, the
 // same cloth G particles wide, as `wetcloth run --grid` makes it.
-Params load(const py::object& scene, const std::vector<std::string>& sets, std::optional<long long> grid) {
+Params load(const py::object& scene, const std::vector<std::string>& sets,
+            std::optional<long long> grid) {
   Params p;
   if (py::isinstance<Scene>(scene)) {
     const Params& base = scene.cast<const Scene&>().params;
     p = parse_scene(to_toml(base), base.name, sets);
   } else if (py::isinstance<py::str>(scene) || py::hasattr(scene, "__fspath__")) {
-    p = load_scene(py::str(py::module_::import("os").attr("fspath")(scene)).cast<std::string>(), sets);
+    p = load_scene(py::str(py::module_::import("os").attr("fspath")(scene)).cast<std::string>(),
+                   sets);
   } else {
     throw py::type_error("scene: expected a built-in scene's name, a path or a wetcloth.Scene");
   }
@@ -147,9 +152,8 @@ Params load(const py::object& scene, const std::vector<std::string>& sets, std::
   } catch (const SceneError& e) {
     throw SceneError(std::string("grid: ") + e.what());
   }
-  if (std::any_of(sets.begin(), sets.end(), [](const std::string& s) {
-        return s.rfind("integrator.dt=", 0) == 0;
-      }))
+  if (std::any_of(sets.begin(), sets.end(),
+                  [](const std::string& s) { return s.rfind("integrator.dt=", 0) == 0; }))
     p.integrator.dt = dt;
   check_params(p);
   return p;
@@ -161,7 +165,8 @@ py::object to_python(const ParamValue& v) {
         using T = std::decay_t<decltype(x)>;
         if constexpr (std::is_same_v<T, double>)
           return std::isnan(x) ? py::object(py::none()) : py::object(py::float_(x));
-        else if constexpr (std::is_same_v<T, bool> || std::is_same_v<T, long long> || std::is_same_v<T, std::string>)
+        else if constexpr (std::is_same_v<T, bool> || std::is_same_v<T, long long> ||
+                           std::is_same_v<T, std::string>)
           return py::cast(x);
         else
           return py::cast(std::vector<typename T::value_type>(x.begin(), x.end()));  // a list
@@ -174,7 +179,8 @@ py::object get_value(const Params& p, const std::string& raw) {
   std::string handle;
   const ParamDef* d = sweep::def_of(key, &handle);
   if (!d) throw SceneError(key + ": unknown key (wetcloth.params() lists the keys)");
-  if (!handle.empty() && !p.handles.count(handle)) throw SceneError(key + ": the scene has no such handle");
+  if (!handle.empty() && !p.handles.count(handle))
+    throw SceneError(key + ": the scene has no such handle");
   return to_python(d->get(p, handle));
 }
 
@@ -185,7 +191,6 @@ py::dict metrics_dict(const Metrics& m) {
   for (std::size_t i = 0; i < cols.size(); ++i) d[py::str(cols[i])] = vals[i];
   return d;
 }
-
 
 class PySimulation {
  public:
@@ -221,7 +226,8 @@ class PySimulation {
     Busy busy(*this);
     const double dt = sim_.model().params.integrator.dt;
     if (!std::isfinite(t) || t < 0 || t / dt > 1e15)
-      throw SceneError("advance_to: t = " + shortest(t) + " s is not a time to reach (finite, >= 0)");
+      throw SceneError("advance_to: t = " + shortest(t) +
+                       " s is not a time to reach (finite, >= 0)");
     check_blow_up();
     const auto target = static_cast<long long>(std::llround(t / dt));
     while (sim_.state().steps < target) {
@@ -262,7 +268,8 @@ class PySimulation {
     const Vec3Array& a = velocities ? sim_.state().v : sim_.state().x;
     const auto n = static_cast<py::ssize_t>(a.size());
     py::array out(py::dtype::of<double>(), {n, py::ssize_t{3}},
-                  {py::ssize_t{sizeof(double)}, static_cast<py::ssize_t>(n * sizeof(double))}, a.column(0), self);
+                  {py::ssize_t{sizeof(double)}, static_cast<py::ssize_t>(n * sizeof(double))},
+                  a.column(0), self);
     out.attr("setflags")(py::arg("write") = false);
     return out;
   }
@@ -274,8 +281,10 @@ class PySimulation {
     const auto n = static_cast<py::ssize_t>(sim_.model().n);
     if (arr.ndim() != 2 || arr.shape(0) != n || arr.shape(1) != 3) {
       std::string shape;
-      for (py::ssize_t k = 0; k < arr.ndim(); ++k) shape += (k ? ", " : "") + std::to_string(arr.shape(k));
-      throw SceneError(std::string(what) + ": expected shape (" + std::to_string(n) + ", 3), got (" + shape + ")");
+      for (py::ssize_t k = 0; k < arr.ndim(); ++k)
+        shape += (k ? ", " : "") + std::to_string(arr.shape(k));
+      throw SceneError(std::string(what) + ": expected shape (" + std::to_string(n) +
+                       ", 3), got (" + shape + ")");
     }
     Vec3Array& a = velocities ? sim_.state().v : sim_.state().x;
     const auto r = arr.unchecked<2>();
@@ -298,7 +307,8 @@ py::array_t<T> copy_of(const std::vector<U>& v) {
 
 // What `wetcloth sweep` tabulates for one case, without its files: the frames
 // of run_scene (apps/cli/run.cpp), the same steps.
-py::dict run_case(const py::object& scene, const std::vector<std::string>& sets, std::optional<long long> grid) {
+py::dict run_case(const py::object& scene, const std::vector<std::string>& sets,
+                  std::optional<long long> grid) {
   const Params p = load(scene, sets, grid);
   sweep::Outcome o;
   std::string message;
@@ -311,7 +321,8 @@ py::dict run_case(const py::object& scene, const std::vector<std::string>& sets,
       const bool ok = sim.advance_to(frame_time(f, p.run.duration, p.run.fps));
       const Metrics m = sim.metrics();
       o.final = m;
-      o.frame_peak_deficit_pa = std::max(o.frame_peak_deficit_pa, p.air.p_atm - m.inner_pressure_pa);
+      o.frame_peak_deficit_pa =
+          std::max(o.frame_peak_deficit_pa, p.air.p_atm - m.inner_pressure_pa);
       if (pulled && o.time_to_5cm_s < 0 && m.handle_height_m >= 0.05) o.time_to_5cm_s = m.time_s;
       if (!ok) {
         o.ok = false;
@@ -351,40 +362,53 @@ PYBIND11_MODULE(_wetcloth, m) {
     }
   });
 
-  m.def("scenes", [] {
-    py::dict d;
-    for (const auto& s : builtin_scenes()) d[py::str(s.name)] = s.description;
-    return d;
-  }, "The built-in scenes: {name: description}.");
+  m.def(
+      "scenes",
+      [] {
+        py::dict d;
+        for (const auto& s : builtin_scenes()) d[py::str(s.name)] = s.description;
+        return d;
+      },
+      "The built-in scenes: {name: description}.");
 
-  m.def("params", [] {
-    py::list rows;
-    for (const ParamDef& d : param_defs()) {
-      py::dict r;
-      r["key"] = d.key;
-      r["type"] = d.type_name();
-      r["unit"] = d.unit;
-      r["default"] = d.default_text();
-      r["range"] = d.range_text();
-      r["meaning"] = d.meaning;
-      rows.append(r);
-    }
-    return rows;
-  }, "Every scene parameter, as `wetcloth params` lists them: dicts of key, type, unit, default, range, meaning.");
+  m.def(
+      "params",
+      [] {
+        py::list rows;
+        for (const ParamDef& d : param_defs()) {
+          py::dict r;
+          r["key"] = d.key;
+          r["type"] = d.type_name();
+          r["unit"] = d.unit;
+          r["default"] = d.default_text();
+          r["range"] = d.range_text();
+          r["meaning"] = d.meaning;
+          rows.append(r);
+        }
+        return rows;
+      },
+      "Every scene parameter, as `wetcloth params` lists them: dicts of key, type, unit, default, "
+      "range, meaning.");
 
   py::class_<Scene>(m, "Scene", "A scene's parameters, resolved (wetcloth.load_scene).")
       .def_property_readonly("name", [](const Scene& s) { return s.params.name; })
       .def_property_readonly("description", [](const Scene& s) { return s.params.description; })
-      .def("get", [](const Scene& s, const std::string& key) { return get_value(s.params, key); },
-           py::arg("key"), "A parameter's value: get('cloth.humidity').")
-      .def("toml", [](const Scene& s) { return to_toml(s.params); }, "Every parameter as TOML (as scene.toml).")
+      .def(
+          "get", [](const Scene& s, const std::string& key) { return get_value(s.params, key); },
+          py::arg("key"), "A parameter's value: get('cloth.humidity').")
+      .def(
+          "toml", [](const Scene& s) { return to_toml(s.params); },
+          "Every parameter as TOML (as scene.toml).")
       .def("__repr__", [](const Scene& s) { return "<wetcloth.Scene '" + s.params.name + "'>"; });
 
-  m.def("load_scene", [](const py::object& scene, const py::object& overrides, const py::kwargs& kw) {
+  m.def(
+      "load_scene",
+      [](const py::object& scene, const py::object& overrides, const py::kwargs& kw) {
         std::optional<long long> grid;
         const auto sets = override_texts(overrides, kw, &grid);
         return Scene{load(scene, sets, grid)};
-      }, py::arg("scene"), py::arg("overrides") = py::none(),
+      },
+      py::arg("scene"), py::arg("overrides") = py::none(),
       "A built-in scene's name or a TOML file's path, with overrides by dotted key "
       "({'cloth.humidity': 0.7}) or keyword (humidity=0.7, cloth__humidity=0.7; grid=G: the "
       "same cloth G particles wide). Raises SceneError naming the key.");
@@ -412,80 +436,115 @@ the whole state of a run.)doc")
       .def("step", &PySimulation::step, "One time step. Raises BlowUp if the state blew up.")
       .def("advance_to", &PySimulation::advance_to, py::arg("t"),
            "Steps until time t (s), releasing the GIL while it steps. Raises BlowUp.")
-      .def_property_readonly("time", [](const PySimulation& s) { return s.sim_.state().time; }, "Simulated time, s.")
+      .def_property_readonly(
+          "time", [](const PySimulation& s) { return s.sim_.state().time; }, "Simulated time, s.")
       .def_property_readonly("steps", [](const PySimulation& s) { return s.sim_.state().steps; })
-      .def_property_readonly("dt", [](const PySimulation& s) { return s.sim_.model().params.integrator.dt; })
-      .def_property_readonly("n", [](const PySimulation& s) { return s.sim_.model().n; }, "Particles.")
-      .def_property_readonly("grid", [](const PySimulation& s) {
-        return py::make_tuple(s.sim_.model().nu, s.sim_.model().nv);
-      }, "(nu, nv): particle i + nu j is grid point (i, j).")
-      .def_property_readonly("name", [](const PySimulation& s) { return s.sim_.model().params.name; })
-      .def("metrics", [](PySimulation& s) {
-        PySimulation::Busy busy(s);
-        return metrics_dict(s.sim_.metrics());
-      },
-           "The metrics now: a dict of metrics.csv's columns.")
+      .def_property_readonly(
+          "dt", [](const PySimulation& s) { return s.sim_.model().params.integrator.dt; })
+      .def_property_readonly(
+          "n", [](const PySimulation& s) { return s.sim_.model().n; }, "Particles.")
+      .def_property_readonly(
+          "grid",
+          [](const PySimulation& s) {
+            return py::make_tuple(s.sim_.model().nu, s.sim_.model().nv);
+          },
+          "(nu, nv): particle i + nu j is grid point (i, j).")
+      .def_property_readonly("name",
+                             [](const PySimulation& s) { return s.sim_.model().params.name; })
+      .def(
+          "metrics",
+          [](PySimulation& s) {
+            PySimulation::Busy busy(s);
+            return metrics_dict(s.sim_.metrics());
+          },
+          "The metrics now: a dict of metrics.csv's columns.")
       .def("set", &PySimulation::set, py::arg("key"), py::arg("value"),
            "Sets a parameter between steps (cloth.humidity live; handle.NAME.force ...). The grid "
            "cannot change.")
-      .def("get", [](const PySimulation& s, const std::string& key) { return get_value(s.sim_.model().params, key); },
-           py::arg("key"))
+      .def(
+          "get",
+          [](const PySimulation& s, const std::string& key) {
+            return get_value(s.sim_.model().params, key);
+          },
+          py::arg("key"))
       .def("toml", [](const PySimulation& s) { return to_toml(s.sim_.model().params); })
-      .def_property_readonly("peak_deficit", [](const PySimulation& s) { return s.sim_.state().peak_deficit; },
-                             "Largest p_atm - p_in over every step so far, Pa.")
-      .def_property_readonly("handles", [](const PySimulation& s) {
-        py::dict d;
-        for (const Handle& h : s.sim_.model().handles) {
-          py::dict e;
-          e["type"] = to_string(h.type);
-          e["particles"] = copy_of<int>(h.particles);
-          e["force"] = py::make_tuple(h.force.x(), h.force.y(), h.force.z());
-          e["velocity"] = py::make_tuple(h.velocity.x(), h.velocity.y(), h.velocity.z());
-          d[py::str(h.name)] = e;
-        }
-        return d;
-      }, "The handles by name: {name: {type, particles, force, velocity}} (set one with "
-         "set('handle.NAME.force', [fx, fy, fz])).")
-      .def_property("positions", [](py::object self) { return self.cast<PySimulation&>().view(self, false); },
-                    [](PySimulation& s, py::handle v) { s.assign(v, false, "positions"); },
-                    "n x 3 positions, m: a read-only view, no copy.")
-      .def_property("velocities", [](py::object self) { return self.cast<PySimulation&>().view(self, true); },
-                    [](PySimulation& s, py::handle v) { s.assign(v, true, "velocities"); },
-                    "n x 3 velocities, m/s: a read-only view, no copy.")
-      .def_property_readonly("triangles", [](const PySimulation& s) {
-        const auto& t = s.sim_.model().triangles;
-        py::array_t<int> out({static_cast<py::ssize_t>(t.size()), py::ssize_t{3}});
-        std::copy_n(t.empty() ? nullptr : t[0].data(), 3 * t.size(), out.mutable_data());
-        return out;
-      }, "m x 3 particle indices (int32), a copy.")
-      .def_property_readonly("in_contact", [](const PySimulation& s) {
-        const auto& c = s.sim_.state().contact;
-        py::array_t<bool> out(static_cast<py::ssize_t>(c.size()));
-        for (std::size_t i = 0; i < c.size(); ++i) out.mutable_data()[i] = c[i] != 0;
-        return out;
-      }, "n booleans: within the liquid-bridge height of the surface, a copy.")
-      .def_property_readonly("pressure", [](const PySimulation& s) { return copy_of<double>(s.sim_.state().pocket_pressure); },
-                             "n inner pressures P_in under each particle, Pa (p_atm where no pocket), a copy.")
-      .def_property_readonly("adhesion", [](const PySimulation& s) { return copy_of<double>(s.sim_.adhesion()); },
-                             "n adhesion forces |F|, N, of the last step, a copy.")
-      .def("save", [](const PySimulation& s, const std::string& path) {
-        save_checkpoint(path, s.sim_.model().params, s.sim_.state());
-      }, py::arg("path"),
-           "Write the whole state with its scene to PATH (a versioned binary file with a checksum); "
-           "Simulation.load(PATH) continues it with the same bits.")
-      .def_static("load", [](const std::string& path) {
-        const Checkpoint c = load_checkpoint(path);
-        auto sim = std::make_unique<PySimulation>(c.params);
-        sim->sim_.restore(c.state);
-        return sim;
-      }, py::arg("path"), "A Simulation continued from a file Simulation.save wrote.")
+      .def_property_readonly(
+          "peak_deficit", [](const PySimulation& s) { return s.sim_.state().peak_deficit; },
+          "Largest p_atm - p_in over every step so far, Pa.")
+      .def_property_readonly(
+          "handles",
+          [](const PySimulation& s) {
+            py::dict d;
+            for (const Handle& h : s.sim_.model().handles) {
+              py::dict e;
+              e["type"] = to_string(h.type);
+              e["particles"] = copy_of<int>(h.particles);
+              e["force"] = py::make_tuple(h.force.x(), h.force.y(), h.force.z());
+              e["velocity"] = py::make_tuple(h.velocity.x(), h.velocity.y(), h.velocity.z());
+              d[py::str(h.name)] = e;
+            }
+            return d;
+          },
+          "The handles by name: {name: {type, particles, force, velocity}} (set one with "
+          "set('handle.NAME.force', [fx, fy, fz])).")
+      .def_property(
+          "positions", [](py::object self) { return self.cast<PySimulation&>().view(self, false); },
+          [](PySimulation& s, py::handle v) { s.assign(v, false, "positions"); },
+          "n x 3 positions, m: a read-only view, no copy.")
+      .def_property(
+          "velocities", [](py::object self) { return self.cast<PySimulation&>().view(self, true); },
+          [](PySimulation& s, py::handle v) { s.assign(v, true, "velocities"); },
+          "n x 3 velocities, m/s: a read-only view, no copy.")
+      .def_property_readonly(
+          "triangles",
+          [](const PySimulation& s) {
+            const auto& t = s.sim_.model().triangles;
+            py::array_t<int> out({static_cast<py::ssize_t>(t.size()), py::ssize_t{3}});
+            std::copy_n(t.empty() ? nullptr : t[0].data(), 3 * t.size(), out.mutable_data());
+            return out;
+          },
+          "m x 3 particle indices (int32), a copy.")
+      .def_property_readonly(
+          "in_contact",
+          [](const PySimulation& s) {
+            const auto& c = s.sim_.state().contact;
+            py::array_t<bool> out(static_cast<py::ssize_t>(c.size()));
+            for (std::size_t i = 0; i < c.size(); ++i) out.mutable_data()[i] = c[i] != 0;
+            return out;
+          },
+          "n booleans: within the liquid-bridge height of the surface, a copy.")
+      .def_property_readonly(
+          "pressure",
+          [](const PySimulation& s) { return copy_of<double>(s.sim_.state().pocket_pressure); },
+          "n inner pressures P_in under each particle, Pa (p_atm where no pocket), a copy.")
+      .def_property_readonly(
+          "adhesion", [](const PySimulation& s) { return copy_of<double>(s.sim_.adhesion()); },
+          "n adhesion forces |F|, N, of the last step, a copy.")
+      .def(
+          "save",
+          [](const PySimulation& s, const std::string& path) {
+            save_checkpoint(path, s.sim_.model().params, s.sim_.state());
+          },
+          py::arg("path"),
+          "Write the whole state with its scene to PATH (a versioned binary file with a checksum); "
+          "Simulation.load(PATH) continues it with the same bits.")
+      .def_static(
+          "load",
+          [](const std::string& path) {
+            const Checkpoint c = load_checkpoint(path);
+            auto sim = std::make_unique<PySimulation>(c.params);
+            sim->sim_.restore(c.state);
+            return sim;
+          },
+          py::arg("path"), "A Simulation continued from a file Simulation.save wrote.")
       .def("__repr__", [](const PySimulation& s) {
-        return "<wetcloth.Simulation '" + s.sim_.model().params.name + "' t=" + shortest(s.sim_.state().time) + " s>";
+        return "<wetcloth.Simulation '" + s.sim_.model().params.name +
+               "' t=" + shortest(s.sim_.state().time) + " s>";
       });
 
   // For wetcloth.sweep: the cases as `wetcloth sweep` plans them, and one run.
-  m.def("_plan_sweep", [](const py::object& scene, const py::list& varied, const std::vector<std::string>& base,
-                          std::optional<long long> grid) {
+  m.def("_plan_sweep", [](const py::object& scene, const py::list& varied,
+                          const std::vector<std::string>& base, std::optional<long long> grid) {
     std::vector<sweep::Varied> vs;
     for (py::handle item : varied) {
       const auto pair = item.cast<py::tuple>();

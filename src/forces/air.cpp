@@ -199,7 +199,8 @@ void update_air(const Model& m, State& s, Workspace& w, double dt) {
       s.air_atm_volume = std::min(s.air_atm_volume, v_sum);
     const bool trapped = model != AirModel::Off && s_now > 0;
     s.pocket_air.push_back(
-        trapped ? pocket_air(p, s.air_atm_volume, v_sum, a_sum, model == AirModel::Exchange) : PocketAir{});
+        trapped ? pocket_air(p, s.air_atm_volume, v_sum, a_sum, model == AirModel::Exchange)
+                : PocketAir{});
     s.air_volume = v_sum;
     s.inner_pressure = pressure(p, s.air_atm_volume, v_sum);
     for_each_particle(m, [&](int i) { s.pocket_pressure[i] = s.inner_pressure; });

@@ -184,11 +184,6 @@ CacheWriter::CacheWriter(const fs::path& dir, const Simulation& sim, ExportForma
                          UpAxis up, double fps)
     : dir_(dir), formats_(formats), up_(up), fps_(fps), model_(sim.model()) {
   const Model& m = model_;
-  for (const char* f : {"cloth.usda", "cloth.pc2", "cloth_rest.obj", "cloth.pvd"})
-    fs::remove(dir / f);
-  if (fs::exists(dir / "vtk"))
-    for (const auto& e : fs::directory_iterator(dir / "vtk"))
-      if (e.path().extension() == ".vtp") fs::remove(e.path());
   if (formats.pc2) {
     write_file_atomic(dir / "cloth_rest.obj", cloth_obj(m, sim.state(), up));
     pc2_.open(dir / "cloth.pc2", std::ios::binary | std::ios::in | std::ios::out | std::ios::trunc);

@@ -173,6 +173,9 @@ done
 grep -q 'upAxis = "Y"' "$T/e/cloth.usda" && head -1 "$T/e/frames/frame_00000.obj" | grep -q ", y up" &&
   ok "--up y: the USD stage and the OBJ frames say so" || bad "--up y not recorded"
 ls "$T/e" "$T/e/vtk" "$T/e/frames" | grep -q '\.tmp$' && bad "--export left temporary files" || ok "--export: no temporary files"
+"$W" run pull-straight --out "$T/e" --set cloth.resolution=[9,9] --duration 0.05 --quiet
+[ ! -e "$T/e/cloth.usda" ] && [ ! -e "$T/e/cloth.pc2" ] && [ ! -e "$T/e/vtk/cloth_00003.vtp" ] &&
+  ok "a run without --export clears the caches of the run before" || bad "old caches left beside a new run"
 expect_bad export "run.export" pull-straight --export usd,alembic
 expect_bad up_axis "--up" pull-straight --up x
 

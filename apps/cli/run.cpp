@@ -89,15 +89,19 @@ class OutputLock {
 // Clears what an earlier run left, so a folder never mixes two runs.
 void clear_outputs(const fs::path& out) {
   std::error_code ec;
-  for (const char* f : {"metrics.csv", "summary.json", "scene.toml", "obstacles.obj"})
+  for (const char* f : {"metrics.csv", "summary.json", "scene.toml", "obstacles.obj", "cloth.usda",
+                        "cloth.pc2", "cloth_rest.obj", "cloth.pvd"})
     if (fs::remove(out / f, ec); ec) throw_output_error(out / f, "cannot remove", ec.value());
-  const fs::path frames = out / "frames";
-  if (!fs::is_directory(frames, ec)) return;
-  for (fs::directory_iterator it(frames, ec), end; !ec && it != end; it.increment(ec))
-    if (it->path().extension() == ".obj")
-      if (std::error_code rec; fs::remove(it->path(), rec), rec)
-        throw_output_error(it->path(), "cannot remove", rec.value());
-  if (ec) throw_output_error(frames, "cannot list", ec.value());
+  // The frames and the VTK caches' frames.
+  for (const auto& [folder, extension] : {std::pair{"frames", ".obj"}, {"vtk", ".vtp"}}) {
+    const fs::path dir = out / folder;
+    if (!fs::is_directory(dir, ec)) continue;
+    for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec))
+      if (it->path().extension() == extension)
+        if (std::error_code rec; fs::remove(it->path(), rec), rec)
+          throw_output_error(it->path(), "cannot remove", rec.value());
+    if (ec) throw_output_error(dir, "cannot list", ec.value());
+  }
 }
 
 // The first metric that is not a number, or empty: such a row is not written.

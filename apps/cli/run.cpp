@@ -218,6 +218,7 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress) {
   Simulation sim(p);
   if (std::error_code ec; fs::create_directories(out, ec), ec)
     throw_output_error(out, "cannot make the folder", ec.value());
+  r.started = true;
   const OutputLock lock(out);
   clear_outputs(out);
   if (p.run.meshes)

@@ -24,6 +24,7 @@ struct RunResult {
   long long steps = 0;
   double wall_seconds = 0;
   double simulated_seconds = 0;
+  bool started = false;  // its folder was made and written into (a signal may skip a case)
 };
 
 // SIGINT and SIGTERM ask runs to stop at the end of the step they are in

@@ -351,7 +351,7 @@ std::function<int()> add_sweep_command(CLI::App& app) {
         const std::size_t i = chosen[k];
         results[i] = r;
         ended[k] = true;
-        if (r.code == kOk || r.code == kBlowUp || r.code > 128) {  // a row: it ran
+        if (r.code == kOk || r.code == kBlowUp || (r.code > 128 && r.started)) {  // it ran: a row
           rows[i] = sweep::csv_row(plan.cases[i], outcome_of(r));
           write_shared(out / plan.cases[i].name / kRowFile, sweep::csv_header(plan) + rows[i]);
         }

@@ -915,10 +915,17 @@ Params load_scene(const std::string& scene, const std::vector<std::string>& over
   // (`--out hang`) opens as a stream too, and read as an empty scene.
   std::error_code ec;
   std::ifstream probe(scene);
-  if (probe.good() && !std::filesystem::is_directory(scene, ec))
-    return parse_scene(read_file(scene), scene, overrides);
+  if (probe.good() && !std::filesystem::is_directory(scene, ec)) {
+    Params p = parse_scene(read_file(scene), scene, overrides);
+    p.scene_dir = std::filesystem::absolute(scene).parent_path().lexically_normal().string();
+    return p;
+  }
   for (const auto& b : builtin_scenes())
-    if (b.name == scene) return parse_scene(b.text, "scenes/" + b.name + ".toml", overrides);
+    if (b.name == scene) {
+      Params p = parse_scene(b.text, "scenes/" + b.name + ".toml", overrides);
+      p.scene_dir = "builtin:";
+      return p;
+    }
   if (scene.find('/') != std::string::npos || scene.find(".toml") != std::string::npos)
     throw SceneError(scene + ": no such file");
   std::string names;

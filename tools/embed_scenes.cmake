@@ -1,12 +1,31 @@
-# Writes OUT: the scenes/*.toml files as string literals, so that built-in
-# scenes are found by name wherever the program runs.
+# Writes OUT: the scenes/*.toml files and the meshes they name
+# (scenes/meshes/*.obj) as string literals, so that built-in scenes are found
+# by name wherever the program runs.
 file(GLOB scenes "${SCENES_DIR}/*.toml")
+file(GLOB meshes "${SCENES_DIR}/meshes/*.obj")
 list(SORT scenes)
-set(body "// Generated from scenes/*.toml by tools/embed_scenes.cmake. Do not edit.\n#include \"wetcloth/scene.hpp\"\nnamespace wetcloth {\nconst std::vector<BuiltinScene>& builtin_scene_texts() {\n  static const std::vector<BuiltinScene> v = {\n")
+list(SORT meshes)
+set(body "// Generated from scenes/ by tools/embed_scenes.cmake. Do not edit.\n#include \"wetcloth/scene.hpp\"\nnamespace wetcloth {\nconst std::vector<BuiltinScene>& builtin_scene_texts() {\n  static const std::vector<BuiltinScene> v = {\n")
 foreach(f ${scenes})
   get_filename_component(name "${f}" NAME_WE)
   file(READ "${f}" text)
   string(APPEND body "    {\"${name}\", \"\", R\"wetcloth_scene(${text})wetcloth_scene\"},\n")
+endforeach()
+string(APPEND body "  };\n  return v;\n}\n")
+# A mesh as pieces under the compilers' limit on one literal's length.
+string(APPEND body "const std::vector<BuiltinScene>& builtin_mesh_texts() {\n  static const std::vector<BuiltinScene> v = {\n")
+foreach(f ${meshes})
+  get_filename_component(name "${f}" NAME)
+  file(READ "${f}" text)
+  string(LENGTH "${text}" len)
+  string(APPEND body "    {\"meshes/${name}\", \"\", std::string()")
+  set(at 0)
+  while(at LESS len)
+    string(SUBSTRING "${text}" ${at} 60000 piece)
+    string(APPEND body " + R\"wetcloth_mesh(${piece})wetcloth_mesh\"")
+    math(EXPR at "${at} + 60000")
+  endwhile()
+  string(APPEND body "},\n")
 endforeach()
 string(APPEND body "  };\n  return v;\n}\n}  // namespace wetcloth\n")
 file(WRITE "${OUT}.tmp" "${body}")

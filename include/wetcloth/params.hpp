@@ -64,6 +64,10 @@ struct HandleParams {
 struct Params {
   std::string name = "scene";
   std::string description;
+  // Not a key: the folder the scene file is in, where the paths it names
+  // start ("." for a scene given as text; "builtin:" for a built-in scene,
+  // whose meshes are built into the program). load_scene sets it.
+  std::string scene_dir = ".";
 
   struct Cloth {
     Vec2i resolution{51, 51};  // particles along u and v

@@ -5,7 +5,7 @@ BUILD    ?= build
 JOBS     ?= $(shell nproc)
 CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Release
 
-.PHONY: all deps build test test-clients test-sanitize fuzz demo validate bench clean docs-params readme-params
+.PHONY: all deps build test test-clients test-sanitize fuzz demo validate same-bits bench clean docs-params readme-params
 
 all: build
 
@@ -63,6 +63,12 @@ demo: build
 
 validate: build
 	tools/validate.sh $(BUILD)
+
+# Whether the current build gives the numbers of REV (default HEAD~1) bit for
+# bit on every built-in scene: a refactoring must.
+REV ?= HEAD~1
+same-bits: build
+	tools/same-bits.sh $(REV) $(BUILD)
 
 # The micro-benchmarks; then, in a build with Bullet (libbullet-dev found when
 # configured), our step beside Bullet's btSoftBody on the same cloth, taking

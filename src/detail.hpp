@@ -91,9 +91,8 @@ void for_each_particle(const Model& m, Body&& body) {
 // One particle's Vec3 written component by component: to = v, to += v,
 // to -= v. Eigen stores a Vec3 through its packet type, which may alias
 // anything, so after each such store the compiler reloads every pointer and
-// bound of the loop and does not vectorise it (BM_gravity at 51 x 51: 6.0 µs
-// that way, 2.9 µs this way). Each component is the same arithmetic, so the
-// same bits.
+// bound of the loop and does not vectorise it (BM_gravity shows the
+// difference). Each component is the same arithmetic, so the same bits.
 // (A strided view of a Vec3Array takes the same path.)
 template <class To, class E>
 void put(To&& to, const Eigen::MatrixBase<E>& v) {

@@ -485,7 +485,7 @@ std::string guard_toml_text(const std::string& text, const std::string& source) 
   return safe;
 }
 
-// The source name of Params made in code (check_params).
+// The source name of Params made in code (validate).
 const std::string kInCode = "Params";
 
 // Where a node came from: "file:line" for scene files, the --set text for overrides.
@@ -748,7 +748,7 @@ void check_consistency(const Params& p, const std::string& source,
     }
   }
   // A run that would take no step, or write frames between steps. Params
-  // made in code (check_params) may step to any time they like.
+  // made in code (validate) may step to any time they like.
   if (source != kInCode) {
     if (p.run.duration > 0 && p.integrator.dt > p.run.duration * (1 + 1e-9))
       bad("integrator.dt", "= " + shortest(p.integrator.dt) +
@@ -1068,6 +1068,48 @@ std::string springs_text(const Params& p) {
   return o.str();
 }
 
-void check_params(const Params& p) { parse_scene(to_toml(p), kInCode); }
+namespace {
+
+// A value made in code, checked as convert() checks one read from a file.
+void check_value(const ParamDef& d, const ParamValue& value, const std::string& key) {
+  const auto bad = [&](const std::string& msg) {
+    throw SceneError(kInCode + ": " + key + ": " + msg);
+  };
+  const auto in_range = [&](double v) {
+    if (!std::isfinite(v)) bad("value is not finite");
+    if (d.min <= d.max && (v < d.min || v > d.max))
+      bad("value " + shortest(v) + " is out of range " + d.range_text());
+  };
+  std::visit(
+      [&](const auto& v) {
+        using T = std::decay_t<decltype(v)>;
+        if constexpr (std::is_same_v<T, double>) {
+          if (!(d.optional && std::isnan(v))) in_range(v);
+        } else if constexpr (std::is_same_v<T, long long>) {
+          in_range(static_cast<double>(v));
+        } else if constexpr (std::is_same_v<T, std::string>) {
+          if (!d.choices.empty() &&
+              std::find(d.choices.begin(), d.choices.end(), v) == d.choices.end())
+            bad("'" + v + "' is not one of " + d.range_text());
+        } else if constexpr (!std::is_same_v<T, bool>) {
+          for (const auto x : v) in_range(static_cast<double>(x));
+        }
+      },
+      value);
+}
+
+}  // namespace
+
+void validate(const Params& p) {
+  for (const ParamDef& d : param_defs()) {
+    if (d.key.rfind("handle.*.", 0) != 0) {
+      check_value(d, d.get(p, ""), d.key);
+      continue;
+    }
+    for (const auto& [name, h] : p.handles)
+      check_value(d, d.get(p, name), "handle." + name + d.key.substr(8));
+  }
+  check_consistency(p, kInCode, {}, toml::table{});
+}
 
 }  // namespace wetcloth

@@ -128,7 +128,7 @@ StepStats Simulation::stats() const {
 const std::vector<double>& Simulation::adhesion() const { return ws_->adhesion; }
 
 Simulation::Simulation(const Params& p)
-    : model_((check_params(p), build_model(p))), ws_(std::make_unique<Workspace>()) {
+    : model_((validate(p), build_model(p))), ws_(std::make_unique<Workspace>()) {
   start_thread_choice();
   reset();
 }
@@ -189,12 +189,12 @@ void Simulation::restore(const State& s) {
 void Simulation::set_humidity(double omega) {
   Params p = model_.params;  // checked as set_params would check it (a slider's rate: cheap)
   p.cloth.humidity = omega;
-  check_params(p);
+  validate(p);
   wetcloth::set_humidity(model_, omega);
 }
 
 void Simulation::set_params(const Params& p) {
-  check_params(p);
+  validate(p);
   const bool same_grid = p.cloth.resolution == model_.params.cloth.resolution;
   model_ = build_model(p);
   start_thread_choice();

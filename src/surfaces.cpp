@@ -8,7 +8,7 @@ namespace {
 // The table alone, as the general loop below treats it (n = z: x.z -= d, an
 // inward v.z becomes v.z - v.z = 0), in scalars without branches: in contact
 // the adhesion pulls particles in every step, and a branch per particle was
-// mispredicted (3 x faster at 51 x 51, BM_collide).
+// mispredicted (BM_collide shows it).
 template <bool record>
 void collide_with_table(const Model& m, State& s, std::uint8_t* touched) {
   const double height = m.params.table.height;

@@ -8,8 +8,8 @@
 #include <new>
 
 #include "common.hpp"
+#include "common/convergence.hpp"
 #include "detail.hpp"
-#include "wetcloth/convergence.hpp"
 #include "wetcloth/simulation.hpp"
 
 using namespace wetcloth;

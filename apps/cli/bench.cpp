@@ -14,8 +14,8 @@
 #include <optional>
 #include <thread>
 
+#include "common/scene_options.hpp"
 #include "run.hpp"
-#include "scene_options.hpp"
 #ifdef WETCLOTH_BULLET
 #include "bullet_peer.hpp"
 #endif

@@ -6,9 +6,9 @@
 #include <filesystem>
 #include <thread>
 
+#include "common/convergence.hpp"
+#include "common/scene_options.hpp"
 #include "run.hpp"
-#include "scene_options.hpp"
-#include "wetcloth/convergence.hpp"
 #include "wetcloth/output.hpp"
 
 namespace wetcloth::cli {

@@ -9,9 +9,9 @@
 #include <optional>
 
 #include "bench.hpp"
+#include "common/scene_options.hpp"
 #include "converge.hpp"
 #include "run.hpp"
-#include "scene_options.hpp"
 #include "sweep.hpp"
 #ifdef WETCLOTH_VIEWER
 #include "../viewer/commands.hpp"

@@ -17,7 +17,7 @@
 #include <optional>
 #include <thread>
 
-#include "scene_options.hpp"
+#include "common/scene_options.hpp"
 #include "wetcloth/caches.hpp"
 #include "wetcloth/output.hpp"
 #include "wetcloth/scene.hpp"

@@ -14,8 +14,8 @@
 #include <sstream>
 #include <thread>
 
+#include "common/scene_options.hpp"
 #include "run.hpp"
-#include "scene_options.hpp"
 #include "sweep_plan.hpp"
 #include "wetcloth/output.hpp"
 #ifdef WETCLOTH_VIEWER

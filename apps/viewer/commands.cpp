@@ -13,7 +13,7 @@
 #include <memory>
 #include <string_view>
 
-#include "cli/scene_options.hpp"
+#include "common/scene_options.hpp"
 #include "programs.hpp"
 
 namespace wetcloth::viewer {

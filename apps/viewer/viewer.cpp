@@ -16,7 +16,7 @@
 #include <memory>
 #include <numbers>
 
-#include "cli/scene_options.hpp"
+#include "common/scene_options.hpp"
 #include "draw.hpp"
 #include "programs.hpp"
 #include "wetcloth/checkpoint.hpp"

@@ -70,7 +70,7 @@ std::string springs_text(const Params& p);
 // The checks a scene file gets (ranges, choices, keys that combine), on
 // Params made in code; Simulation's constructor and set_params run it. Throws
 // SceneError naming the key: "Params: cloth.humidity: value 3.0 is out of range [0, 1]".
-void check_params(const Params& p);
+void validate(const Params& p);
 
 // Markdown table of every parameter (the table in docs/guide.md).
 std::string params_markdown();

@@ -215,7 +215,7 @@ std::vector<double> metrics_values(const Metrics& m);
 
 class Simulation {
  public:
-  // Throws SceneError on parameters a scene file could not give (check_params).
+  // Throws SceneError on parameters a scene file could not give (validate).
   explicit Simulation(const Params& p);
   Simulation(const Simulation& other);
   Simulation& operator=(const Simulation& other);
@@ -238,7 +238,7 @@ class Simulation {
   // Live: mass, permeability and adhesion follow. Throws SceneError outside [0, 1].
   void set_humidity(double omega);
   // New parameters, live: the state is kept when the grid is the same size.
-  // Throws SceneError on parameters a scene file could not give (check_params).
+  // Throws SceneError on parameters a scene file could not give (validate).
   void set_params(const Params& p);
 
   // Non-empty when the state holds NaN or a runaway speed; names what to look at.

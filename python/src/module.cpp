@@ -155,7 +155,7 @@ Params load(const py::object& scene, const std::vector<std::string>& sets,
   if (std::any_of(sets.begin(), sets.end(),
                   [](const std::string& s) { return s.rfind("integrator.dt=", 0) == 0; }))
     p.integrator.dt = dt;
-  check_params(p);
+  validate(p);
   return p;
 }
 

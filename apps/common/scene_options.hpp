@@ -38,7 +38,7 @@ inline Params load_on_grid(const std::string& scene, const std::vector<std::stri
   // What the scaling made of the scene (a handle's patch in grid steps) is
   // checked here, so that the error names the option before anything runs.
   try {
-    check_params(p);
+    validate(p);
   } catch (const SceneError& e) {
     std::string what = e.what();
     if (what.rfind("Params: ", 0) == 0) what = what.substr(8);

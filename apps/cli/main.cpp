@@ -183,6 +183,11 @@ int main(int argc, char** argv) {
                            " would change it (--threads, --checkpoint-every, --quiet and --force "
                            "may be given)");
         out = resume_dir;
+        if (cli::run_ended_whole(out)) {
+          if (!quiet)
+            std::printf("%s: the run ended whole (summary.json); nothing to resume\n", out.c_str());
+          return 0;
+        }
         resume = cli::load_resume_point(out);
         p = resume->params;
         if (run_opts.threads) p.integrator.threads = *run_opts.threads;

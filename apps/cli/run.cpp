@@ -250,6 +250,15 @@ void install_stop_handlers() {
 
 int stop_signal() { return g_stop.load(); }
 
+bool run_ended_whole(const fs::path& dir) {
+  std::error_code ec;
+  if (fs::exists(dir / "checkpoint.state", ec)) return false;
+  std::ifstream f(dir / "summary.json");
+  if (!f) return false;
+  const auto j = nlohmann::json::parse(f, nullptr, false);
+  return !j.is_discarded() && j.is_object() && j.value("status", "") == "ok";
+}
+
 ResumePoint load_resume_point(const fs::path& dir) {
   ResumePoint rp;
   rp.file = dir / "checkpoint.state";
@@ -272,7 +281,13 @@ ResumePoint load_resume_point(const fs::path& dir) {
   if (!fs::exists(scene, ec))
     throw SceneError(scene.string() + ": missing, so the outputs of " + dir.string() +
                      " cannot be matched with " + rp.file.string());
-  const std::string mine = to_toml(c.params), theirs = to_toml(load_scene(scene.string()));
+  // What --resume may set (the step's threads, the checkpoints' interval)
+  // changes no result: not compared.
+  const Params folder = load_scene(scene.string());
+  Params compared = c.params;
+  compared.integrator.threads = folder.integrator.threads;
+  compared.run.checkpoint_every = folder.run.checkpoint_every;
+  const std::string mine = to_toml(compared), theirs = to_toml(folder);
   if (mine != theirs) {
     std::istringstream a(mine), b(theirs);
     std::string la, lb;
@@ -331,7 +346,8 @@ OutputsAt record_outputs(const ResumePoint& rp, long long& substeps, double& wal
     at.frame_peak_deficit_pa = j.at("frame_peak_deficit_pa").get<double>();
     substeps = j.at("substeps").get<long long>();
     wall = j.at("wall_seconds").get<double>();
-    if (at.next_frame < 0 || at.metrics_bytes < 0 || at.cache.frames != at.next_frame)
+    if (at.next_frame < 0 || at.metrics_bytes < 0 ||
+        (!at.cache.samples_bytes.empty() && at.cache.frames != at.next_frame))
       throw std::invalid_argument("its frames do not agree");
     return at;
   } catch (const std::exception& e) {
@@ -407,6 +423,11 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress,
     at = record_outputs(*resume, substeps_before, wall_before);
     const std::vector<double> times =
         kept_row_times(out / "metrics.csv", at.metrics_bytes, at.next_frame, resume->file);
+    if (formats.any()) {
+      at.cache.frames = at.next_frame;  // a cache has a frame a row
+      caches.emplace(out, sim, formats, up, p.run.fps, at.cache, times);
+    }
+    metrics.emplace(out / "metrics.csv", at.metrics_bytes);
     // The folder as it stood at the checkpoint: nothing after it, no summary yet.
     if (std::error_code ec; fs::remove(out / "summary.json", ec), ec)
       throw_output_error(out / "summary.json", "cannot remove", ec.value());
@@ -414,8 +435,6 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress,
     if (p.run.meshes)
       if (std::error_code ec; fs::create_directories(out / "frames", ec), ec)
         throw_output_error(out / "frames", "cannot make the folder", ec.value());
-    if (formats.any()) caches.emplace(out, sim, formats, up, p.run.fps, at.cache, times);
-    metrics.emplace(out / "metrics.csv", at.metrics_bytes);
     r.time_to_5cm_s = at.time_to_5cm_s;
     r.frame_peak_deficit_pa = at.frame_peak_deficit_pa;
   }

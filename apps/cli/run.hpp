@@ -57,6 +57,9 @@ struct ResumePoint {
 // checkpoint, another format, damaged, one without a run's record, or one of
 // another scene than DIR/scene.toml.
 ResumePoint load_resume_point(const std::filesystem::path& dir);
+// DIR holds a run that ended whole (summary.json "ok", no checkpoint): a
+// resume has nothing to do.
+bool run_ended_whole(const std::filesystem::path& dir);
 
 // Runs P into OUT (made if missing, locked while the run writes: a second run
 // into it throws SceneError). Throws OutputError where a file cannot be written.

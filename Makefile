@@ -5,7 +5,7 @@ BUILD    ?= build
 JOBS     ?= $(shell nproc)
 CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Release
 
-.PHONY: all deps build test test-clients test-sanitize fuzz demo validate same-bits bench clean docs-params readme-params
+.PHONY: all deps build test test-clients test-sanitize test-sanitize-ci fuzz demo validate same-bits bench clean docs-params readme-params
 
 all: build
 
@@ -28,7 +28,8 @@ test-clients: build
 	tests/test_clients.sh $(BUILD)/wetcloth $(CURDIR)
 # The unit tests, the fuzz corpus and a short run of every built-in scene on 1
 # and 2 threads, built with AddressSanitizer and UndefinedBehaviorSanitizer in
-# their own folder (any report fails it). Not in CI: it takes too long there (README).
+# their own folder (any report fails it). Not in CI: it takes too long there
+# (docs/guide.md); CI runs test-sanitize-ci below.
 SAN_BUILD ?= build-sanitize
 SAN_FLAGS = -fsanitize=address,undefined -fno-sanitize-recover=all -fno-omit-frame-pointer
 SAN_ENV = ASAN_OPTIONS=detect_leaks=1:abort_on_error=1:strict_string_checks=1 \
@@ -40,6 +41,26 @@ test-sanitize: deps
 	cd $(SAN_BUILD) && $(SAN_ENV) ctest --output-on-failure -j $(JOBS) \
 	  -E '^(cli|install_and_find_package|plot_scripts|bench_peer_bullet)$$'
 	$(SAN_ENV) tests/sanitize_scenes.sh $(SAN_BUILD)/wetcloth
+
+# The sanitizer check CI runs (.ci/run), sized to fit its time: ASan + UBSan at
+# -O1 in build-sanitize-ci, the library and the program alone (no viewer,
+# Python or benchmarks), a subset of the unit tests (wetcloth_tests_subset,
+# tests/CMakeLists.txt), the fuzz corpus replay, the fault and signal tests,
+# the kill-and-resume test and a short run of every built-in scene on 1 and 2
+# threads. About 17 minutes on a fresh clone on 2 cores (docs/performance.md).
+SAN_CI_BUILD ?= build-sanitize-ci
+# Two tests of the subset take 1.5 and 2.5 minutes under the sanitizers: left to make test-sanitize.
+SAN_CI_UNIT_FILTER = -StrainLimit.NoStructuralSpringEndsLongerThanTheLimit:SelfCollision.KeepsTwoFoldedLayersApart
+test-sanitize-ci: deps
+	cmake -S . -B $(SAN_CI_BUILD) -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+	  "-DCMAKE_CXX_FLAGS_RELWITHDEBINFO=-O1 -g1 -DNDEBUG" "-DCMAKE_CXX_FLAGS=$(SAN_FLAGS)" \
+	  -DWETCLOTH_VIEWER=OFF -DWETCLOTH_BENCH=OFF -DWETCLOTH_BULLET=OFF -DWETCLOTH_PYTHON=OFF
+	$(SAN_ENV) cmake --build $(SAN_CI_BUILD) -j $(JOBS) --target wetcloth_cli fuzz_replay wetcloth_tests_subset
+	$(SAN_ENV) $(SAN_CI_BUILD)/tests/wetcloth_tests_subset --gtest_filter=$(SAN_CI_UNIT_FILTER)
+	$(SAN_ENV) $(SAN_CI_BUILD)/tests/fuzz_replay tests/fuzz-corpus
+	$(SAN_ENV) tests/test_faults.sh $(SAN_CI_BUILD)/wetcloth
+	$(SAN_ENV) tests/test_resume.sh $(SAN_CI_BUILD)/wetcloth
+	$(SAN_ENV) tests/sanitize_scenes.sh $(SAN_CI_BUILD)/wetcloth
 
 # The scene loader's libFuzzer target (clang, ASan + UBSan, in build-fuzz), for
 # FUZZ_SECONDS; new inputs go to build-fuzz/corpus, crashes to build-fuzz/crashes

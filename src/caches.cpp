@@ -1,11 +1,16 @@
 #include "wetcloth/caches.hpp"
 
+#include <unistd.h>
+
 #include <array>
 #include <cerrno>
 #include <cstdint>
 #include <cstring>
+#include <iterator>
 #include <sstream>
 #include <stdexcept>
+
+#include "wetcloth/scene.hpp"
 
 namespace wetcloth {
 
@@ -163,11 +168,12 @@ void write_pc2_header(std::fstream& f, int points, long long samples) {
 
 }  // namespace
 
-// A USD attribute's time samples, "code: value,\n" each, kept in a temporary
-// file until the stage is written.
+// A USD attribute's time samples, "code: value,\n" each, kept in a file of
+// .cloth.usda.samples/ until the stage is written.
 struct CacheWriter::Spool {
   std::string declaration;  // e.g. "point3f[] points"
-  std::FILE* file = std::tmpfile();
+  fs::path path;
+  std::FILE* file = nullptr;
   ~Spool() {
     if (file) std::fclose(file);
   }
@@ -175,10 +181,50 @@ struct CacheWriter::Spool {
     std::string line = "            ";
     put(line, code);
     line += ": " + value + ",\n";
-    if (!file || std::fwrite(line.data(), 1, line.size(), file) != line.size())
-      throw std::runtime_error("cloth.usda: cannot write its time samples to a temporary file");
+    if (std::fwrite(line.data(), 1, line.size(), file) != line.size())
+      throw_output_error(path, "cannot write", errno);
   }
 };
+
+namespace {
+
+const fs::path kSamples = ".cloth.usda.samples";
+constexpr const char* kAttributes[][2] = {{"point3f[] points", "points"},
+                                          {"normal3f[] normals", "normals"},
+                                          {"float3[] extent", "extent"},
+                                          {"float[] primvars:contact", "contact"},
+                                          {"float[] primvars:pressure", "pressure"},
+                                          {"float[] primvars:adhesion", "adhesion"},
+                                          {"float primvars:humidity", "humidity"}};
+
+}  // namespace
+
+void CacheWriter::open_usd_samples(const CachePosition* at) {
+  const fs::path folder = dir_ / kSamples;
+  if (std::error_code ec; fs::create_directories(folder, ec), ec)
+    throw_output_error(folder, "cannot make the folder", ec.value());
+  if (at && at->samples_bytes.size() != std::size(kAttributes))
+    throw SceneError(folder.string() + ": the checkpoint does not say where its samples end");
+  for (std::size_t a = 0; a < std::size(kAttributes); ++a) {
+    auto spool = std::make_unique<Spool>();
+    spool->declaration = kAttributes[a][0];
+    spool->path = folder / kAttributes[a][1];
+    if (at) {
+      std::error_code ec;
+      const auto size = fs::file_size(spool->path, ec);
+      if (ec || static_cast<long long>(size) < at->samples_bytes[a])
+        throw SceneError(spool->path.string() + ": " +
+                         (ec ? ec.message() : "shorter than the checkpoint says") +
+                         ": the USD samples the checkpoint continues are not there");
+      fs::resize_file(spool->path, static_cast<std::uintmax_t>(at->samples_bytes[a]), ec);
+      if (ec) throw_output_error(spool->path, "cannot cut back", ec.value());
+    }
+    spool->file = std::fopen(spool->path.c_str(), at ? "ab+" : "wb+");
+    if (!spool->file || std::fseek(spool->file, 0, SEEK_END) != 0)
+      throw_output_error(spool->path, "cannot open", errno);
+    spools_.push_back(std::move(spool));
+  }
+}
 
 CacheWriter::CacheWriter(const fs::path& dir, const Simulation& sim, ExportFormats formats,
                          UpAxis up, double fps)
@@ -201,15 +247,69 @@ CacheWriter::CacheWriter(const fs::path& dir, const Simulation& sim, ExportForma
     }
     write_file_atomic(dir / "vtk" / "obstacles.vtp", polydata(points, tris, ""));
   }
-  if (formats.usd)
-    for (const char* d :
-         {"point3f[] points", "normal3f[] normals", "float3[] extent", "float[] primvars:contact",
-          "float[] primvars:pressure", "float[] primvars:adhesion", "float primvars:humidity"}) {
-      spools_.push_back(std::make_unique<Spool>());
-      spools_.back()->declaration = d;
-      if (!spools_.back()->file)
-        throw std::runtime_error("cloth.usda: cannot open a temporary file for its time samples");
-    }
+  if (formats.usd) open_usd_samples(nullptr);
+}
+
+CacheWriter::CacheWriter(const fs::path& dir, const Simulation& sim, ExportFormats formats,
+                         UpAxis up, double fps, const CachePosition& at,
+                         const std::vector<double>& frame_times)
+    : dir_(dir), formats_(formats), up_(up), fps_(fps), model_(sim.model()) {
+  frames_ = at.frames;
+  last_code_ = at.last_code;
+  if (formats.pc2) {
+    const fs::path path = dir / "cloth.pc2";
+    const auto bytes = static_cast<std::uintmax_t>(32 + at.frames * 3LL * model_.n * 4);
+    std::error_code ec;
+    const auto size = fs::file_size(path, ec);
+    if (ec || size < bytes)
+      throw SceneError(
+          path.string() + ": " + (ec ? ec.message() : "shorter than the checkpoint says") +
+          ": the " + std::to_string(at.frames) + " frames the checkpoint continues are not there");
+    if (fs::resize_file(path, bytes, ec); ec)
+      throw_output_error(path, "cannot cut back", ec.value());
+    pc2_.open(path, std::ios::binary | std::ios::in | std::ios::out);
+    if (!pc2_) throw_output_error(path, "cannot write", errno);
+    write_pc2_header(pc2_, model_.n, at.frames);
+    if (!pc2_.flush()) throw_output_error(path, "cannot write", errno);
+  }
+  if (formats.vtk) {
+    if (static_cast<long long>(frame_times.size()) != at.frames)
+      throw std::logic_error("CacheWriter: a frame time a frame kept");
+    vtk_times_ = frame_times;
+    write_pvd();
+  }
+  if (formats.usd) open_usd_samples(&at);
+}
+
+CachePosition CacheWriter::position(bool durable) {
+  CachePosition p;
+  p.frames = frames_;
+  p.last_code = last_code_;
+  if (formats_.pc2) {
+    if (!pc2_.flush()) throw_output_error(dir_ / "cloth.pc2", "cannot write", errno);
+    if (durable) sync_file(dir_ / "cloth.pc2");
+  }
+  for (const auto& spool : spools_) {
+    if (std::fflush(spool->file) != 0) throw_output_error(spool->path, "cannot write", errno);
+    if (durable && ::fsync(fileno(spool->file)) != 0)
+      throw_output_error(spool->path, "cannot write", errno);
+    const long size = std::ftell(spool->file);
+    if (size < 0) throw_output_error(spool->path, "cannot tell its size", errno);
+    p.samples_bytes.push_back(size);
+  }
+  return p;
+}
+
+void CacheWriter::write_pvd() {
+  std::string pvd =
+      "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n";
+  for (std::size_t q = 0; q < vtk_times_.size(); ++q) {
+    char line[128];
+    std::snprintf(line, sizeof line, "<DataSet timestep=\"%.9g\" file=\"vtk/cloth_%05zu.vtp\"/>\n",
+                  vtk_times_[q], q);
+    pvd += line;
+  }
+  write_file_atomic(dir_ / "cloth.pvd", pvd + "</Collection>\n</VTKFile>\n");
 }
 
 CacheWriter::~CacheWriter() = default;
@@ -243,16 +343,7 @@ void CacheWriter::add_frame(const Simulation& sim) {
         "</PointData>\n";
     write_file_atomic(dir_ / "vtk" / name, polydata(f.points, model_.triangles, fields));
     vtk_times_.push_back(f.time);
-    std::string pvd =
-        "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n";
-    for (std::size_t q = 0; q < vtk_times_.size(); ++q) {
-      char line[128];
-      std::snprintf(line, sizeof line,
-                    "<DataSet timestep=\"%.9g\" file=\"vtk/cloth_%05zu.vtp\"/>\n", vtk_times_[q],
-                    q);
-      pvd += line;
-    }
-    write_file_atomic(dir_ / "cloth.pvd", pvd + "</Collection>\n</VTKFile>\n");
+    write_pvd();
   }
   if (formats_.usd) {
     Vec3 lo = f.points[0], hi = f.points[0];
@@ -274,7 +365,7 @@ void CacheWriter::add_frame(const Simulation& sim) {
   }
 }
 
-void CacheWriter::finish() {
+void CacheWriter::finish(bool keep_samples) {
   if (finished_) return;
   finished_ = true;
   if (!formats_.usd) return;
@@ -309,6 +400,7 @@ void CacheWriter::finish() {
          " (\n            interpolation = \"vertex\"\n        )\n";
   o += "        float primvars:humidity (\n            interpolation = \"constant\"\n        )\n";
   const fs::path path = dir_ / "cloth.usda", tmp = path.string() + ".tmp";
+  const TemporaryFile record(tmp.string());  // a second signal removes it
   {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
     out << o;
@@ -336,7 +428,14 @@ void CacheWriter::finish() {
       throw_output_error(path, "cannot write", error);
     }
   }
-  fs::rename(tmp, path);
+  if (std::error_code ec; fs::rename(tmp, path, ec), ec) {
+    fs::remove(tmp, ec);
+    throw_output_error(path, "cannot rename " + tmp.string() + " to it", ec.value());
+  }
+  if (keep_samples) return;
+  spools_.clear();
+  if (std::error_code ec; fs::remove_all(dir_ / kSamples, ec), ec)
+    throw_output_error(dir_ / kSamples, "cannot remove", ec.value());
 }
 
 }  // namespace wetcloth

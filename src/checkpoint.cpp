@@ -1,7 +1,8 @@
 // Layout: "WETCLOTH-STATE\0\0", the format version (u32), the scene as TOML
 // (u64 length, bytes), then the State's fields in declaration order (arrays
-// as a u64 count and their elements; Vec3Arrays x, y, z columns), then the
-// FNV-1a 64 hash of everything before it. Little-endian, as the machines we
+// as a u64 count and their elements; Vec3Arrays x, y, z columns), then
+// (format 2) the run's own record (u64 length, bytes), then the FNV-1a 64
+// hash of everything before it. Little-endian, as the machines we
 // run on.
 #include "wetcloth/checkpoint.hpp"
 
@@ -19,7 +20,7 @@ namespace wetcloth {
 namespace {
 
 constexpr char kMagic[16] = "WETCLOTH-STATE";
-constexpr std::uint32_t kVersion = 1;
+constexpr std::uint32_t kVersion = 2;  // 1 had no run record: still read
 
 std::uint64_t fnv1a(const std::string& bytes) {
   std::uint64_t h = 1469598103934665603ULL;
@@ -119,7 +120,8 @@ void fields(IO& io, State& s) {
 
 }  // namespace
 
-void save_checkpoint(const std::filesystem::path& path, const Params& params, const State& state) {
+void save_checkpoint(const std::filesystem::path& path, const Params& params, const State& state,
+                     const std::string& run) {
   Writer w;
   w.out.append(kMagic, sizeof kMagic);
   w.pod(kVersion);
@@ -127,8 +129,10 @@ void save_checkpoint(const std::filesystem::path& path, const Params& params, co
   w.pod(static_cast<std::uint64_t>(toml.size()));
   w.out += toml;
   fields(w, const_cast<State&>(state));  // the writer only reads
+  w.pod(static_cast<std::uint64_t>(run.size()));
+  w.out += run;
   w.pod(fnv1a(w.out));
-  write_file_atomic(path, w.out);
+  write_file_atomic(path, w.out, Durability::kSynced);
 }
 
 Checkpoint load_checkpoint(const std::filesystem::path& path) {
@@ -141,9 +145,10 @@ Checkpoint load_checkpoint(const std::filesystem::path& path) {
   if (bytes.size() < sizeof kMagic + 4 + 8 || std::memcmp(bytes.data(), kMagic, sizeof kMagic) != 0)
     r.bad("not a wetcloth checkpoint");
   r.at = sizeof kMagic;
-  if (const auto v = r.pod<std::uint32_t>(); v != kVersion)
-    r.bad("a checkpoint of format " + std::to_string(v) + "; this wetcloth reads format " +
-          std::to_string(kVersion));
+  const auto version = r.pod<std::uint32_t>();
+  if (version != 1 && version != kVersion)
+    r.bad("a checkpoint of format " + std::to_string(version) +
+          "; this wetcloth reads formats 1 to " + std::to_string(kVersion));
   std::uint64_t stored;
   std::memcpy(&stored, bytes.data() + bytes.size() - 8, 8);
   if (fnv1a(bytes.substr(0, bytes.size() - 8)) != stored)
@@ -154,6 +159,12 @@ Checkpoint load_checkpoint(const std::filesystem::path& path) {
   r.at += length;
   c.params = parse_scene(toml, path.string() + " (its scene)");
   fields(r, c.state);
+  if (version >= 2) {
+    const std::size_t run = r.count(1);
+    if (run > bytes.size() - 8 - r.at) r.bad("the checkpoint is cut short");
+    c.run.assign(bytes, r.at, run);
+    r.at += run;
+  }
   if (r.at != bytes.size() - 8) r.bad("unexpected bytes after the state");
   return c;
 }

@@ -29,27 +29,6 @@ struct TempSlot {
 };
 TempSlot g_temp[kTempSlots];
 
-struct TempRecord {
-  int slot = -1;
-  explicit TempRecord(const std::string& path) {
-    if (path.size() >= kTempPath) return;
-    for (int i = 0; i < kTempSlots; ++i) {
-      bool expected = false;
-      if (g_temp[i].used.compare_exchange_strong(expected, true)) {
-        std::memcpy(g_temp[i].path, path.c_str(), path.size() + 1);
-        g_temp[i].ready = true;
-        slot = i;
-        return;
-      }
-    }
-  }
-  ~TempRecord() {
-    if (slot < 0) return;
-    g_temp[slot].ready = false;
-    g_temp[slot].used = false;
-  }
-};
-
 // WETCLOTH_FAIL_AFTER_BYTES: bytes left before writes fail; < 0: no fault.
 std::atomic<long long>& fault_budget() {
   static std::atomic<long long> budget = [] {
@@ -87,6 +66,25 @@ bool write_all(int fd, const char* data, std::size_t size) {
 
 }  // namespace
 
+TemporaryFile::TemporaryFile(const std::string& path) {
+  if (path.size() >= kTempPath) return;
+  for (int i = 0; i < kTempSlots; ++i) {
+    bool expected = false;
+    if (g_temp[i].used.compare_exchange_strong(expected, true)) {
+      std::memcpy(g_temp[i].path, path.c_str(), path.size() + 1);
+      g_temp[i].ready = true;
+      slot_ = i;
+      return;
+    }
+  }
+}
+
+TemporaryFile::~TemporaryFile() {
+  if (slot_ < 0) return;
+  g_temp[slot_].ready = false;
+  g_temp[slot_].used = false;
+}
+
 bool write_fault_injected() { return fault_budget().load() >= 0; }
 
 void throw_output_error(const std::filesystem::path& path, const std::string& doing,
@@ -99,12 +97,48 @@ void remove_temporary_files() noexcept {
     if (t.ready.load()) ::unlink(t.path);
 }
 
-void write_file_atomic(const std::filesystem::path& path, const std::string& contents) {
+namespace {
+
+// fsync of the folder holding PATH: its new entry (a rename) is on the disk.
+void sync_folder(const std::filesystem::path& path) {
+  const std::filesystem::path dir = path.has_parent_path() ? path.parent_path() : ".";
+  const int fd = ::open(dir.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) throw_output_error(dir, "cannot open the folder", errno);
+  if (::fsync(fd) != 0 && errno != EINVAL) {  // EINVAL: a file system that cannot
+    const int e = errno;
+    ::close(fd);
+    throw_output_error(dir, "cannot sync the folder", e);
+  }
+  ::close(fd);
+}
+
+}  // namespace
+
+void sync_file(const std::filesystem::path& path) {
+  const int fd = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
+  if (fd < 0) throw_output_error(path, "cannot open", errno);
+  if (::fsync(fd) != 0) {
+    const int e = errno;
+    ::close(fd);
+    throw_output_error(path, "cannot write", e);
+  }
+  ::close(fd);
+  sync_folder(path);
+}
+
+void write_file_atomic(const std::filesystem::path& path, const std::string& contents,
+                       Durability durability) {
   const std::string tmp = path.string() + ".tmp";
-  TempRecord record(tmp);
+  TemporaryFile record(tmp);
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
   if (fd < 0) throw_output_error(tmp, "cannot create", errno);
   if (!write_all(fd, contents.data(), contents.size())) {
+    const int e = errno;
+    ::close(fd);
+    ::unlink(tmp.c_str());
+    throw_output_error(path, "cannot write", e);
+  }
+  if (durability == Durability::kSynced && ::fsync(fd) != 0) {
     const int e = errno;
     ::close(fd);
     ::unlink(tmp.c_str());
@@ -120,6 +154,7 @@ void write_file_atomic(const std::filesystem::path& path, const std::string& con
     ::unlink(tmp.c_str());
     throw_output_error(path, "cannot rename " + tmp + " to it", e);
   }
+  if (durability == Durability::kSynced) sync_folder(path);
 }
 
 std::string metrics_csv_header() {
@@ -142,6 +177,22 @@ MetricsFile::MetricsFile(const std::filesystem::path& path) : path_(path) {
   fd_ = ::open(path.c_str(), O_WRONLY | O_APPEND | O_CLOEXEC);
   if (fd_ < 0) throw_output_error(path, "cannot open", errno);
   size_ = static_cast<long long>(header.size());
+}
+
+MetricsFile::MetricsFile(const std::filesystem::path& path, long long keep_bytes) : path_(path) {
+  fd_ = ::open(path.c_str(), O_WRONLY | O_APPEND | O_CLOEXEC);
+  if (fd_ < 0) throw_output_error(path, "cannot open", errno);
+  if (::ftruncate(fd_, static_cast<off_t>(keep_bytes)) != 0) {
+    const int e = errno;
+    ::close(fd_);
+    fd_ = -1;
+    throw_output_error(path, "cannot cut back", e);
+  }
+  size_ = keep_bytes;
+}
+
+void MetricsFile::sync() {
+  if (fd_ >= 0 && ::fsync(fd_) != 0) throw_output_error(path_, "cannot write", errno);
 }
 
 MetricsFile::~MetricsFile() {

@@ -289,6 +289,10 @@ std::vector<ParamDef> make_defs() {
             P(run.exports)),
       field("run.up", "", 1, 0, "up axis of the files written: z (the simulation's) or y",
             P(run.up)),
+      field("run.checkpoint_every", "s", 0, 1e6,
+            "simulated time between checkpoints (checkpoint.state, for `wetcloth run --resume`; "
+            "0: none, but a run stopped by a signal writes one)",
+            P(run.checkpoint_every)),
       handle_field("type", "", 1, 0, "force: constant force; move: driven at a velocity; pin: held",
                    H(type)),
       handle_field("at", "1", 0, 1,

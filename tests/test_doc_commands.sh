@@ -125,6 +125,8 @@ def small(words):
         return args, ({0} if BULLET or "--peer" not in rest else {1}), ""
     if sub == "sweep" and "--gather" in rest:
         return words, {0}, ""
+    if sub == "run" and "--resume" in rest:  # the scene is the checkpoint's: as it is
+        return words, {0}, ""
     if sub in ("run", "check", "converge", "sweep", "render"):
         drop_flags = ()
         note = ""

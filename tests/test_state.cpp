@@ -125,5 +125,22 @@ TEST(Checkpoint, ResumesFromAFileWithTheSameBits) {
   fs::remove(file);
 }
 
+// A program's own record (`wetcloth run`'s: where its outputs stood) comes
+// back as it was written, and is covered by the checksum.
+TEST(Checkpoint, KeepsTheRunsRecord) {
+  namespace fs = std::filesystem;
+  const fs::path file = fs::temp_directory_path() / "wetcloth_test_checkpoint_record.state";
+  const Params p = load_scene("hang", {"cloth.resolution=[5,5]"});
+  Simulation sim(p);
+  ASSERT_TRUE(sim.advance_to(0.01));
+  const std::string record = "{\"next_frame\": 3}";
+  save_checkpoint(file, p, sim.state(), record);
+  EXPECT_FALSE(fs::exists(file.string() + ".tmp"));
+  EXPECT_EQ(load_checkpoint(file).run, record);
+  save_checkpoint(file, p, sim.state());
+  EXPECT_EQ(load_checkpoint(file).run, "");
+  fs::remove(file);
+}
+
 }  // namespace
 }  // namespace wetcloth

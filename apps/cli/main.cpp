@@ -33,7 +33,18 @@ int main(int argc, char** argv) {
   std::string out_dir;
   bool quiet = false, force = false;
   auto* run = app.add_subcommand("run", "run a scene and write its results into a folder");
-  run_opts.add_to(run);
+  run_opts.add_to(run, false);  // no SCENE with --resume
+  std::optional<double> checkpoint_every;
+  run->add_option("--checkpoint-every", checkpoint_every,
+                  "write the whole state into DIR/checkpoint.state every S of simulated time, "
+                  "for --resume (= --set run.checkpoint_every=S)")
+      ->check(cli::in_range_of("run.checkpoint_every"));
+  std::string resume_dir;
+  run->add_option("--resume", resume_dir,
+                  "continue the run in DIR from its checkpoint.state, with the same bits as a run "
+                  "never stopped (no SCENE: it comes from the checkpoint; --threads and "
+                  "--checkpoint-every may be given)")
+      ->check(cli::a_path());
   run->add_option("--out", out_dir, "output folder (default out/<scene name>)")
       ->check(cli::a_path());
   run->add_flag("--quiet", quiet, "no progress bar");
@@ -52,7 +63,8 @@ int main(int argc, char** argv) {
       "Exit codes: 0 ok, 2 bad input (nothing written; or DIR is in use by another run),\n"
       "3 the simulation blew up (outputs so far kept), 4 an output could not be written\n"
       "(full disk, read-only folder: the file and the reason named), 130 / 143 stopped by\n"
-      "SIGINT / SIGTERM at the end of a step (outputs whole, summary.json \"interrupted\").");
+      "SIGINT / SIGTERM at the end of a step (outputs whole, summary.json \"interrupted\",\n"
+      "DIR/checkpoint.state written: `wetcloth run --resume DIR` continues the run).");
 
   auto* scenes = app.add_subcommand("scenes", "list the built-in scenes");
 
@@ -147,19 +159,62 @@ int main(int argc, char** argv) {
       return 0;
     }
     if (*run) {
-      if (exports) run_opts.sets.push_back("run.export=\"" + *exports + "\"");
-      if (up) run_opts.sets.push_back("run.up=" + *up);
-      const Params p = run_opts.load();
-      const fs::path out =
-          out_dir.empty() ? fs::path("out") / cli::folder_name(p.name) : fs::path(out_dir);
-      if (!force) cli::check_resources(p, out, run_opts.scene);
-      cli::make_output_folder(out);
+      Params p;
+      fs::path out;
+      std::optional<cli::ResumePoint> resume;
+      if (!resume_dir.empty()) {
+        // The scene is the checkpoint's: what would change it is refused.
+        std::string given;
+        const auto refuse = [&](bool set, const char* what) {
+          if (set) given += (given.empty() ? "" : ", ") + std::string(what);
+        };
+        refuse(!run_opts.scene.empty(), "a SCENE");
+        refuse(!run_opts.sets.empty(), "--set");
+        refuse(run_opts.humidity.has_value(), "--humidity");
+        refuse(run_opts.duration.has_value(), "--duration");
+        refuse(run_opts.grid.has_value(), "--grid");
+        refuse(exports.has_value(), "--export");
+        refuse(up.has_value(), "--up");
+        refuse(!out_dir.empty(), "--out");
+        if (!given.empty())
+          throw SceneError("--resume " + resume_dir +
+                           ": the run continues in that folder with its checkpoint's scene; " +
+                           given +
+                           " would change it (--threads, --checkpoint-every, --quiet and --force "
+                           "may be given)");
+        out = resume_dir;
+        if (cli::run_ended_whole(out)) {
+          if (!quiet)
+            std::printf("%s: the run ended whole (summary.json); nothing to resume\n", out.c_str());
+          return 0;
+        }
+        resume = cli::load_resume_point(out);
+        p = resume->params;
+        if (run_opts.threads) p.integrator.threads = *run_opts.threads;
+        if (checkpoint_every) p.run.checkpoint_every = *checkpoint_every;
+        if (!force) cli::check_resources(p, out, resume->file.string());
+      } else {
+        if (run_opts.scene.empty())
+          throw SceneError(
+              "run: a SCENE is needed (a TOML file or a built-in name: wetcloth scenes), or "
+              "--resume DIR");
+        if (exports) run_opts.sets.push_back("run.export=\"" + *exports + "\"");
+        if (up) run_opts.sets.push_back("run.up=" + *up);
+        if (checkpoint_every)
+          run_opts.sets.push_back("run.checkpoint_every=" + format_number(*checkpoint_every));
+        p = run_opts.load();
+        out = out_dir.empty() ? fs::path("out") / cli::folder_name(p.name) : fs::path(out_dir);
+        if (!force) cli::check_resources(p, out, run_opts.scene);
+        cli::make_output_folder(out);
+      }
       const bool progress = !quiet && isatty(STDERR_FILENO);
       cli::install_stop_handlers();
-      const auto r = cli::run_scene(p, out, progress);
+      const auto r = cli::run_scene(p, out, progress, resume ? &*resume : nullptr);
       if (r.code > 128) {
-        std::fprintf(stderr, "wetcloth: %s\nresults so far (whole): %s\n", r.message.c_str(),
-                     out.c_str());
+        std::fprintf(stderr,
+                     "wetcloth: %s\nresults so far (whole): %s; `wetcloth run --resume %s` "
+                     "continues the run\n",
+                     r.message.c_str(), out.c_str(), out.c_str());
         return r.code;
       }
       if (r.code != cli::kOk) {

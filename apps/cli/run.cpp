@@ -12,13 +12,18 @@
 #include <cmath>
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <limits>
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <optional>
+#include <sstream>
 #include <thread>
 
 #include "common/scene_options.hpp"
 #include "wetcloth/caches.hpp"
+#include "wetcloth/checkpoint.hpp"
 #include "wetcloth/output.hpp"
 #include "wetcloth/scene.hpp"
 
@@ -90,8 +95,10 @@ class OutputLock {
 void clear_outputs(const fs::path& out) {
   std::error_code ec;
   for (const char* f : {"metrics.csv", "summary.json", "scene.toml", "obstacles.obj", "cloth.usda",
-                        "cloth.pc2", "cloth_rest.obj", "cloth.pvd"})
+                        "cloth.pc2", "cloth_rest.obj", "cloth.pvd", "checkpoint.state"})
     if (fs::remove(out / f, ec); ec) throw_output_error(out / f, "cannot remove", ec.value());
+  if (fs::remove_all(out / ".cloth.usda.samples", ec); ec)
+    throw_output_error(out / ".cloth.usda.samples", "cannot remove", ec.value());
   // The frames and the VTK caches' frames.
   for (const auto& [folder, extension] : {std::pair{"frames", ".obj"}, {"vtk", ".vtp"}}) {
     const fs::path dir = out / folder;
@@ -102,6 +109,36 @@ void clear_outputs(const fs::path& out) {
           throw_output_error(it->path(), "cannot remove", rec.value());
     if (ec) throw_output_error(dir, "cannot list", ec.value());
   }
+}
+
+// Removes the frames (frames/frame_NNNNN.obj, vtk/cloth_NNNNN.vtp) from
+// `first` on: a resumed run writes them again.
+void remove_frames_from(const fs::path& out, long long first) {
+  std::error_code ec;
+  for (const auto& [folder, prefix] : {std::pair{"frames", "frame_"}, {"vtk", "cloth_"}}) {
+    const fs::path dir = out / folder;
+    if (!fs::is_directory(dir, ec)) continue;
+    for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+      const std::string name = it->path().filename().string();
+      const std::string p = prefix;
+      if (name.rfind(p, 0) != 0 || name.size() < p.size() + 5) continue;
+      char* endp = nullptr;
+      const long long index = std::strtoll(name.c_str() + p.size(), &endp, 10);
+      if (endp == name.c_str() + p.size() || index < first) continue;
+      if (std::string(endp) != (std::string(folder) == "frames" ? ".obj" : ".vtp")) continue;
+      if (std::error_code rec; fs::remove(it->path(), rec), rec)
+        throw_output_error(it->path(), "cannot remove", rec.value());
+    }
+    if (ec) throw_output_error(dir, "cannot list", ec.value());
+  }
+}
+
+std::string read_file(const fs::path& path) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) throw SceneError(path.string() + ": cannot read");
+  std::ostringstream buf;
+  buf << f.rdbuf();
+  return buf.str();
 }
 
 // The first metric that is not a number, or empty: such a row is not written.
@@ -213,27 +250,196 @@ void install_stop_handlers() {
 
 int stop_signal() { return g_stop.load(); }
 
-RunResult run_scene(const Params& p, const fs::path& out, bool progress) {
+bool run_ended_whole(const fs::path& dir) {
+  std::error_code ec;
+  if (fs::exists(dir / "checkpoint.state", ec)) return false;
+  std::ifstream f(dir / "summary.json");
+  if (!f) return false;
+  const auto j = nlohmann::json::parse(f, nullptr, false);
+  return !j.is_discarded() && j.is_object() && j.value("status", "") == "ok";
+}
+
+ResumePoint load_resume_point(const fs::path& dir) {
+  ResumePoint rp;
+  rp.file = dir / "checkpoint.state";
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec))
+    throw SceneError("--resume " + dir.string() + ": not a folder of a run");
+  if (!fs::exists(rp.file, ec))
+    throw SceneError(rp.file.string() +
+                     ": no checkpoint to resume from (a run writes one every "
+                     "--checkpoint-every S of simulated time, and when SIGINT or SIGTERM stops "
+                     "it; a run that ended whole removes it)");
+  Checkpoint c = load_checkpoint(rp.file);
+  if (c.run.empty())
+    throw SceneError(rp.file.string() +
+                     ": a state without its run's record (saved by the viewer, Python's "
+                     "Simulation.save or an older wetcloth): `run --resume` continues only a "
+                     "checkpoint that `wetcloth run` wrote");
+  // The folder's scene.toml is the scene its outputs came from.
+  const fs::path scene = dir / "scene.toml";
+  if (!fs::exists(scene, ec))
+    throw SceneError(scene.string() + ": missing, so the outputs of " + dir.string() +
+                     " cannot be matched with " + rp.file.string());
+  // What --resume may set (the step's threads, the checkpoints' interval)
+  // changes no result: not compared.
+  const Params folder = load_scene(scene.string());
+  Params compared = c.params;
+  compared.integrator.threads = folder.integrator.threads;
+  compared.run.checkpoint_every = folder.run.checkpoint_every;
+  const std::string mine = to_toml(compared), theirs = to_toml(folder);
+  if (mine != theirs) {
+    std::istringstream a(mine), b(theirs);
+    std::string la, lb;
+    while (std::getline(a, la) && std::getline(b, lb) && la == lb) {
+    }
+    throw SceneError(rp.file.string() + ": a checkpoint of another scene than " + scene.string() +
+                     " (the checkpoint's `" + la + "`, scene.toml's `" + lb + "`)");
+  }
+  rp.params = std::move(c.params);
+  rp.state = std::move(c.state);
+  rp.record = std::move(c.run);
+  return rp;
+}
+
+namespace {
+
+// Where the outputs stand after the last frame that a resumed run keeps.
+struct OutputsAt {
+  long long next_frame = 0;     // the frame a resumed run writes first
+  long long metrics_bytes = 0;  // metrics.csv's header and rows up to it
+  CachePosition cache;
+  bool any_row = false;
+  nlohmann::json first, final;  // metrics of the first and last rows kept
+  double time_to_5cm_s = -1, frame_peak_deficit_pa = 0;
+};
+
+nlohmann::json record_json(const OutputsAt& at, long long substeps, double wall) {
+  return {{"next_frame", at.next_frame},
+          {"metrics_bytes", at.metrics_bytes},
+          {"cache",
+           {{"frames", at.cache.frames},
+            {"last_code", at.cache.last_code},
+            {"samples_bytes", at.cache.samples_bytes}}},
+          {"any_row", at.any_row},
+          {"first", at.first},
+          {"final", at.final},
+          {"time_to_5cm_s", at.time_to_5cm_s},
+          {"frame_peak_deficit_pa", at.frame_peak_deficit_pa},
+          {"substeps", substeps},
+          {"wall_seconds", wall}};
+}
+
+OutputsAt record_outputs(const ResumePoint& rp, long long& substeps, double& wall) {
+  try {
+    const auto j = nlohmann::json::parse(rp.record);
+    OutputsAt at;
+    at.next_frame = j.at("next_frame").get<long long>();
+    at.metrics_bytes = j.at("metrics_bytes").get<long long>();
+    at.cache.frames = j.at("cache").at("frames").get<long long>();
+    at.cache.last_code = j.at("cache").at("last_code").get<double>();
+    at.cache.samples_bytes = j.at("cache").at("samples_bytes").get<std::vector<long long>>();
+    at.any_row = j.at("any_row").get<bool>();
+    at.first = j.at("first");
+    at.final = j.at("final");
+    at.time_to_5cm_s = j.at("time_to_5cm_s").get<double>();
+    at.frame_peak_deficit_pa = j.at("frame_peak_deficit_pa").get<double>();
+    substeps = j.at("substeps").get<long long>();
+    wall = j.at("wall_seconds").get<double>();
+    if (at.next_frame < 0 || at.metrics_bytes < 0 ||
+        (!at.cache.samples_bytes.empty() && at.cache.frames != at.next_frame))
+      throw std::invalid_argument("its frames do not agree");
+    return at;
+  } catch (const std::exception& e) {
+    throw SceneError(rp.file.string() + ": its run record is damaged (" + e.what() + ")");
+  }
+}
+
+// The times of the rows of metrics.csv a resumed run keeps (its first
+// `bytes`: the header and `rows` whole rows); SceneError where the file does
+// not hold them.
+std::vector<double> kept_row_times(const fs::path& path, long long bytes, long long rows,
+                                   const fs::path& checkpoint) {
+  std::error_code ec;
+  if (!fs::exists(path, ec))
+    throw SceneError(path.string() + ": missing; " + checkpoint.string() + " continues it");
+  const std::string text = read_file(path);
+  const std::string why = path.string() + ": not the metrics.csv " + checkpoint.string() +
+                          " continues (" + std::to_string(rows) + " rows, " +
+                          std::to_string(bytes) + " bytes): ";
+  if (static_cast<long long>(text.size()) < bytes)
+    throw SceneError(why + "only " + std::to_string(text.size()) + " bytes");
+  const std::string kept = text.substr(0, static_cast<std::size_t>(bytes));
+  const std::string header = metrics_csv_header();
+  if (kept.rfind(header, 0) != 0) throw SceneError(why + "another header");
+  std::vector<double> times;
+  for (std::size_t at = header.size(); at < kept.size();) {
+    const std::size_t end = kept.find('\n', at);
+    if (end == std::string::npos) throw SceneError(why + "a row cut short");
+    times.push_back(std::strtod(kept.c_str() + at, nullptr));
+    at = end + 1;
+  }
+  if (static_cast<long long>(times.size()) != rows)
+    throw SceneError(why + std::to_string(times.size()) + " rows");
+  return times;
+}
+
+}  // namespace
+
+RunResult run_scene(const Params& p, const fs::path& out, bool progress,
+                    const ResumePoint* resume) {
   RunResult r;
   Simulation sim(p);
+  if (resume) try {
+      sim.restore(resume->state);
+    } catch (const std::invalid_argument& e) {
+      throw SceneError(resume->file.string() + ": " + e.what());
+    }
   if (std::error_code ec; fs::create_directories(out, ec), ec)
     throw_output_error(out, "cannot make the folder", ec.value());
   r.started = true;
   const OutputLock lock(out);
-  clear_outputs(out);
-  if (p.run.meshes)
-    if (std::error_code ec; fs::create_directories(out / "frames", ec), ec)
-      throw_output_error(out / "frames", "cannot make the folder", ec.value());
-  write_file_atomic(out / "scene.toml", "# resolved by wetcloth " WETCLOTH_VERSION
-                                        "; `wetcloth run` this file to reproduce the run\n" +
-                                            to_toml(p));
   const UpAxis up = p.run.up;
-  write_file_atomic(out / "obstacles.obj", obstacles_obj(sim.model(), up));
   const ExportFormats formats = parse_export_formats(p.run.exports);
   std::optional<CacheWriter> caches;
-  if (formats.any()) caches.emplace(out, sim, formats, up, p.run.fps);
+  std::optional<MetricsFile> metrics;
+  OutputsAt at;  // where the outputs stand after the last whole frame
+  long long substeps_before = 0;
+  double wall_before = 0;
+  if (!resume) {
+    clear_outputs(out);
+    if (p.run.meshes)
+      if (std::error_code ec; fs::create_directories(out / "frames", ec), ec)
+        throw_output_error(out / "frames", "cannot make the folder", ec.value());
+    write_file_atomic(out / "scene.toml", "# resolved by wetcloth " WETCLOTH_VERSION
+                                          "; `wetcloth run` this file to reproduce the run\n" +
+                                              to_toml(p));
+    write_file_atomic(out / "obstacles.obj", obstacles_obj(sim.model(), up));
+    if (formats.any()) caches.emplace(out, sim, formats, up, p.run.fps);
+    metrics.emplace(out / "metrics.csv");
+    at.metrics_bytes = metrics->size();
+    if (caches) at.cache = caches->position(false);
+  } else {
+    at = record_outputs(*resume, substeps_before, wall_before);
+    const std::vector<double> times =
+        kept_row_times(out / "metrics.csv", at.metrics_bytes, at.next_frame, resume->file);
+    if (formats.any()) {
+      at.cache.frames = at.next_frame;  // a cache has a frame a row
+      caches.emplace(out, sim, formats, up, p.run.fps, at.cache, times);
+    }
+    metrics.emplace(out / "metrics.csv", at.metrics_bytes);
+    // The folder as it stood at the checkpoint: nothing after it, no summary yet.
+    if (std::error_code ec; fs::remove(out / "summary.json", ec), ec)
+      throw_output_error(out / "summary.json", "cannot remove", ec.value());
+    remove_frames_from(out, at.next_frame);
+    if (p.run.meshes)
+      if (std::error_code ec; fs::create_directories(out / "frames", ec), ec)
+        throw_output_error(out / "frames", "cannot make the folder", ec.value());
+    r.time_to_5cm_s = at.time_to_5cm_s;
+    r.frame_peak_deficit_pa = at.frame_peak_deficit_pa;
+  }
+  nlohmann::json first_json = at.first, final_json = at.final;
 
-  MetricsFile metrics(out / "metrics.csv");
   const long long frames = last_frame_index(p.run.duration, p.run.fps);
   const auto start = std::chrono::steady_clock::now();
   auto wall = [&] {
@@ -243,14 +449,31 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress) {
   // pins) sits at its height from the start.
   const bool pulled = sim.model().measures_a_pull();
   const double dt = p.integrator.dt;
+  const auto target_step = [&](long long f) {
+    return static_cast<long long>(std::llround(frame_time(f, p.run.duration, p.run.fps) / dt));
+  };
+  // The checkpoint: this state, and the outputs as they stood after the last
+  // whole frame (a row at a step between two frames is written again).
+  const fs::path checkpoint_file = out / "checkpoint.state";
+  const auto save = [&] {
+    metrics->sync();
+    if (caches) caches->position(true);  // on the disk
+    const nlohmann::json rec =
+        record_json(at, substeps_before + sim.stats().substeps, wall_before + wall());
+    save_checkpoint(checkpoint_file, p, sim.state(), rec.dump());
+  };
+  const double every = p.run.checkpoint_every;
+  const auto next_checkpoint_after = [&](double t) {
+    return every > 0 ? (std::floor(t / every + 1e-9) + 1) * every
+                     : std::numeric_limits<double>::infinity();
+  };
+  double next_checkpoint = next_checkpoint_after(sim.state().time);
   long long written_at_step = -1;  // the step of the last row written
-  bool any_row = false;
-  for (long long f = 0; f <= frames; ++f) {
-    const double t = frame_time(f, p.run.duration, p.run.fps);
+  for (long long f = at.next_frame; f <= frames; ++f) {
     // Simulation::advance_to, a step at a time: a signal stops the run at
     // the end of the step it arrived in.
     bool ok = true;
-    const auto target = static_cast<long long>(std::llround(t / dt));
+    const long long target = target_step(f);
     while (sim.state().steps < target && stop_signal() == 0) {
       sim.step();
       if (!sim.blow_up_reason().empty()) break;
@@ -259,6 +482,7 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress) {
     const int sig = stop_signal();
     if (sig != 0 && sim.state().steps == written_at_step) {  // the last row is this state's
       r.code = 128 + sig;
+      save();
       break;
     }
     const Metrics m = sim.metrics();
@@ -272,11 +496,14 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress) {
               : sim.blow_up_reason());
       break;
     }
-    metrics.append(m);
+    metrics->append(m);
     written_at_step = sim.state().steps;
-    if (!any_row) r.first = m;
-    any_row = true;
+    if (first_json.is_null()) {
+      first_json = metrics_json(m);
+      r.first = m;
+    }
     r.final = m;
+    final_json = metrics_json(m);
     r.frame_peak_deficit_pa = std::max(r.frame_peak_deficit_pa, p.air.p_atm - m.inner_pressure_pa);
     if (p.run.meshes) {
       char name[32];
@@ -285,24 +512,50 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress) {
     }
     if (caches) caches->add_frame(sim);
     if (pulled && r.time_to_5cm_s < 0 && m.handle_height_m >= 0.05) r.time_to_5cm_s = m.time_s;
-    if (progress) print_progress(sim.state().time, p.run.duration, wall());
+    if (progress) print_progress(sim.state().time, p.run.duration, wall_before + wall());
     if (!ok) {
       r.code = kBlowUp;
       r.message = sim.blow_up_reason();
       break;
     }
+    if (sim.state().steps == target) {  // a whole frame: a resumed run goes on after it
+      at.next_frame = f + 1;
+      at.metrics_bytes = metrics->size();
+      if (caches) at.cache = caches->position(false);
+      at.any_row = true;
+      at.first = first_json;
+      at.final = final_json;
+      at.time_to_5cm_s = r.time_to_5cm_s;
+      at.frame_peak_deficit_pa = r.frame_peak_deficit_pa;
+    }
     if (sig != 0) {
       r.code = 128 + sig;
+      save();
       break;
+    }
+    // Every run.checkpoint_every, at a whole frame with steps to the next
+    // (a row right after a restore is the next step's).
+    if (sim.state().time >= next_checkpoint - 1e-9 * every && f < frames &&
+        target_step(f + 1) > target) {
+      save();
+      next_checkpoint = next_checkpoint_after(sim.state().time);
     }
   }
   if (progress) std::fprintf(stderr, "\n");
-  metrics.close();
-  if (caches) caches->finish();
-  if (!any_row) r.first = r.final = sim.metrics();
+  metrics->close();
+  if (caches) caches->finish(r.code != kOk);  // a run that may resume keeps its USD samples
+  if (first_json.is_null()) {
+    r.first = r.final = sim.metrics();
+    first_json = final_json = metrics_json(r.first);
+  } else if (written_at_step < 0) {
+    r.final = sim.metrics();  // a resumed run that had no frame left: the state's
+  }
+  if (r.code == kOk)  // whole: nothing to resume
+    if (std::error_code ec; fs::remove(checkpoint_file, ec), ec)
+      throw_output_error(checkpoint_file, "cannot remove", ec.value());
   r.peak_deficit_pa = sim.state().peak_deficit;
   r.steps = sim.state().steps;
-  r.wall_seconds = wall();
+  r.wall_seconds = wall_before + wall();
   r.simulated_seconds = sim.state().time;
   const bool interrupted = r.code > 128;
   if (interrupted)
@@ -317,7 +570,8 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress) {
   if (interrupted) s["signal"] = signal_name(r.code - 128);
   if (r.code != kOk) s["message"] = r.message;
   s["steps"] = r.steps;
-  s["substeps"] = sim.stats().substeps;  // more than steps where implicit Euler halved some
+  // More than steps where implicit Euler halved some.
+  s["substeps"] = substeps_before + sim.stats().substeps;
   s["particles"] = sim.model().n;
   // The count asked for (0: chosen as it ran), always a number; beside it how
   // the choice went, or the count used (at most one thread per 1024 particles).
@@ -331,8 +585,8 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress) {
   s["wall_seconds"] = r.wall_seconds;
   s["realtime_factor"] = r.wall_seconds > 0 ? sim.state().time / r.wall_seconds : 0.0;
   s["peak_pressure_deficit_pa"] = r.peak_deficit_pa;
-  if (!non_finite_metric(r.final).empty()) r.final = r.first;  // JSON has no inf
-  s["final"] = metrics_json(r.final);
+  s["final"] = final_json;  // the last row's (JSON has no inf: a row never has one)
+  if (resume) s["resumed_at_s"] = resume->state.time;
   write_file_atomic(out / "summary.json", s.dump(2) + "\n");
   return r;
 }

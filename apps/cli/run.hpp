@@ -45,9 +45,31 @@ ResourceEstimate estimate_resources(const Params& p);
 void check_resources(const Params& p, const std::filesystem::path& out, const std::string& source);
 int stop_signal();  // the signal that asked to stop, or 0
 
+// What `run --resume DIR` continues from: DIR/checkpoint.state, a checkpoint
+// written by run_scene (its scene, its state, and where the outputs stood).
+struct ResumePoint {
+  std::filesystem::path file;  // DIR/checkpoint.state
+  Params params;               // the checkpoint's scene
+  State state;
+  std::string record;  // where the outputs stood (JSON)
+};
+// Throws SceneError naming the file and what is wrong: no checkpoint, not a
+// checkpoint, another format, damaged, one without a run's record, or one of
+// another scene than DIR/scene.toml.
+ResumePoint load_resume_point(const std::filesystem::path& dir);
+// DIR holds a run that ended whole (summary.json "ok", no checkpoint): a
+// resume has nothing to do.
+bool run_ended_whole(const std::filesystem::path& dir);
+
 // Runs P into OUT (made if missing, locked while the run writes: a second run
 // into it throws SceneError). Throws OutputError where a file cannot be written.
-RunResult run_scene(const Params& p, const std::filesystem::path& out, bool progress);
+// With run.checkpoint_every, and when a signal stops it, writes
+// OUT/checkpoint.state (removed when the run ends whole). With `resume` (P its
+// scene, but for the step's threads and run.checkpoint_every), continues the
+// run OUT holds from that checkpoint: metrics.csv and the caches cut back to
+// it, the frames after it removed, with the same bits as a run never stopped.
+RunResult run_scene(const Params& p, const std::filesystem::path& out, bool progress,
+                    const ResumePoint* resume = nullptr);
 
 // The override that shares the cores between `jobs` runs at once, put first
 // in `sets` unless the user chose the step's threads (more threads than cores

@@ -9,8 +9,9 @@
 //                             primvars, UVs (primvars:st), the obstacles as static
 //                             meshes; up axis, metres and frames per second in the
 //                             stage's metadata. Written when the run ends (the
-//                             time samples are spooled in temporary files, which
-//                             the system removes however the process ends).
+//                             time samples are spooled, a file an attribute, in
+//                             .cloth.usda.samples/, kept until the run is whole
+//                             so that a resumed run writes them all).
 //   cloth.pc2, cloth_rest.obj Blender's Mesh Cache modifier, Houdini; one sample a
 //                             frame. The header's count follows every frame, so
 //                             a run cut short leaves a readable cache.
@@ -48,21 +49,42 @@ struct CacheFrame {
 };
 CacheFrame cache_frame(const Simulation& sim, UpAxis up);
 
+// Where the caches stand after some frames: what a checkpoint keeps so that a
+// resumed run continues them (CacheWriter::resume).
+struct CachePosition {
+  long long frames = 0;
+  double last_code = 0;                  // USD time code of the last frame
+  std::vector<long long> samples_bytes;  // each USD attribute's spooled samples
+};
+
 class CacheWriter {
  public:
-  // Opens the caches of `formats` in `dir` for the simulation's cloth.
+  // Opens the caches of `formats` in `dir` for the simulation's cloth (at its
+  // rest state: cloth_rest.obj is written from it).
   CacheWriter(const std::filesystem::path& dir, const Simulation& sim, ExportFormats formats,
               UpAxis up, double fps);
+  // Continues the caches a run left in `dir` at `at` (a checkpoint's): the PC2
+  // cut back to its frames, the USD samples to theirs, cloth.pvd rewritten
+  // with `frame_times` (one a frame kept). OutputError where a cache is
+  // missing or shorter than `at`.
+  CacheWriter(const std::filesystem::path& dir, const Simulation& sim, ExportFormats formats,
+              UpAxis up, double fps, const CachePosition& at,
+              const std::vector<double>& frame_times);
   ~CacheWriter();
   CacheWriter(const CacheWriter&) = delete;
   CacheWriter& operator=(const CacheWriter&) = delete;
 
   void add_frame(const Simulation& sim);
+  // The frames so far, flushed (and with `durable`, on the disk).
+  CachePosition position(bool durable);
   // Writes what is written at the end (cloth.usda); further frames are refused.
-  void finish();
+  // The USD samples are removed unless `keep_samples` (a run that may resume).
+  void finish(bool keep_samples = false);
 
  private:
-  struct Spool;  // a time-sampled USD attribute's samples, in a temporary file
+  struct Spool;  // a time-sampled USD attribute's samples, in a file of their own
+  void open_usd_samples(const CachePosition* at);
+  void write_pvd();
   std::filesystem::path dir_;
   ExportFormats formats_;
   UpAxis up_;

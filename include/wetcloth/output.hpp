@@ -24,7 +24,28 @@ struct OutputError : std::runtime_error {
 
 // Writes PATH.tmp, then renames it to PATH: a reader sees the old file or the
 // new one, whole. On any failure the .tmp is removed and OutputError thrown.
-void write_file_atomic(const std::filesystem::path& path, const std::string& contents);
+// Durable: the file is on the disk (fsync) before the rename, and the rename
+// too (the folder's fsync) before it returns.
+enum class Durability { kCached, kSynced };
+void write_file_atomic(const std::filesystem::path& path, const std::string& contents,
+                       Durability durability = Durability::kCached);
+
+// Makes a file's bytes, and its folder's entry, durable (fsync); OutputError
+// naming it where that fails.
+void sync_file(const std::filesystem::path& path);
+
+// A temporary file being written, known to remove_temporary_files for as long
+// as this lives (write_file_atomic takes one itself).
+class TemporaryFile {
+ public:
+  explicit TemporaryFile(const std::string& path);
+  ~TemporaryFile();
+  TemporaryFile(const TemporaryFile&) = delete;
+  TemporaryFile& operator=(const TemporaryFile&) = delete;
+
+ private:
+  int slot_ = -1;
+};
 
 // Removes the temporary files being written at this moment (by any thread).
 // Async-signal-safe: a signal handler that ends the process calls it.
@@ -42,11 +63,16 @@ bool write_fault_injected();
 class MetricsFile {
  public:
   explicit MetricsFile(const std::filesystem::path& path);
+  // Continues an existing metrics.csv: cut back to its first `keep_bytes`
+  // (a header and whole rows), then appended to.
+  MetricsFile(const std::filesystem::path& path, long long keep_bytes);
   ~MetricsFile();
   MetricsFile(const MetricsFile&) = delete;
   MetricsFile& operator=(const MetricsFile&) = delete;
   void append(const Metrics& m);
   void close();  // flushed to the disk (fsync); the destructor closes without
+  void sync();   // the rows so far on the disk (fsync)
+  long long size() const { return size_; }
 
  private:
   std::filesystem::path path_;

@@ -180,11 +180,12 @@ struct Params {
   } integrator;
 
   struct Run {
-    double duration = 2.0;  // s
-    double fps = 30;        // output frames per simulated second
-    bool meshes = true;     // write frames/*.obj
-    std::string exports;    // run.export: caches to write, "usd,pc2,vtk" or any of them
-    UpAxis up = UpAxis::Z;  // the up axis of the files written
+    double duration = 2.0;        // s
+    double fps = 30;              // output frames per simulated second
+    bool meshes = true;           // write frames/*.obj
+    std::string exports;          // run.export: caches to write, "usd,pc2,vtk" or any of them
+    UpAxis up = UpAxis::Z;        // the up axis of the files written
+    double checkpoint_every = 0;  // s of simulated time between checkpoints; 0: none
   } run;
 
   std::map<std::string, HandleParams> handles;  // [handle.NAME]

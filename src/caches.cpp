@@ -108,12 +108,10 @@ std::string flat(const std::vector<Vec3>& v) {  // VTK: x y z x y z ...
   return o;
 }
 
-std::vector<Vec3> uvs(const Model& m) {  // (u, v, 0): the grid's own coordinates
+std::vector<Vec3> uvs(const Model& m) {  // (u, v, 0): the grid's own coordinates, or the mesh's
   std::vector<Vec3> uv;
   uv.reserve(m.n);
-  for (int j = 0; j < m.nv; ++j)
-    for (int i = 0; i < m.nu; ++i)
-      uv.emplace_back(double(i) / (m.nu - 1), double(j) / (m.nv - 1), 0.0);
+  for (const auto& t : m.uv) uv.emplace_back(t[0], t[1], 0.0);
   return uv;
 }
 

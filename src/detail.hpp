@@ -10,6 +10,22 @@
 #include "wetcloth/simulation.hpp"
 #include "workspace.hpp"
 
+namespace wetcloth {
+
+struct TriangleMesh;
+// mesh_cloth.cpp: a cloth from cloth.mesh (Model::grid false): particles,
+// areas, springs, neighbour lists; where its vertices start (the file's
+// bounding box's centre at cloth.center, then orientation and tilt); a
+// handle's particles, placed by the texture coordinates.
+void build_mesh_cloth(Model& m, const Params& p);
+std::vector<Vec3> mesh_cloth_positions(const Params& p, const TriangleMesh& mesh);
+std::vector<int> mesh_handle_particles(const Model& m, const HandleParams& h);
+// A scene's cloth.mesh read and placed: throws SceneError naming the scene
+// file (source), the mesh file and what is wrong with it.
+void check_cloth_mesh(const Params& p, const std::string& source);
+
+}  // namespace wetcloth
+
 namespace wetcloth::detail {
 
 // A simulation's scratch, for the library's stages, its tests and benchmarks.
@@ -172,6 +188,11 @@ double chain_stiffness(const Params& p);
 // "structural 200 N/m, shear 20 N/m, bending 20 N/m".
 std::string step_limit_springs_text(const Params& p);
 void add_spring_forces(const Model& m, const State& s, Workspace& w, bool with_damping);
+// The general kernels of a mesh cloth (mesh_cloth.cpp), where the grid has its stencil's.
+void add_spring_forces_mesh(const Model& m, const State& s, Workspace& w, bool damped);
+void apply_spring_damping_mesh(const Model& m, State& s, double h);
+void compute_normals_mesh(const Model& m, const double* X, Vec3Array& normal);
+void contact_border_mesh(const Model& m, const State& s, Workspace& w);
 void apply_spring_damping(const Model& m, State& s, Workspace& w, double h);
 void add_gravity(const Model& m, Vec3Array& f);
 void add_viscous_damping(const Model& m, const State& s, Vec3Array& f);

@@ -110,47 +110,74 @@ void multiply(const Model& m, const State& s, Workspace& w, Vector in, Vector ou
   const Columns xc = columns(m, w, in), yc = columns(m, w, out);
   const double *const x0 = xc.c[0], *const x1 = xc.c[1], *const x2 = xc.c[2];
   double *const y0 = yc.c[0], *const y1 = yc.c[1], *const y2 = yc.c[2];
-  for_each_row_block(m, [&](int j0, int j1, int) {
-    const int a0 = j0 * m.nu, a1 = j1 * m.nu;
-    {
-      const double *d0 = diagonal_field(m, w, 0), *d1 = diagonal_field(m, w, 1),
-                   *d2 = diagonal_field(m, w, 2), *d3 = diagonal_field(m, w, 3),
-                   *d4 = diagonal_field(m, w, 4), *d5 = diagonal_field(m, w, 5);
-#pragma GCC ivdep
-      for (int a = a0; a < a1; ++a) {
-        y0[a] = d0[a] * x0[a] + d3[a] * x1[a] + d4[a] * x2[a];
-        y1[a] = d3[a] * x0[a] + d1[a] * x1[a] + d5[a] * x2[a];
-        y2[a] = d4[a] * x0[a] + d5[a] * x1[a] + d2[a] * x2[a];
-      }
+  if (!m.grid) {  // a mesh cloth: the diagonal blocks, then each spring's at both ends
+    const double *d0 = diagonal_field(m, w, 0), *d1 = diagonal_field(m, w, 1),
+                 *d2 = diagonal_field(m, w, 2), *d3 = diagonal_field(m, w, 3),
+                 *d4 = diagonal_field(m, w, 4), *d5 = diagonal_field(m, w, 5);
+    for (int a = 0; a < m.n; ++a) {
+      y0[a] = d0[a] * x0[a] + d3[a] * x1[a] + d4[a] * x2[a];
+      y1[a] = d3[a] * x0[a] + d1[a] * x1[a] + d5[a] * x2[a];
+      y2[a] = d4[a] * x0[a] + d5[a] * x1[a] + d2[a] * x2[a];
     }
-    for (int e = 0; e < 8; ++e) {
-      // Edge e's block sits at its lower end: particle a's forward edge (to
-      // a + off) at a, its backward edge (from a - off) at a - off.
-      const int off = m.stencil[e].di + m.stencil[e].dj * m.nu;
-      const float *s0 = edge_field(m, w, e, 0), *s1 = edge_field(m, w, e, 1),
-                  *s2 = edge_field(m, w, e, 2), *beta = edge_field(m, w, e, 3);
-      const float *t0 = s0 - off, *t1 = s1 - off, *t2 = s2 - off, *tb = beta - off;
-      const double *n0 = x0 + off, *n1 = x1 + off, *n2 = x2 + off;
-      const double *m0 = x0 - off, *m1 = x1 - off, *m2 = x2 - off;
-#pragma GCC ivdep
-      for (int a = a0; a < a1; ++a) {
-        const double sx = s0[a] * n0[a] + s1[a] * n1[a] + s2[a] * n2[a];
-        const double tx = t0[a] * m0[a] + t1[a] * m1[a] + t2[a] * m2[a];
-        const double f0 = y0[a] - (s0[a] * sx + beta[a] * n0[a]);
-        const double f1 = y1[a] - (s1[a] * sx + beta[a] * n1[a]);
-        const double f2 = y2[a] - (s2[a] * sx + beta[a] * n2[a]);
-        y0[a] = f0 - (t0[a] * tx + tb[a] * m0[a]);
-        y1[a] = f1 - (t1[a] * tx + tb[a] * m1[a]);
-        y2[a] = f2 - (t2[a] * tx + tb[a] * m2[a]);
+    const float* block = w.mesh_blocks.data();
+    for (const SpringSet* set : {&m.structural, &m.shear, &m.bending})
+      for (std::size_t e = 0; e < set->size(); ++e, block += 4) {
+        const double sx = block[0], sy = block[1], sz = block[2], beta = block[3];
+        for (const auto& [a, b] :
+             {std::pair{set->a[e], set->b[e]}, std::pair{set->b[e], set->a[e]}}) {
+          const double t = sx * x0[b] + sy * x1[b] + sz * x2[b];
+          y0[a] -= sx * t + beta * x0[b];
+          y1[a] -= sy * t + beta * x1[b];
+          y2[a] -= sz * t + beta * x2[b];
+        }
       }
+    for (const int a : w.fixed_particles) {
+      y0[a] = x0[a];
+      y1[a] = x1[a];
+      y2[a] = x2[a];
     }
-    for (const int a : w.fixed_particles)
-      if (a >= a0 && a < a1) {
-        y0[a] = x0[a];
-        y1[a] = x1[a];
-        y2[a] = x2[a];
+  } else
+    for_each_row_block(m, [&](int j0, int j1, int) {
+      const int a0 = j0 * m.nu, a1 = j1 * m.nu;
+      {
+        const double *d0 = diagonal_field(m, w, 0), *d1 = diagonal_field(m, w, 1),
+                     *d2 = diagonal_field(m, w, 2), *d3 = diagonal_field(m, w, 3),
+                     *d4 = diagonal_field(m, w, 4), *d5 = diagonal_field(m, w, 5);
+#pragma GCC ivdep
+        for (int a = a0; a < a1; ++a) {
+          y0[a] = d0[a] * x0[a] + d3[a] * x1[a] + d4[a] * x2[a];
+          y1[a] = d3[a] * x0[a] + d1[a] * x1[a] + d5[a] * x2[a];
+          y2[a] = d4[a] * x0[a] + d5[a] * x1[a] + d2[a] * x2[a];
+        }
       }
-  });
+      for (int e = 0; e < 8; ++e) {
+        // Edge e's block sits at its lower end: particle a's forward edge (to
+        // a + off) at a, its backward edge (from a - off) at a - off.
+        const int off = m.stencil[e].di + m.stencil[e].dj * m.nu;
+        const float *s0 = edge_field(m, w, e, 0), *s1 = edge_field(m, w, e, 1),
+                    *s2 = edge_field(m, w, e, 2), *beta = edge_field(m, w, e, 3);
+        const float *t0 = s0 - off, *t1 = s1 - off, *t2 = s2 - off, *tb = beta - off;
+        const double *n0 = x0 + off, *n1 = x1 + off, *n2 = x2 + off;
+        const double *m0 = x0 - off, *m1 = x1 - off, *m2 = x2 - off;
+#pragma GCC ivdep
+        for (int a = a0; a < a1; ++a) {
+          const double sx = s0[a] * n0[a] + s1[a] * n1[a] + s2[a] * n2[a];
+          const double tx = t0[a] * m0[a] + t1[a] * m1[a] + t2[a] * m2[a];
+          const double f0 = y0[a] - (s0[a] * sx + beta[a] * n0[a]);
+          const double f1 = y1[a] - (s1[a] * sx + beta[a] * n1[a]);
+          const double f2 = y2[a] - (s2[a] * sx + beta[a] * n2[a]);
+          y0[a] = f0 - (t0[a] * tx + tb[a] * m0[a]);
+          y1[a] = f1 - (t1[a] * tx + tb[a] * m1[a]);
+          y2[a] = f2 - (t2[a] * tx + tb[a] * m2[a]);
+        }
+      }
+      for (const int a : w.fixed_particles)
+        if (a >= a0 && a < a1) {
+          y0[a] = x0[a];
+          y1[a] = x1[a];
+          y2[a] = x2[a];
+        }
+    });
   for (const CollisionPair& c : w.collision_pairs)  // few: serial, in pair order
     for (const auto& [a, b] : {std::pair{c.i, c.j}, std::pair{c.j, c.i}}) {
       if (fixed(m, s, a)) continue;
@@ -250,38 +277,51 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
   w.cg_columns.resize(padded_size(m, kSolverColumns));
   const double* const X = s.x.column(0);  // x, y, z by component
   const int n = m.n, nu = m.nu;
-  parallel_for(m, m.nv, [&](int j) {
-    const int row = j * nu;
-    for (int e = 0; e < 8; ++e) {
-      const StencilEdge& st = m.stencil[e];
-      const int off = st.di + st.dj * nu;
-      // Particles of the row whose edge e stays on the grid (every forward edge has dj >= 0).
-      const int from = j + st.dj < m.nv ? std::max(0, -st.di) : nu;
-      const int to = j + st.dj < m.nv ? std::min(nu, nu - st.di) : nu;
-      float *s0 = edge_field(m, w, e, 0) + row, *s1 = edge_field(m, w, e, 1) + row,
-            *s2 = edge_field(m, w, e, 2) + row, *beta = edge_field(m, w, e, 3) + row;
-      for (float* f : {s0, s1, s2, beta}) {  // edges off the grid: zero blocks
-        std::fill(f, f + from, 0.0f);
-        std::fill(f + to, f + nu, 0.0f);
+  if (!m.grid) {  // a mesh cloth: each spring's block, in the springs' order
+    w.mesh_blocks.clear();
+    for (const SpringSet* set : {&m.structural, &m.shear, &m.bending})
+      for (std::size_t e = 0; e < set->size(); ++e) {
+        const Vec3 d = s.x[set->b[e]] - s.x[set->a[e]];
+        const double len = d.norm(), inv = len > 0 ? 1.0 / len : 0.0, k = set->k[e];
+        const double transverse = len > 0 ? std::max(0.0, 1.0 - set->rest[e] * inv) * k : 0.0;
+        const double q = std::sqrt(h * set->damping[e] + h2 * (k - transverse)) * inv;
+        for (const double f : {q * d.x(), q * d.y(), q * d.z(), h2 * transverse})
+          w.mesh_blocks.push_back(float(f));
       }
-      const double *x0 = X + row, *x1 = X + n + row, *x2 = X + 2 * n + row;
-      const double rest = st.rest, k = st.k, damping = st.damping;
+  }
+  if (m.grid)
+    parallel_for(m, m.nv, [&](int j) {
+      const int row = j * nu;
+      for (int e = 0; e < 8; ++e) {
+        const StencilEdge& st = m.stencil[e];
+        const int off = st.di + st.dj * nu;
+        // Particles of the row whose edge e stays on the grid (every forward edge has dj >= 0).
+        const int from = j + st.dj < m.nv ? std::max(0, -st.di) : nu;
+        const int to = j + st.dj < m.nv ? std::min(nu, nu - st.di) : nu;
+        float *s0 = edge_field(m, w, e, 0) + row, *s1 = edge_field(m, w, e, 1) + row,
+              *s2 = edge_field(m, w, e, 2) + row, *beta = edge_field(m, w, e, 3) + row;
+        for (float* f : {s0, s1, s2, beta}) {  // edges off the grid: zero blocks
+          std::fill(f, f + from, 0.0f);
+          std::fill(f + to, f + nu, 0.0f);
+        }
+        const double *x0 = X + row, *x1 = X + n + row, *x2 = X + 2 * n + row;
+        const double rest = st.rest, k = st.k, damping = st.damping;
 #pragma GCC ivdep
-      for (int i = from; i < to; ++i) {
-        const double dx = x0[i + off] - x0[i], dy = x1[i + off] - x1[i], dz = x2[i + off] - x2[i];
-        const double len = std::sqrt(dx * dx + dy * dy + dz * dz);
-        const double inv = len > 0 ? 1.0 / len : 0.0;  // a zero-length spring: a zero block
-        // K_e = k (u uᵀ + (1 - l0/|d|)(I - u uᵀ)), the transverse part only when
-        // stretched: the block is α u uᵀ + β I, α = h k_d + h² (k - transverse) ≥ 0.
-        const double transverse = len > 0 ? std::max(0.0, 1.0 - rest * inv) * k : 0.0;
-        const double q = std::sqrt(h * damping + h2 * (k - transverse)) * inv;
-        s0[i] = float(q * dx);
-        s1[i] = float(q * dy);
-        s2[i] = float(q * dz);
-        beta[i] = float(h2 * transverse);
+        for (int i = from; i < to; ++i) {
+          const double dx = x0[i + off] - x0[i], dy = x1[i + off] - x1[i], dz = x2[i + off] - x2[i];
+          const double len = std::sqrt(dx * dx + dy * dy + dz * dz);
+          const double inv = len > 0 ? 1.0 / len : 0.0;  // a zero-length spring: a zero block
+          // K_e = k (u uᵀ + (1 - l0/|d|)(I - u uᵀ)), the transverse part only when
+          // stretched: the block is α u uᵀ + β I, α = h k_d + h² (k - transverse) ≥ 0.
+          const double transverse = len > 0 ? std::max(0.0, 1.0 - rest * inv) * k : 0.0;
+          const double q = std::sqrt(h * damping + h2 * (k - transverse)) * inv;
+          s0[i] = float(q * dx);
+          s1[i] = float(q * dy);
+          s2[i] = float(q * dz);
+          beta[i] = float(h2 * transverse);
+        }
       }
-    }
-  });
+    });
   // Diagonal blocks: mass, viscous and collision damping, and every edge at
   // the particle, in the product's order and over the same blocks of rows (an
   // edge off the grid adds its zero block).
@@ -296,6 +336,21 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
     for (int a = a0; a < a1; ++a) {
       d0[a] = d1[a] = d2[a] = m.mass[a] + h * c * m.area[a] + (w.colliding[a] ? h * kf : 0.0);
       d3[a] = d4[a] = d5[a] = 0.0;
+    }
+    if (!m.grid) {
+      const float* block = w.mesh_blocks.data();
+      for (const SpringSet* set : {&m.structural, &m.shear, &m.bending})
+        for (std::size_t e = 0; e < set->size(); ++e, block += 4)
+          for (const int a : {set->a[e], set->b[e]}) {
+            const double x = block[0], y = block[1], z = block[2], b = block[3];
+            d0[a] += x * x + b;
+            d1[a] += y * y + b;
+            d2[a] += z * z + b;
+            d3[a] += x * y;
+            d4[a] += x * z;
+            d5[a] += y * z;
+          }
+      return;
     }
     for (int e = 0; e < 8; ++e)
       for (const int sign : {1, -1}) {
@@ -445,6 +500,13 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
 // flat cloth, springs at rest have no stiffness across it, and a force on a
 // few particles would move them at h F / m.
 double step_strain(const Model& m, const State& s, double h) {
+  if (!m.grid) {
+    double worst = 0;
+    for (const SpringSet* set : {&m.structural, &m.shear})
+      for (std::size_t e = 0; e < set->size(); ++e)
+        worst = std::max(worst, h * (s.v[set->b[e]] - s.v[set->a[e]]).norm() / set->rest[e]);
+    return worst;
+  }
   const double *const VX = s.v.column(0), *const VY = s.v.column(1), *const VZ = s.v.column(2);
   const int nu = m.nu;
   double worst = 0;

@@ -8,6 +8,7 @@
 #include <unordered_map>
 
 #include "detail.hpp"
+#include "mesh_io.hpp"
 
 namespace wetcloth {
 
@@ -113,7 +114,12 @@ void add_spring(SpringSet& s, const Model& m, int edge, int i0, int j0) {
   s.b.push_back(b);
   s.rest.push_back((m.rest_position[b] - m.rest_position[a]).norm());
   s.edge.push_back(static_cast<std::uint8_t>(edge));
+  s.k.push_back(m.stencil[edge].k);
+  s.damping.push_back(m.stencil[edge].damping);
 }
+
+// The grid: particles, areas, springs by stencil offset, triangles.
+void build_grid(Model& m, const Params& p);
 
 int nearest(double t, int n) {
   return std::clamp(static_cast<int>(std::lround(t * (n - 1))), 0, n - 1);
@@ -134,11 +140,78 @@ Vec3 cloth_start_position(const Params& p, int i, int j) {
 Model build_model(const Params& p) {
   Model m;
   m.params = p;
+  if (p.cloth.mesh.empty())
+    build_grid(m, p);
+  else
+    build_mesh_cloth(m, p);
+  // Triangles sharing an edge (for the wrinkle measure).
+  std::unordered_map<long long, int> first;
+  for (int t = 0; t < static_cast<int>(m.triangles.size()); ++t)
+    for (int e = 0; e < 3; ++e) {
+      const int u = m.triangles[t][e], v = m.triangles[t][(e + 1) % 3];
+      const long long key = static_cast<long long>(std::min(u, v)) * m.n + std::max(u, v);
+      const auto [it, fresh] = first.emplace(key, t);
+      if (!fresh) m.triangle_pairs.push_back({it->second, t});
+    }
+
+  if (p.contact.surface == SurfaceChoice::Table && p.table.enabled)
+    m.contact_surface = SurfaceKind::Table;
+  if (p.contact.surface == SurfaceChoice::Ball && p.ball.enabled)
+    m.contact_surface = SurfaceKind::Ball;
+
+  for (const auto& [name, hp] : p.handles) {
+    Handle h;
+    h.name = name;
+    h.type = hp.type;
+    if (m.grid) {
+      // The grid rectangle from `at` to `at + span`, widened by the patch.
+      const int r = static_cast<int>(hp.patch);
+      // (std::minmax of two temporaries would return dangling references; of a
+      // list it returns values)
+      const auto [i0, i1] =
+          std::minmax({nearest(hp.at[0], m.nu), nearest(hp.at[0] + hp.span[0], m.nu)});
+      const auto [j0, j1] =
+          std::minmax({nearest(hp.at[1], m.nv), nearest(hp.at[1] + hp.span[1], m.nv)});
+      for (int j = std::max(0, j0 - r); j <= std::min(m.nv - 1, j1 + r); ++j)
+        for (int i = std::max(0, i0 - r); i <= std::min(m.nu - 1, i1 + r); ++i)
+          h.particles.push_back(m.index(i, j));
+    } else {
+      h.particles = mesh_handle_particles(m, hp);
+    }
+    h.force = to_vec(hp.force);
+    double area = 0;
+    for (int k : h.particles) area += m.area[k];
+    for (int k : h.particles) h.share.push_back(m.area[k] / area);
+    h.velocity = to_vec(hp.velocity);
+    h.max_height = hp.max_height;
+    h.max_travel = hp.max_travel;
+    h.start = hp.start;
+    for (int k : h.particles) {
+      h.anchor.push_back(m.rest_position[k]);
+      // A pin or move handle that starts late leaves its particles free until
+      // then (apply_handle_constraints then takes them where they are).
+      if (h.type != HandleType::Force && h.start == 0) m.driven[k] = 1;
+    }
+    if (m.measured_handle < 0 && h.type != HandleType::Pin)
+      m.measured_handle = static_cast<int>(m.handles.size());
+    m.handles.push_back(std::move(h));
+  }
+  // With pins alone the metrics follow the first: the force it holds the cloth up with.
+  if (m.measured_handle < 0 && !m.handles.empty()) m.measured_handle = 0;
+  set_humidity(m, p.cloth.humidity);
+  return m;
+}
+
+namespace {
+
+void build_grid(Model& m, const Params& p) {
   m.nu = static_cast<int>(p.cloth.resolution[0]);
   m.nv = static_cast<int>(p.cloth.resolution[1]);
   m.n = m.nu * m.nv;
   const double du = p.cloth.size[0] / (m.nu - 1), dv = p.cloth.size[1] / (m.nv - 1);
 
+  m.spacing = std::min(du, dv);
+  m.uv.resize(m.n);
   m.rest_position.resize(m.n);
   m.area.resize(m.n);
   m.on_border.assign(m.n, 0);
@@ -154,6 +227,7 @@ Model build_model(const Params& p) {
       m.on_border[k] = edge_u || edge_v;
       const double uu = m.nu > 1 ? double(i) / (m.nu - 1) : 0,
                    vv = m.nv > 1 ? double(j) / (m.nv - 1) : 0;
+      m.uv[k] = {uu, vv};
       m.in_wind[k] = uu >= p.wind.region_min[0] && uu <= p.wind.region_max[0] &&
                      vv >= p.wind.region_min[1] && vv <= p.wind.region_max[1];
     }
@@ -207,59 +281,9 @@ Model build_model(const Params& p) {
       }
     }
   }
-  // Triangles sharing an edge (for the wrinkle measure).
-  std::unordered_map<long long, int> first;
-  for (int t = 0; t < static_cast<int>(m.triangles.size()); ++t)
-    for (int e = 0; e < 3; ++e) {
-      const int u = m.triangles[t][e], v = m.triangles[t][(e + 1) % 3];
-      const long long key = static_cast<long long>(std::min(u, v)) * m.n + std::max(u, v);
-      const auto [it, fresh] = first.emplace(key, t);
-      if (!fresh) m.triangle_pairs.push_back({it->second, t});
-    }
-
-  if (p.contact.surface == SurfaceChoice::Table && p.table.enabled)
-    m.contact_surface = SurfaceKind::Table;
-  if (p.contact.surface == SurfaceChoice::Ball && p.ball.enabled)
-    m.contact_surface = SurfaceKind::Ball;
-
-  for (const auto& [name, hp] : p.handles) {
-    Handle h;
-    h.name = name;
-    h.type = hp.type;
-    // The grid rectangle from `at` to `at + span`, widened by the patch.
-    const int r = static_cast<int>(hp.patch);
-    // (std::minmax of two temporaries would return dangling references; of a
-    // list it returns values)
-    const auto [i0, i1] =
-        std::minmax({nearest(hp.at[0], m.nu), nearest(hp.at[0] + hp.span[0], m.nu)});
-    const auto [j0, j1] =
-        std::minmax({nearest(hp.at[1], m.nv), nearest(hp.at[1] + hp.span[1], m.nv)});
-    for (int j = std::max(0, j0 - r); j <= std::min(m.nv - 1, j1 + r); ++j)
-      for (int i = std::max(0, i0 - r); i <= std::min(m.nu - 1, i1 + r); ++i)
-        h.particles.push_back(m.index(i, j));
-    h.force = to_vec(hp.force);
-    double area = 0;
-    for (int k : h.particles) area += m.area[k];
-    for (int k : h.particles) h.share.push_back(m.area[k] / area);
-    h.velocity = to_vec(hp.velocity);
-    h.max_height = hp.max_height;
-    h.max_travel = hp.max_travel;
-    h.start = hp.start;
-    for (int k : h.particles) {
-      h.anchor.push_back(m.rest_position[k]);
-      // A pin or move handle that starts late leaves its particles free until
-      // then (apply_handle_constraints then takes them where they are).
-      if (h.type != HandleType::Force && h.start == 0) m.driven[k] = 1;
-    }
-    if (m.measured_handle < 0 && h.type != HandleType::Pin)
-      m.measured_handle = static_cast<int>(m.handles.size());
-    m.handles.push_back(std::move(h));
-  }
-  // With pins alone the metrics follow the first: the force it holds the cloth up with.
-  if (m.measured_handle < 0 && !m.handles.empty()) m.measured_handle = 0;
-  set_humidity(m, p.cloth.humidity);
-  return m;
 }
+
+}  // namespace
 
 void set_humidity(Model& m, double omega) {
   m.params.cloth.humidity = omega;

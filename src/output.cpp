@@ -248,12 +248,10 @@ std::string cloth_obj(const Model& m, const State& s, UpAxis up) {
     std::snprintf(line, sizeof line, "v %.7g %.7g %.7g\n", x.x(), x.y(), x.z());
     o += line;
   }
-  for (int j = 0; j < m.nv; ++j)
-    for (int i = 0; i < m.nu; ++i) {
-      std::snprintf(line, sizeof line, "vt %.7g %.7g\n", double(i) / (m.nu - 1),
-                    double(j) / (m.nv - 1));
-      o += line;
-    }
+  for (const auto& uv : m.uv) {
+    std::snprintf(line, sizeof line, "vt %.7g %.7g\n", uv[0], uv[1]);
+    o += line;
+  }
   for (const auto& n0 : normal) {
     const Vec3 n = to_up(n0, up);
     std::snprintf(line, sizeof line, "vn %.5f %.5f %.5f\n", n.x(), n.y(), n.z());

@@ -130,6 +130,14 @@ std::vector<ParamDef> make_defs() {
   return {
       field("name", "", 1, 0, "scene name (default output folder out/NAME)", P(name)),
       field("description", "", 1, 0, "one line about the scene", P(description)),
+      field("cloth.mesh", "", 1, 0,
+            "an OBJ triangle (or quad) mesh to make the cloth of, relative to the scene file "
+            "(\"\": the grid of cloth.resolution and cloth.size); its bounding box's centre is "
+            "placed at cloth.center, then cloth.orientation and cloth.tilt turn it as the grid",
+            P(cloth.mesh)),
+      field("cloth.mesh_scale", "m", 1e-6, 1e6,
+            "cloth.mesh: the length of one unit of the file (0.01: the file is in centimetres)",
+            P(cloth.mesh_scale)),
       field("cloth.resolution", "particles", 2, 2001, "grid nu × nv", P(cloth.resolution)),
       field("cloth.size", "m", 1e-4, 100, "width (u) and height (v) of the cloth", P(cloth.size)),
       field("cloth.center", "m", -kFar, kFar,
@@ -738,11 +746,13 @@ void check_consistency(const Params& p, const std::string& source,
                                        std::tuple{SurfaceKind::Ball, "ball", p.ball.enabled}}) {
     if (!on) continue;
     double deepest = 0;
-    for (int j = 0; j < p.cloth.resolution[1]; ++j)
-      for (int i = 0; i < p.cloth.resolution[0]; ++i) {
-        const Vec3 x = cloth_start_position(p, i, j);
-        deepest = std::min(deepest, detail::query_surface(p, kind, x).distance);
-      }
+    // (A mesh cloth's: check_cloth_mesh, once its file is found.)
+    if (p.cloth.mesh.empty())
+      for (int j = 0; j < p.cloth.resolution[1]; ++j)
+        for (int i = 0; i < p.cloth.resolution[0]; ++i) {
+          const Vec3 x = cloth_start_position(p, i, j);
+          deepest = std::min(deepest, detail::query_surface(p, kind, x).distance);
+        }
     if (deepest < -1e-9) {
       char mm[32];
       std::snprintf(mm, sizeof mm, "%.3g", -deepest * 1000);
@@ -922,12 +932,14 @@ Params load_scene(const std::string& scene, const std::vector<std::string>& over
   if (probe.good() && !std::filesystem::is_directory(scene, ec)) {
     Params p = parse_scene(read_file(scene), scene, overrides);
     p.scene_dir = std::filesystem::absolute(scene).parent_path().lexically_normal().string();
+    check_cloth_mesh(p, scene);
     return p;
   }
   for (const auto& b : builtin_scenes())
     if (b.name == scene) {
       Params p = parse_scene(b.text, "scenes/" + b.name + ".toml", overrides);
       p.scene_dir = "builtin:";
+      check_cloth_mesh(p, "scenes/" + b.name + ".toml");
       return p;
     }
   if (scene.find('/') != std::string::npos || scene.find(".toml") != std::string::npos)
@@ -1025,6 +1037,10 @@ Params at_resolution(Params p, long long grid) {
 }
 
 std::string springs_text(const Params& p) {
+  if (!p.cloth.mesh.empty())
+    return "# The springs: per spring, from the material and the mesh's local sizes "
+           "(docs/model.md section 1,\n#   \"a cloth from a mesh\"), or as [springs] sets "
+           "them; cloth.resolution and cloth.size are not used.\n";
   const ResolvedSprings r = resolve_springs(p);
   const auto num = [](double v) {
     char buf[32];

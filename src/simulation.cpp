@@ -28,6 +28,10 @@ using namespace detail;
 // rest).
 void detail::compute_normals(const Model& m, const double* X, Vec3Array& normal,
                              std::vector<double>& quad_normals) {
+  if (!m.grid) {
+    compute_normals_mesh(m, X, normal);
+    return;
+  }
   const int nu = m.nu, nv = m.nv, n = m.n;
   const std::size_t before = std::size_t(nu) + 1, stride = before + n;
   quad_normals.resize(6 * stride);
@@ -195,7 +199,9 @@ void Simulation::set_humidity(double omega) {
 
 void Simulation::set_params(const Params& p) {
   validate(p);
-  const bool same_grid = p.cloth.resolution == model_.params.cloth.resolution;
+  const bool same_grid = p.cloth.resolution == model_.params.cloth.resolution &&
+                         p.cloth.mesh == model_.params.cloth.mesh &&
+                         p.cloth.mesh_scale == model_.params.cloth.mesh_scale;
   model_ = build_model(p);
   start_thread_choice();
   if (!same_grid) reset();
@@ -330,7 +336,9 @@ void Simulation::take_step() {
 
 int xpbd_substeps(const Params& p) {
   if (p.integrator.substeps > 0) return static_cast<int>(p.integrator.substeps);
-  const long long longer = std::max(p.cloth.resolution[0], p.cloth.resolution[1]);
+  // (A mesh cloth: as the default grid's.)
+  const long long longer =
+      p.cloth.mesh.empty() ? std::max(p.cloth.resolution[0], p.cloth.resolution[1]) : 51;
   return static_cast<int>(10 + std::max(0LL, (longer - 101 + 9) / 10));
 }
 
@@ -650,7 +658,19 @@ Metrics Simulation::metrics() const {
   // particles to particles in contact, their elastic force on the latter along
   // the surface normal (the springs between two contact particles cancel). A
   // peel rig's force is the lifted part's weight and suction plus this.
-  if (m.contact_surface != SurfaceKind::None)
+  if (m.contact_surface != SurfaceKind::None && !m.grid) {
+    for (const SpringSet* set : {&m.structural, &m.shear, &m.bending})
+      for (std::size_t e = 0; e < set->size(); ++e)
+        for (const auto& [k, o] :
+             {std::pair{set->a[e], set->b[e]}, std::pair{set->b[e], set->a[e]}}) {
+          if (!s.contact[k] || s.contact[o]) continue;
+          const Vec3 d = s.x[o] - s.x[k];
+          const double len = d.norm();
+          if (len > 0)
+            r.front_pull_n +=
+                set->k[e] * (len - set->rest[e]) / len * d.dot(ws_->surface_normal[k]);
+        }
+  } else if (m.contact_surface != SurfaceKind::None)
     for (int k = 0; k < m.n; ++k) {
       if (!s.contact[k]) continue;
       const int i = k % m.nu, j = k / m.nu;

@@ -16,6 +16,15 @@ namespace {
 // Structural and shear springs are the first four offsets of Model::stencil.
 constexpr int kStrainOffsets = 4;
 
+// A mesh cloth's structural or shear spring e (structural first), its end
+// that is not k.
+int other_end(const Model& m, int e, int k) {
+  const auto ns = static_cast<int>(m.structural.size());
+  const SpringSet& set = e < ns ? m.structural : m.shear;
+  const int i = e < ns ? e : e - ns;
+  return set.a[i] == k ? set.b[i] : set.a[i];
+}
+
 // Breadth-first grid distance (8-neighbourhood) from the source particles.
 void distances_from(const Model& m, const std::vector<int>& sources, State& s, Workspace& w) {
   s.source_distance.assign(m.n, -1);
@@ -24,6 +33,18 @@ void distances_from(const Model& m, const std::vector<int>& sources, State& s, W
     if (s.source_distance[k] == 0) continue;
     s.source_distance[k] = 0;
     w.queue.push_back(k);
+  }
+  if (!m.grid) {  // a mesh cloth: along the structural and shear springs
+    for (std::size_t q = 0; q < w.queue.size(); ++q) {
+      const int k = w.queue[q];
+      for (int e = m.strain_start[k]; e < m.strain_start[k + 1]; ++e) {
+        const int kk = other_end(m, m.strain_spring[e], k);
+        if (s.source_distance[kk] >= 0) continue;
+        s.source_distance[kk] = s.source_distance[k] + 1;
+        w.queue.push_back(kk);
+      }
+    }
+    return;
   }
   for (std::size_t q = 0; q < w.queue.size(); ++q) {
     const int k = w.queue[q], i = k % m.nu, j = k / m.nu;
@@ -47,6 +68,11 @@ void order_springs(const Model& m, const State& s, Workspace& w) {
   for (const SpringSet* set : {&m.structural, &m.shear})
     for (std::size_t k = 0; k < set->size(); ++k) {
       const int a = set->a[k], b = set->b[k];
+      if (!m.grid) {  // its slot: its index, structural then shear
+        const int slot = static_cast<int>(w.strain_springs.size());
+        w.strain_springs.push_back({a, b, stretch * set->rest[k], slot});
+        continue;
+      }
       // Its stencil slot: the lower end and the forward offset, one of the first four.
       int di = b % m.nu - a % m.nu, dj = b / m.nu - a / m.nu, lower = a;
       if (dj < 0 || (dj == 0 && di < 0)) {
@@ -63,7 +89,7 @@ void order_springs(const Model& m, const State& s, Workspace& w) {
   };
   std::stable_sort(w.strain_springs.begin(), w.strain_springs.end(),
                    [&](const auto& x, const auto& y) { return level(x) < level(y); });
-  w.strain_index.assign(kStrainOffsets * std::size_t(m.n), -1);
+  w.strain_index.assign(m.grid ? kStrainOffsets * std::size_t(m.n) : w.strain_springs.size(), -1);
   for (std::size_t e = 0; e < w.strain_springs.size(); ++e)
     w.strain_index[w.strain_springs[e].slot] = static_cast<int>(e);
   w.strain_levels.clear();
@@ -132,7 +158,7 @@ void limit_strain(const Model& m, State& s, Workspace& w, double dt) {
   w.strain_reaction.resize(m.n, Vec3::Zero());  // zero but for strain_reacting
   w.strain_corrections.clear();
   const auto& springs = w.strain_springs;
-  w.strain_stretched.resize(kStrainOffsets * std::size_t(m.n));
+  w.strain_stretched.resize(m.grid ? kStrainOffsets * std::size_t(m.n) : springs.size());
   w.strain_queued.resize(springs.size(), 0);  // zero between passes
   auto fixed = [&](int i) { return m.driven[i] || s.held[i]; };
   double max_len2[kStrainOffsets];
@@ -152,6 +178,12 @@ void limit_strain(const Model& m, State& s, Workspace& w, double dt) {
   };
   // Particle k moved: its springs in later levels than l may now be stretched.
   auto queue_springs_of = [&](int k, int l) {
+    if (!m.grid) {
+      for (int e = m.strain_start[k]; e < m.strain_start[k + 1]; ++e)
+        if (const int order = w.strain_index[m.strain_spring[e]]; order >= level_end(l))
+          queue(order);
+      return;
+    }
     const int i = k % m.nu, j = k / m.nu;
     for (int e = 0; e < kStrainOffsets; ++e)
       for (const int sign : {1, -1}) {
@@ -206,6 +238,15 @@ void limit_strain(const Model& m, State& s, Workspace& w, double dt) {
     if (pass > 0) {
       for (const int k : w.strain_moved) queue_springs_of(k, -1);
       for (const int e : w.strain_over) queue(e);
+    } else if (!m.grid) {  // a mesh cloth: every spring, in the springs' order
+      for (std::size_t e = 0; e < springs.size(); ++e) {
+        const auto& sp = springs[e];
+        if ((s.x[sp.b] - s.x[sp.a]).squaredNorm() > sp.max_len * sp.max_len) {
+          heap.push_back(static_cast<int>(e));
+          w.strain_queued[e] = 1;
+        }
+      }
+      std::make_heap(heap.begin(), heap.end(), std::greater<>());
     } else {
       parallel_for(m, m.nv, [&](int j) {
         // Locals: a byte store could alias the vectors, the model and the bounds.

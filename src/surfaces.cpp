@@ -98,6 +98,10 @@ void update_contact(const Model& m, State& s, Workspace& w) {
   // cloth's border, c & ~(left & right & up & down) over a row of 0/1 bytes:
   // a loop that vectorises, where a branch per particle did not (locals, as
   // above).
+  if (!m.grid) {
+    contact_border_mesh(m, s, w);
+    return;
+  }
   parallel_for(m, m.nv, [&](int j) {
     const int nu = m.nu, row = j * nu, end = row + nu;
     const std::uint8_t* const c = s.contact.data();

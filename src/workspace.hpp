@@ -96,6 +96,7 @@ struct Workspace {
   // matrix's diagonal blocks; per-row sums; the particles whose velocity the
   // solve keeps (pinned, driven, held).
   std::vector<float> float_columns;
+  std::vector<float> mesh_blocks;  // a mesh cloth: each spring's block (s_x, s_y, s_z, β)
   std::vector<double> cg_columns;
   std::vector<int> fixed_particles;
   std::vector<double> row_sums, row_max;

@@ -101,7 +101,50 @@ void apply_corrections(int count, double sign, std::array<double*, 3> x,
 
 }  // namespace
 
+namespace {
+
+// A mesh cloth: the same projection, one spring at a time (Gauss-Seidel in
+// the springs' order: structural, shear, bending), on one thread.
+void project_springs_mesh(const Model& m, State& s, Workspace& w, double h, bool limit_only) {
+  const double tau = m.params.strain_limit.enabled ? m.params.strain_limit.tau : -1.0;
+  const double* const inv = w.free_inv_mass.data();
+  // The particles the measured handle holds, flagged (their reaction force).
+  w.class_gate.assign(m.n, 0.0);
+  for (const int k : w.reaction_particles) w.class_gate[k] = 1.0;
+  const SpringSet* const sets[3] = {&m.structural, &m.shear, &m.bending};
+  for (int kind = 0; kind < 3; ++kind) {
+    const SpringSet& set = *sets[kind];
+    const bool limited = kind < 2 && tau >= 0;
+    if (limit_only && !limited) continue;
+    for (std::size_t e = 0; e < set.size(); ++e) {
+      const double k = set.k[e];
+      if (k <= 0) continue;
+      const int a = set.a[e], b = set.b[e];
+      const Vec3 d = s.x[b] - s.x[a];
+      const double len = d.norm(), ws = inv[a] + inv[b];
+      if (!(len > 0) || !(ws > 0)) continue;
+      const double alpha = 1.0 / (k * h * h), gamma = set.damping[e] / (k * h);
+      const double dd = (1 + gamma) * ws + alpha;
+      const Vec3 before = w.x_prev[b] - w.x_prev[a];
+      const double rate = (d - before).dot(d) / len;
+      double f = limit_only ? 0.0 : -((len - set.rest[e]) + gamma * rate) / (dd * len);
+      if (limited) f = std::min(f, ((1.0 + tau) * set.rest[e] - len) / (ws * len));
+      const Vec3 c = f * d;
+      if (w.class_gate[a] != 0) w.reaction_impulse -= c;
+      if (w.class_gate[b] != 0) w.reaction_impulse += c;
+      sub(s.x[a], inv[a] * c);
+      add(s.x[b], inv[b] * c);
+    }
+  }
+}
+
+}  // namespace
+
 void project_springs(const Model& m, State& s, Workspace& w, double h, bool limit_only) {
+  if (!m.grid) {
+    project_springs_mesh(m, s, w, h, limit_only);
+    return;
+  }
   const int nu = m.nu, nv = m.nv, n = m.n;
   const double tau = m.params.strain_limit.enabled ? m.params.strain_limit.tau : -1.0;
   w.correction.resize(3 * std::size_t(n));

@@ -38,6 +38,32 @@ expect_bad dt         "dt.toml:2: integrator.dt"        "$T/dt.toml"
 expect_bad material   "material.toml:2: material.bending_rigidity: value -0.00072 is out of range" "$T/material.toml"
 expect_bad springs    "springs.toml:3: springs.bending_k: expected a number" "$T/springs.toml"
 expect_bad missing    "nowhere.toml: no such file"      "$T/nowhere.toml"
+
+# A cloth from a mesh (cloth.mesh): `check` names the mesh file and what is
+# wrong with it, and exits 2; `run` refuses it the same way.
+expect_check_bad() {
+  local name="$1" text="$2" obj="$3"
+  mkdir -p "$T/mesh_$name"
+  printf '[cloth]\nmesh = "cloth.obj"\n' > "$T/mesh_$name/scene.toml"
+  [ -n "$obj" ] && printf "$obj" > "$T/mesh_$name/cloth.obj"
+  "$W" check "$T/mesh_$name/scene.toml" >/dev/null 2>"$T/err"; local code=$?
+  if [ $code -ne 2 ]; then bad "mesh $name: check exit code $code, want 2"; return; fi
+  if ! grep -qF -- "$text" "$T/err"; then bad "mesh $name: message lacks '$text': $(cat "$T/err")"; return; fi
+  ok "mesh $name ($(head -1 "$T/err"))"
+}
+expect_check_bad nonmanifold "cloth.obj: not a manifold mesh" \
+  'v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nf 1 2 3\nf 2 1 4\nf 1 2 5\n'
+expect_check_bad degenerate "cloth.obj: face 1 is degenerate" 'v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n'
+expect_check_bad nofaces "cloth.obj: no faces" 'v 0 0 0\nv 1 0 0\n'
+expect_check_bad notobj "cloth.obj: no faces" 'this is not an OBJ file\n'
+expect_check_bad index "cloth.obj: face 1 names a vertex that is not in the file" 'v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n'
+expect_check_bad absent "scene.toml: cloth.mesh" ''
+expect_bad mesh_run "cloth.obj: face 1 is degenerate" "$T/mesh_degenerate/scene.toml"
+"$W" check drape-disc | grep -q '^mesh = "meshes/cloth_disc.obj"$' && ok "check a mesh cloth" ||
+  bad "check drape-disc: $("$W" check drape-disc 2>&1 | head -3)"
+"$W" run drape-disc --set run.duration=0.01 --out "$T/disc" --quiet --export usd,pc2,vtk &&
+  [ "$(grep -c '^vt ' "$T/disc/frames/frame_00000.obj")" = 1951 ] &&
+  ok "run a mesh cloth: its UVs in the frames" || bad "run drape-disc"
 expect_bad name       "no-such-scene"                   no-such-scene
 expect_bad set        "--humidity: value 2 is out of range [0, 1]" hang --humidity 2
 expect_bad duration   "--duration: value -1 is out of range" hang --duration -1

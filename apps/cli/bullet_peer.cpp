@@ -23,6 +23,8 @@
 #include <optional>
 #include <vector>
 
+#include "wetcloth/scene.hpp"
+
 namespace wetcloth::cli {
 
 namespace {
@@ -202,6 +204,10 @@ BulletCloth::BulletCloth(const Model& m, double dt) : w_(std::make_unique<World>
   // CreatePatch puts node x + nu y at the bilinear blend of the corners, as
   // our grid puts particle (i, j) = j nu + i: the cloth is flat, so the two
   // agree (to float).
+  if (!m.grid)
+    throw SceneError(
+        "bench --peer bullet: the peer builds the grid's cloth; a mesh cloth "
+        "(cloth.mesh) has no Bullet counterpart here");
   const auto corner = [&](int i, int j) { return bt(m.rest_position[m.index(i, j)]); };
   w.cloth =
       btSoftBodyHelpers::CreatePatch(info, corner(0, 0), corner(m.nu - 1, 0), corner(0, m.nv - 1),

@@ -91,8 +91,10 @@ Legend cloth_mesh(const Simulation& sim, ColorBy mode, float& scale, ClothMesh& 
       const int na = std::min(n, static_cast<int>(adhesion.size()));
       // An inner particle in contact holds adhesion_pressure * its area; the
       // border's share of the edge term comes on top, so the scale goes to twice that.
-      const double cell = m.params.cloth.size[0] / std::max(1, m.nu - 1) * m.params.cloth.size[1] /
-                          std::max(1, m.nv - 1);
+      // (An inner particle's area: the grid's cell, a mesh's largest.)
+      const double cell = m.grid ? m.params.cloth.size[0] / std::max(1, m.nu - 1) *
+                                       m.params.cloth.size[1] / std::max(1, m.nv - 1)
+                                 : *std::max_element(m.area.begin(), m.area.end());
       float top = range > 0 ? range : static_cast<float>(2 * adhesion_pressure(m.params) * cell);
       if (!(top > 0)) {
         float peak = 0;

@@ -533,8 +533,12 @@ class Viewer {
     ImGui::PushTextWrapPos(0);
     ImGui::TextDisabled("%s", params_.description.c_str());
     ImGui::PopTextWrapPos();
-    ImGui::Text("t = %.3f s   %lld steps   %dx%d particles", s.time, s.steps, sim_->model().nu,
-                sim_->model().nv);
+    if (sim_->model().grid)
+      ImGui::Text("t = %.3f s   %lld steps   %dx%d particles", s.time, s.steps, sim_->model().nu,
+                  sim_->model().nv);
+    else
+      ImGui::Text("t = %.3f s   %lld steps   %d particles (mesh)", s.time, s.steps,
+                  sim_->model().n);
     ImGui::Text("%.3fx real time   %.0f fps", rtf_, ImGui::GetIO().Framerate);
     ImGui::TextDisabled("physics %.0f ms, drawing %.0f ms per frame", physics_ms_, draw_ms_);
     if (!blow_up_.empty()) {

@@ -88,7 +88,8 @@ inline Vec3 to_up(const Vec3& x, UpAxis up) {
   return up == UpAxis::Z ? x : Vec3(x.x(), x.z(), -x.y());
 }
 
-// The cloth: positions, texture coordinates (u, v) = (i, j) / (nu - 1, nv - 1),
+// The cloth: positions, texture coordinates (the grid's (u, v) = (i, j) / (nu - 1, nv - 1),
+// a mesh cloth's from its file),
 // normals, triangles.
 std::string cloth_obj(const Model& m, const State& s, UpAxis up = UpAxis::Z);
 

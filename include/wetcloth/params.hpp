@@ -70,6 +70,10 @@ struct Params {
   std::string scene_dir = ".";
 
   struct Cloth {
+    // A triangle mesh (OBJ, relative to the scene file) to make the cloth of;
+    // empty: the rectangular grid of resolution and size (docs/guide.md).
+    std::string mesh;
+    double mesh_scale = 1;     // the mesh file's units, in metres
     Vec2i resolution{51, 51};  // particles along u and v
     Vec2d size{0.3, 0.3};      // width (u) and height (v), m
     Vec3d center{0, 0, 0};     // centre of the cloth at t = 0, m

@@ -84,6 +84,9 @@ struct SpringSet {
   // Each spring's offset in Model::stencil, which holds its constants (on a
   // grid that is not square, a kind's springs along u and v differ).
   std::vector<std::uint8_t> edge;
+  // Each spring's stiffness (N/m) and damping (N·s/m): on the grid its
+  // offset's, on a mesh cloth from the material and the local geometry.
+  std::vector<double> k, damping;
   std::size_t size() const { return a.size(); }
 };
 
@@ -110,7 +113,27 @@ struct StencilEdge {
 
 struct Model {
   Params params;
+  // The rectangular grid (cloth.mesh unset): particle (i, j) is j nu + i, and
+  // the step runs the grid's stencil kernels. A mesh cloth (cloth.mesh,
+  // mesh_cloth.cpp) has grid = false, nu = n, nv = 1 (one row: the passes in
+  // which each particle stands alone run unchanged) and runs the general
+  // kernels, which follow the springs and the neighbour lists below, on one
+  // thread.
+  bool grid = true;
   int nu = 0, nv = 0, n = 0;
+  // Texture coordinates per particle: (i, j) / (nu - 1, nv - 1) on the grid,
+  // the file's on a mesh (handles and the wind region are placed by them).
+  std::vector<std::array<double, 2>> uv;
+  // The cloth's edges (its structural springs) per particle, as lists:
+  // particle k's neighbours are edge_neighbour[edge_start[k] .. edge_start[k + 1]).
+  std::vector<int> edge_start, edge_neighbour;
+  // A mesh cloth: each particle's structural and shear springs (their index
+  // in structural, then shear + structural.size()), as lists.
+  std::vector<int> strain_start, strain_spring;
+  // A mesh cloth: the particles that never collide with k (within
+  // self-collision's reach along the springs), sorted, as lists.
+  std::vector<int> ring_start, ring;
+  double spacing = 0;  // the grid's smaller step; a mesh's shortest mean edge, m
   std::vector<Vec3> rest_position;
   std::vector<double> area, mass, inv_mass;
   std::vector<std::uint8_t> on_border;  // on the cloth's border
@@ -130,8 +153,8 @@ struct Model {
   SurfaceKind contact_surface = SurfaceKind::None;
   int index(int i, int j) const { return j * nu + i; }
   // Spring e of a set: its stiffness (N/m) and damping (N·s/m).
-  const StencilEdge& constants(const SpringSet& set, std::size_t e) const {
-    return stencil[set.edge[e]];
+  SpringConstants constants(const SpringSet& set, std::size_t e) const {
+    return {set.k[e], set.damping[e]};
   }
   // Whether the metrics follow a handle that pulls or drives (not a pin).
   bool measures_a_pull() const {

@@ -116,6 +116,13 @@ void update_vented(const Model& m, State& s, Workspace& w, double dt) {
         v_sum += m.area[k] * air_gap(m, w.distance[k]);
         a_sum += m.area[k];
       }
+      if (!m.grid) {  // a mesh cloth: along its edges
+        for (int e = m.edge_start[k]; e < m.edge_start[k + 1]; ++e) {
+          const int kk = m.edge_neighbour[e];
+          if (s.pocket[kk] == kNone && !s.contact[kk]) mark(kk, id);
+        }
+        continue;
+      }
       const int i = k % m.nu, j = k / m.nu;
       const int nb[4][2] = {{i - 1, j}, {i + 1, j}, {i, j - 1}, {i, j + 1}};
       for (const auto& c : nb) {

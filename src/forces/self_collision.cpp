@@ -60,15 +60,19 @@ void refresh_collision_candidates(const Model& m, const State& s, Workspace& w) 
   // The margin is at most 1.5 grid steps: on a fine grid half of d_t spans
   // many steps, and a flat cloth would list every particle's whole ring of
   // grid neighbours just past the excluded ones (360 B a particle at 401 x 401).
-  const double step =
-      std::min(m.params.cloth.size[0] / (m.nu - 1), m.params.cloth.size[1] / (m.nv - 1));
+  const double step = m.spacing;
   const double margin = std::min(0.5 * dt_dist, 1.5 * step), radius = dt_dist + margin;
   // Grid neighbours never collide: within two grid steps (MODEL.md), or more
   // on a grid fine enough that d_t spans more steps, else a flat cloth would
   // repel itself.
   const int nu = m.nu;
   const int reach = std::max(2, static_cast<int>(std::ceil(dt_dist / step)));
-  auto near_in_grid = [nu, reach](int i, int j) {
+  // A mesh cloth: within its own reach along the springs (Model::ring).
+  const bool grid = m.grid;
+  const int* const ring = m.ring.data();
+  const int* const ring_start = m.ring_start.data();
+  auto near_in_grid = [nu, reach, grid, ring, ring_start](int i, int j) {
+    if (!grid) return std::binary_search(ring + ring_start[i], ring + ring_start[i + 1], j);
     return std::abs(i % nu - j % nu) <= reach && std::abs(i / nu - j / nu) <= reach;
   };
   auto& anchor = w.candidates_anchor;

@@ -94,7 +94,9 @@ void add_spring_forces(const Model& m, const State& s, Workspace& w) {
 }  // namespace
 
 void add_spring_forces(const Model& m, const State& s, Workspace& w, bool with_damping) {
-  if (with_damping)
+  if (!m.grid)
+    add_spring_forces_mesh(m, s, w, with_damping);
+  else if (with_damping)
     add_spring_forces<true>(m, s, w);
   else
     add_spring_forces<false>(m, s, w);
@@ -285,6 +287,10 @@ void transpose(const Model& m, const Real* __restrict in, Real* __restrict out, 
 }  // namespace
 
 void apply_spring_damping(const Model& m, State& s, Workspace& w, double h) {
+  if (!m.grid) {
+    apply_spring_damping_mesh(m, s, h);
+    return;
+  }
   int damped = 0;
   for (const StencilEdge& st : m.stencil) damped += st.damping > 0;
   if (damped == 0) return;

@@ -142,6 +142,16 @@ TEST(MeshObstacle, SphereMeshGivesTheBallsDistanceWithinTheChordError) {
     }
   }
   EXPECT_EQ(checked, 3600);
+  // The same sphere with every face turned inward: turned back, the same answers.
+  Obj inverted = sphere;
+  for (auto& t : inverted.f) std::swap(t[1], t[2]);
+  dir.write("meshes/inverted.obj", inverted.text());
+  p.obstacles["mesh"].mesh = "meshes/inverted.obj";
+  const auto flipped = build_mesh_obstacle(p, "mesh");
+  for (const Vec3 x : {Vec3(c + Vec3(0, 0, r + 0.003)), Vec3(c + Vec3(0.02, 0.01, 0.0))}) {
+    EXPECT_EQ(flipped->query(x).distance, o->query(x).distance);
+    EXPECT_EQ(flipped->query(x).normal, o->query(x).normal);
+  }
 }
 
 // The same cloth dropped on the ball and on a sphere mesh in its place lands

@@ -69,24 +69,24 @@ def bowl():
     # 8 mm thick, the inner wall down to the inner bottom's centre.
     r_foot, r_rim, height, wall = 0.05, 0.11, 0.07, 0.008
     profile = [(0.0, 0.0)]
-    for k in range(1, 9):  # the foot
-        profile.append((r_foot * k / 8, 0.0))
-    for k in range(1, 25):  # the outer wall: a quarter ellipse out and up
-        a = math.pi / 2 * k / 24
+    for k in range(1, 5):  # the foot
+        profile.append((r_foot * k / 4, 0.0))
+    for k in range(1, 17):  # the outer wall: a quarter ellipse out and up
+        a = math.pi / 2 * k / 16
         profile.append((r_foot + (r_rim - r_foot) * math.sin(a), height * (1 - math.cos(a))))
-    for k in range(1, 12):  # the rim: a half circle over the top
-        a = math.pi * k / 12
+    for k in range(1, 8):  # the rim: a half circle over the top
+        a = math.pi * k / 8
         c = r_rim - wall / 2
         profile.append((c + wall / 2 * math.cos(a), height + wall / 2 * math.sin(a)))
     r_in, h_in = r_rim - wall, height
-    for k in range(0, 25):  # the inner wall down to the inner bottom
-        a = math.pi / 2 * k / 24
+    for k in range(0, 17):  # the inner wall down to the inner bottom
+        a = math.pi / 2 * k / 16
         profile.append(((r_foot - wall) + (r_in - r_foot + wall) * math.cos(a),
                         wall + (h_in - wall) * (1 - math.sin(a))))
-    for k in range(7, 0, -1):
-        profile.append(((r_foot - wall) * k / 8, wall))
+    for k in range(3, 0, -1):
+        profile.append(((r_foot - wall) * k / 4, wall))
     profile.append((0.0, wall))
-    pts, tris = revolve(profile, 72)
+    pts, tris = revolve(profile, 48)
     return pts, outward(pts, tris)
 
 

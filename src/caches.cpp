@@ -2,7 +2,9 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <array>
+#include <cctype>
 #include <cerrno>
 #include <cstdint>
 #include <cstring>
@@ -411,10 +413,18 @@ void CacheWriter::finish(bool keep_samples) {
       out << "        }\n";
     }
     out << "    }\n";
+    std::vector<std::string> prims;  // USD names: [A-Za-z_][A-Za-z0-9_]*, each once
     for (const NamedMesh& mesh : obstacle_meshes(m)) {
       std::vector<Vec3> points;
       for (const Vec3& x : mesh.points) points.push_back(to_up(x, up_));
-      out << "\n    def Mesh \"" << mesh.name << "\"\n    {\n"
+      std::string prim = mesh.name;
+      for (char& c : prim)
+        if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+      if (prim.empty() || std::isdigit(static_cast<unsigned char>(prim[0]))) prim = "_" + prim;
+      while (std::find(prims.begin(), prims.end(), prim) != prims.end() || prim == "cloth")
+        prim += "_";
+      prims.push_back(prim);
+      out << "\n    def Mesh \"" << prim << "\"\n    {\n"
           << mesh_topology(mesh.triangles, "        ") << "        point3f[] points = ["
           << tuples(points) << "]\n        uniform token subdivisionScheme = \"none\"\n    }\n";
     }

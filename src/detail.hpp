@@ -7,6 +7,7 @@
 #include <array>
 #include <limits>
 
+#include "mesh_obstacle.hpp"
 #include "wetcloth/simulation.hpp"
 #include "workspace.hpp"
 
@@ -53,11 +54,25 @@ inline SurfaceHit query_surface(const Params& p, SurfaceKind kind, const Vec3& x
   return h;
 }
 
+// surfaces.cpp: collide's projection out of the mesh obstacles alone, after
+// friction moved particles along a curved mesh (a chord of it dips inside).
+void collide_with_meshes(const Model& m, State& s, Workspace& w);
+
+// Any surface by its byte (SurfaceKind, or kMeshCode + k for obstacle k),
+// exactly (a whole search of a mesh): for what is asked once in a while.
+inline SurfaceHit query_code(const Model& m, int code, const Vec3& x) {
+  if (code < kMeshCode) return query_surface(m.params, static_cast<SurfaceKind>(code), x);
+  const MeshObstacle::Hit h = m.obstacles[code - kMeshCode]->query(x);
+  return {h.distance, h.normal};
+}
+
 // surfaces.cpp: projects particles out of every obstacle and removes inward normal velocity.
-// touched[i] is the obstacle it was pushed out of (SurfaceKind), or None.
+// touched[i] is the obstacle it was pushed out of (SurfaceKind, or kMeshCode
+// + k for mesh obstacle k), or None.
 // With `only`, just those particles (the others are known to be outside).
+// With a workspace, mesh obstacles' searches are bounded by its cache.
 void collide(const Model& m, State& s, std::vector<std::uint8_t>* touched,
-             const std::vector<int>* only = nullptr);
+             const std::vector<int>* only = nullptr, Workspace* w = nullptr);
 // simulation.cpp: compute_normals from positions by component (x, y, z
 // columns of n), with a scratch array for the triangles' normals (the step's:
 // no allocation).

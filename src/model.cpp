@@ -158,6 +158,13 @@ Model build_model(const Params& p) {
     m.contact_surface = SurfaceKind::Table;
   if (p.contact.surface == SurfaceChoice::Ball && p.ball.enabled)
     m.contact_surface = SurfaceKind::Ball;
+  for (const auto& [name, o] : p.obstacles) {  // [obstacle.NAME], in name order
+    if (o.contact && p.contact.surface == SurfaceChoice::Obstacle) {
+      m.contact_surface = SurfaceKind::Mesh;
+      m.contact_obstacle = static_cast<int>(m.obstacles.size());
+    }
+    m.obstacles.push_back(build_mesh_obstacle(p, name));
+  }
 
   for (const auto& [name, hp] : p.handles) {
     Handle h;

@@ -14,6 +14,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "mesh_obstacle.hpp"
+
 namespace wetcloth {
 
 namespace {
@@ -265,8 +267,9 @@ std::string cloth_obj(const Model& m, const State& s, UpAxis up) {
   return o;
 }
 
-std::vector<NamedMesh> obstacle_meshes(const Model& m) {
-  const Params& p = m.params;
+namespace {
+// The table and the ball as meshes.
+std::vector<NamedMesh> analytic_meshes(const Params& p) {
   std::vector<NamedMesh> meshes;
   if (p.table.enabled) {
     const double h = std::max(p.cloth.size[0], p.cloth.size[1]) * 2, z = p.table.height;
@@ -295,6 +298,22 @@ std::vector<NamedMesh> obstacle_meshes(const Model& m) {
         b.triangles.push_back({a, d + segs, d});
       }
     meshes.push_back(std::move(b));
+  }
+  return meshes;
+}
+}  // namespace
+
+std::vector<NamedMesh> obstacle_meshes(const Model& m) {
+  std::vector<NamedMesh> meshes = analytic_meshes(m.params);
+  for (const auto& o : m.obstacles) meshes.push_back({o->name, o->points, o->triangles});
+  return meshes;
+}
+
+std::vector<NamedMesh> obstacle_meshes(const Params& p) {
+  std::vector<NamedMesh> meshes = analytic_meshes(p);
+  for (const auto& [name, unused] : p.obstacles) {
+    const auto o = build_mesh_obstacle(p, name);
+    meshes.push_back({o->name, o->points, o->triangles});
   }
   return meshes;
 }

@@ -20,6 +20,7 @@
 #include <type_traits>
 
 #include "detail.hpp"
+#include "mesh_obstacle.hpp"
 
 namespace wetcloth {
 
@@ -97,6 +98,28 @@ ParamDef handle_field(std::string key, std::string unit, double lo, double hi, s
   return d;
 }
 
+// A key of [obstacle.NAME]: `obstacle.*.KEY` (get and set take the name).
+template <class F>
+ParamDef obstacle_field(std::string key, std::string unit, double lo, double hi,
+                        std::string meaning, F acc) {
+  using T = std::remove_cvref_t<decltype(acc(std::declval<ObstacleParams&>()))>;
+  ParamDef d;
+  d.key = "obstacle.*." + key;
+  d.unit = std::move(unit);
+  d.meaning = std::move(meaning);
+  d.min = lo;
+  d.max = hi;
+  ObstacleParams defaults;
+  d.default_value = to_value(acc(defaults));
+  d.get = [acc](const Params& p, const std::string& o) {
+    return to_value(acc(const_cast<ObstacleParams&>(p.obstacles.at(o))));
+  };
+  d.set = [acc](Params& p, const std::string& o, const ParamValue& v) {
+    acc(p.obstacles[o]) = from_value<T>(v);
+  };
+  return d;
+}
+
 // A number that may be left unset (std::optional<double>): get gives NaN then.
 template <class F>
 ParamDef optional_field(std::string key, std::string unit, double lo, double hi,
@@ -123,6 +146,8 @@ ParamDef optional_field(std::string key, std::string unit, double lo, double hi,
   [](Params & p) -> auto& { return p.path; }
 #define H(path) \
   [](HandleParams & h) -> auto& { return h.path; }
+#define O(path) \
+  [](ObstacleParams & o) -> auto& { return o.path; }
 
 std::vector<ParamDef> make_defs() {
   // Positions: at 1e14 m a double's step is 0.02 m, and metrics.csv got inf.
@@ -321,11 +346,33 @@ std::vector<ParamDef> make_defs() {
                    "time the handle starts acting (a pin or move handle leaves its particles free "
                    "until then, then holds or drives them from where they are)",
                    H(start)),
+      obstacle_field("mesh", "", 1, 0,
+                     "[obstacle.NAME]: a fixed obstacle, an OBJ triangle mesh (path relative to "
+                     "the scene file, inside its folder)",
+                     O(mesh)),
+      obstacle_field("translate", "m", -kFar, kFar,
+                     "moves the mesh: its points p become R (S p) + translate", O(translate)),
+      obstacle_field("rotate", "°", -360, 360,
+                     "turns the mesh about the x, then y, then z axis (fixed axes), degrees; "
+                     "[90, 0, 0] stands a y-up file's mesh up in wetcloth's z-up world",
+                     O(rotate)),
+      obstacle_field("scale", "1", 1e-6, 1e6,
+                     "scales the mesh along x, y, z (before turning it); the same three: uniform",
+                     O(scale)),
+      obstacle_field("thickness", "m", 0, 10,
+                     "an open mesh (edges on one triangle only) is a shell this thick about its "
+                     "surface; a closed mesh's inside is the obstacle (0)",
+                     O(thickness)),
+      obstacle_field("contact", "", 0, 0,
+                     "this obstacle is the contact surface (with contact.surface = "
+                     "\"obstacle\"): adhesion, friction's wet load and trapped air act on it",
+                     O(contact)),
   };
 }
 
 #undef P
 #undef H
+#undef O
 
 // Bounds on a scene's text (guard_toml_text).
 constexpr std::size_t kMaxSceneBytes = 1 << 20;
@@ -602,16 +649,19 @@ std::string unknown_key(const std::string& key) {
     }
     return row[b.size()];
   };
-  // A handle's keys compare by their part after the handle's name.
-  const bool in_handle = key.rfind("handle.", 0) == 0 && key.find('.', 7) != std::string::npos;
-  const std::string prefix = in_handle ? key.substr(0, key.find('.', 7) + 1) : "";
+  // A handle's or obstacle's keys compare by their part after its name.
+  std::string kind;  // "handle." or "obstacle.", or none
+  for (const std::string k : {"handle.", "obstacle."})
+    if (key.rfind(k, 0) == 0 && key.find('.', k.size()) != std::string::npos) kind = k;
+  const bool in_handle = !kind.empty();
+  const std::string prefix = in_handle ? key.substr(0, key.find('.', kind.size()) + 1) : "";
   const std::string leaf = in_handle ? key.substr(prefix.size()) : key;
   std::string best;
   std::size_t best_distance = std::max<std::size_t>(2, leaf.size() / 4) + 1;
   for (const ParamDef& d : param_defs()) {
-    const bool handle_key = d.key.rfind("handle.*.", 0) == 0;
-    if (handle_key != in_handle) continue;
-    const std::string candidate = handle_key ? d.key.substr(9) : d.key;
+    const bool named_key = d.key.rfind("handle.*.", 0) == 0 || d.key.rfind("obstacle.*.", 0) == 0;
+    if (named_key != in_handle || (in_handle && d.key.rfind(kind + "*.", 0) != 0)) continue;
+    const std::string candidate = named_key ? d.key.substr(kind.size() + 2) : d.key;
     if (const std::size_t dist = distance(leaf, candidate); dist < best_distance)
       best_distance = dist, best = prefix + candidate;
   }
@@ -626,11 +676,13 @@ void apply_table(const toml::table& t, const std::string& prefix, Params& p, boo
   for (const auto& [k, node] : t) {
     const std::string key =
         prefix.empty() ? std::string(k.str()) : prefix + "." + std::string(k.str());
-    if (prefix.empty() && k.str() == "handle") {
-      const auto* handles = node.as_table();
-      if (!handles) fail(node, key, "expected a table of handles, [handle.NAME]");
-      for (const auto& [name, h] : *handles) {
-        const std::string hkey = "handle." + std::string(name.str());
+    if (prefix.empty() && (k.str() == "handle" || k.str() == "obstacle")) {
+      // [handle.NAME] and [obstacle.NAME]: tables of keys `handle.*.KEY`, `obstacle.*.KEY`.
+      const std::string kind(k.str());
+      const auto* tables = node.as_table();
+      if (!tables) fail(node, key, "expected a table of " + kind + "s, [" + kind + ".NAME]");
+      for (const auto& [name, h] : *tables) {
+        const std::string hkey = kind + "." + std::string(name.str());
         const auto* ht = h.as_table();
         if (!ht) fail(h, hkey, "expected a table");
         // The name is part of keys (handle.NAME.force, --set, scene.toml): a bare key.
@@ -639,22 +691,31 @@ void apply_table(const toml::table& t, const std::string& prefix, Params& p, boo
               return std::isalnum(c) || c == '_' || c == '-';
             }))
           fail(h, hkey,
-               "a handle's name is letters, digits, _ and - (it is part of keys such as "
-               "handle.NAME.force)");
-        if (!new_handles && !p.handles.count(std::string(name.str()))) {
+               "a " + kind + "'s name is letters, digits, _ and - (it is part of keys such as " +
+                   kind + ".NAME." + (kind == "handle" ? "force" : "mesh") + ")");
+        const bool is_handle = kind == "handle";
+        const bool known = is_handle ? p.handles.count(std::string(nm)) > 0
+                                     : p.obstacles.count(std::string(nm)) > 0;
+        if (!new_handles && !known) {
           std::string names;
-          for (const auto& [n, unused] : p.handles) names += (names.empty() ? "" : ", ") + n;
+          if (is_handle)
+            for (const auto& [n, unused] : p.handles) names += (names.empty() ? "" : ", ") + n;
+          else
+            for (const auto& [n, unused] : p.obstacles) names += (names.empty() ? "" : ", ") + n;
           fail(h, hkey,
-               "the scene has no such handle (" +
-                   (names.empty() ? "it has none" : "its handles: " + names) +
-                   "); add a handle in a scene file");
+               "the scene has no such " + kind + " (" +
+                   (names.empty() ? "it has none" : "its " + kind + "s: " + names) + "); add " +
+                   (is_handle ? "a handle" : "an obstacle") + " in a scene file");
         }
-        p.handles[std::string(name.str())];  // a handle with every key at its default
+        if (is_handle)
+          p.handles[std::string(nm)];  // a handle with every key at its default
+        else
+          p.obstacles[std::string(nm)];
         for (const auto& [hk, hv] : *ht) {
           const std::string full = hkey + "." + std::string(hk.str());
-          const ParamDef* d = find_def("handle.*." + std::string(hk.str()));
+          const ParamDef* d = find_def(kind + ".*." + std::string(hk.str()));
           if (!d) fail(hv, full, unknown_key(full));
-          d->set(p, std::string(name.str()), convert(hv, *d, full));
+          d->set(p, std::string(nm), convert(hv, *d, full));
         }
       }
       continue;
@@ -732,6 +793,26 @@ void check_consistency(const Params& p, const std::string& source,
     bad("contact.surface", "is 'ball' but ball.enabled is false");
   if (p.contact.surface == SurfaceChoice::Table && !p.table.enabled)
     bad("contact.surface", "is 'table' but table.enabled is false");
+  // Obstacles: at most one is the contact surface, and then contact.surface says so.
+  if (p.obstacles.size() > static_cast<std::size_t>(kMostObstacles))
+    bad("obstacle", "more than " + std::to_string(kMostObstacles) + " obstacles");
+  std::string contact_obstacles;
+  for (const auto& [name, o] : p.obstacles) {
+    if (o.mesh.empty())
+      bad("obstacle." + name + ".mesh", "is missing: name the obstacle's OBJ file");
+    if (o.contact) contact_obstacles += (contact_obstacles.empty() ? "" : ", ") + name;
+  }
+  if (contact_obstacles.find(',') != std::string::npos)
+    bad("contact.surface", "one obstacle at most can be the contact surface, and " +
+                               contact_obstacles + " all say contact = true");
+  if (p.contact.surface == SurfaceChoice::Obstacle && contact_obstacles.empty())
+    bad("contact.surface",
+        "is 'obstacle' but no [obstacle.NAME] says contact = true (mark the one the cloth "
+        "sticks to)");
+  if (p.contact.surface != SurfaceChoice::Obstacle && !contact_obstacles.empty())
+    bad("obstacle." + contact_obstacles + ".contact",
+        "is true but contact.surface is '" + to_string(p.contact.surface) +
+            "' (set contact.surface = \"obstacle\" to make it the contact surface)");
   try {
     parse_export_formats(p.run.exports);
   } catch (const std::invalid_argument& e) {
@@ -933,6 +1014,7 @@ Params load_scene(const std::string& scene, const std::vector<std::string>& over
     Params p = parse_scene(read_file(scene), scene, overrides);
     p.scene_dir = std::filesystem::absolute(scene).parent_path().lexically_normal().string();
     check_cloth_mesh(p, scene);
+    check_obstacle_meshes(p, scene);
     return p;
   }
   for (const auto& b : builtin_scenes())
@@ -940,6 +1022,7 @@ Params load_scene(const std::string& scene, const std::vector<std::string>& over
       Params p = parse_scene(b.text, "scenes/" + b.name + ".toml", overrides);
       p.scene_dir = "builtin:";
       check_cloth_mesh(p, "scenes/" + b.name + ".toml");
+      check_obstacle_meshes(p, "scenes/" + b.name + ".toml");
       return p;
     }
   if (scene.find('/') != std::string::npos || scene.find(".toml") != std::string::npos)
@@ -953,7 +1036,7 @@ std::string to_toml(const Params& p) {
   std::ostringstream o;
   std::string section;
   for (const auto& d : param_defs()) {
-    if (d.key.rfind("handle.", 0) == 0) continue;
+    if (d.key.rfind("handle.", 0) == 0 || d.key.rfind("obstacle.", 0) == 0) continue;
     const auto dot = d.key.rfind('.');
     const std::string sec = dot == std::string::npos ? "" : d.key.substr(0, dot);
     const std::string leaf = dot == std::string::npos ? d.key : d.key.substr(dot + 1);
@@ -973,6 +1056,13 @@ std::string to_toml(const Params& p) {
     for (const auto& d : param_defs()) {
       if (d.key.rfind("handle.*.", 0) != 0) continue;
       o << d.key.substr(9) << " = " << format_value(d.get(p, name)) << "\n";
+    }
+  }
+  for (const auto& [name, unused] : p.obstacles) {
+    o << "\n[obstacle." << name << "]\n";
+    for (const auto& d : param_defs()) {
+      if (d.key.rfind("obstacle.*.", 0) != 0) continue;
+      o << d.key.substr(11) << " = " << format_value(d.get(p, name)) << "\n";
     }
   }
   return o.str();

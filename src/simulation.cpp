@@ -460,7 +460,7 @@ void Simulation::finish_step(double h) {
   State& s = state_;
   Workspace& w = *ws_;
   apply_handle_constraints(m, s, w);
-  collide(m, s, &touched_);
+  collide(m, s, &touched_, nullptr, &w);
   apply_friction(m, s, w, touched_, h);
   if (m.params.strain_limit.enabled) {
     limit_strain(m, s, w, h);
@@ -470,8 +470,11 @@ void Simulation::finish_step(double h) {
     // 0 or z within a factor 2 of it, as a step's motion keeps it). A ball's
     // projection can leave one an ulp inside, and two obstacles can push a
     // particle out of one into the other: then all are looked at again.
-    const bool table_alone = m.params.table.enabled && !m.params.ball.enabled;
-    collide(m, s, nullptr, table_alone ? &w.strain_changed : nullptr);
+    const bool table_alone =
+        m.params.table.enabled && !m.params.ball.enabled && m.obstacles.empty();
+    collide(m, s, nullptr, table_alone ? &w.strain_changed : nullptr, &w);
+  } else if (!m.obstacles.empty()) {
+    collide_with_meshes(m, s, w);  // friction's move along a curved mesh dips inside
   }
   hold_stopped_handles(m, s);
   update_contact(m, s, w);

@@ -115,7 +115,11 @@ void update_strain_order(const Model& m, State& s, Workspace& w) {
       const bool near = (m.params.table.enabled &&
                          query_surface(m.params, SurfaceKind::Table, s.x[i]).distance < h_th) ||
                         (m.params.ball.enabled &&
-                         query_surface(m.params, SurfaceKind::Ball, s.x[i]).distance < h_th);
+                         query_surface(m.params, SurfaceKind::Ball, s.x[i]).distance < h_th) ||
+                        std::any_of(m.obstacles.begin(), m.obstacles.end(), [&](const auto& o) {
+                          // (a search within the bridge alone: the cloth is outside)
+                          return o->query_within(s.x[i], h_th + o->half_thickness).distance < h_th;
+                        });
       if (near) sources.push_back(i);
     }
   }

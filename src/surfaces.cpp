@@ -1,4 +1,5 @@
-// Contact surfaces and obstacles (MODEL.md section 3): the table plane and the ball.
+// Contact surfaces and obstacles (MODEL.md section 3): the table plane, the
+// ball and the mesh obstacles (mesh_obstacle.cpp).
 #include "detail.hpp"
 
 namespace wetcloth::detail {
@@ -33,13 +34,24 @@ void collide_with_table(const Model& m, State& s, std::uint8_t* touched) {
 }  // namespace
 
 void collide(const Model& m, State& s, std::vector<std::uint8_t>* touched,
-             const std::vector<int>* only) {
+             const std::vector<int>* only, Workspace* w) {
   const Params& p = m.params;
-  if (!only && p.table.enabled && !p.ball.enabled)
+  if (!only && p.table.enabled && !p.ball.enabled && m.obstacles.empty())
     return touched ? collide_with_table<true>(m, s, touched->data())
                    : collide_with_table<false>(m, s, nullptr);
   const SurfaceKind kinds[] = {SurfaceKind::Table, SurfaceKind::Ball};
   const bool enabled[] = {p.table.enabled, p.ball.enabled};
+  const int meshes = static_cast<int>(m.obstacles.size());
+  if (w) {
+    w->mesh_cache.resize(m.obstacles.size());
+    for (MeshQueryCache& c : w->mesh_cache) c.prepare(m.n);
+  }
+  auto push_out = [&](int i, double distance, const Vec3& normal, int code) {
+    sub(s.x[i], distance * normal);
+    const double vn = s.v[i].dot(normal);
+    if (vn < 0) sub(s.v[i], vn * normal);
+    if (touched) (*touched)[i] = static_cast<std::uint8_t>(code);
+  };
   auto one = [&](int i) {
     if (touched) (*touched)[i] = 0;
     if (m.driven[i]) return;
@@ -47,10 +59,13 @@ void collide(const Model& m, State& s, std::vector<std::uint8_t>* touched,
       if (!enabled[o]) continue;
       const SurfaceHit h = query_surface(p, kinds[o], s.x[i]);
       if (h.distance >= 0) continue;
-      sub(s.x[i], h.distance * h.normal);
-      const double vn = s.v[i].dot(h.normal);
-      if (vn < 0) sub(s.v[i], vn * h.normal);
-      if (touched) (*touched)[i] = static_cast<std::uint8_t>(kinds[o]);
+      push_out(i, h.distance, h.normal, static_cast<int>(kinds[o]));
+    }
+    for (int k = 0; k < meshes; ++k) {
+      const MeshObstacle::Hit h =
+          query_mesh(*m.obstacles[k], s.x[i], 0.0, w ? &w->mesh_cache[k] : nullptr, i);
+      if (h.distance >= 0) continue;
+      push_out(i, h.distance, h.normal, kMeshCode + k);
     }
   };
   if (only)
@@ -59,9 +74,26 @@ void collide(const Model& m, State& s, std::vector<std::uint8_t>* touched,
     for_each_particle(m, one);
 }
 
+void collide_with_meshes(const Model& m, State& s, Workspace& w) {
+  w.mesh_cache.resize(m.obstacles.size());
+  for (MeshQueryCache& c : w.mesh_cache) c.prepare(m.n);
+  for_each_particle(m, [&](int i) {
+    if (m.driven[i]) return;
+    for (std::size_t k = 0; k < m.obstacles.size(); ++k) {
+      const MeshObstacle::Hit h = query_mesh(*m.obstacles[k], s.x[i], 0.0, &w.mesh_cache[k], i);
+      if (h.distance >= 0) continue;
+      sub(s.x[i], h.distance * h.normal);
+      const double vn = s.v[i].dot(h.normal);
+      if (vn < 0) sub(s.v[i], vn * h.normal);
+    }
+  });
+}
+
 void update_contact(const Model& m, State& s, Workspace& w) {
   const Params& p = m.params;
   const double h_th = p.contact.bridge_height;
+  w.mesh_cache.resize(m.obstacles.size());
+  for (MeshQueryCache& c : w.mesh_cache) c.prepare(m.n);
   for_each_particle_block(m, [&](const int begin, const int end) {
     // Locals: a byte store may alias anything, so the loop would otherwise
     // reload after each one every pointer and bound it reads through a
@@ -81,6 +113,20 @@ void update_contact(const Model& m, State& s, Workspace& w) {
         nx[i] = ny[i] = 0.0;
         nz[i] = 1.0;
         contact[i] = distance[i] < h_th;
+      }
+      return;
+    }
+    if (kind == SurfaceKind::Mesh) {  // within the air's band: beyond it nothing needs more
+      const MeshObstacle& o = *m.obstacles[m.contact_obstacle];
+      MeshQueryCache* cache = &w.mesh_cache[m.contact_obstacle];
+      const double reach = std::max(p.air.band, h_th);
+      for (int i = begin; i < end; ++i) {
+        const MeshObstacle::Hit h = query_mesh(o, s.x[i], reach, cache, i);
+        distance[i] = h.distance;
+        nx[i] = h.normal.x();
+        ny[i] = h.normal.y();
+        nz[i] = h.normal.z();
+        contact[i] = h.distance < h_th;
       }
       return;
     }

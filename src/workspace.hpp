@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "mesh_obstacle.hpp"
 #include "wetcloth/simulation.hpp"
 
 namespace wetcloth {
@@ -27,6 +28,8 @@ struct Workspace {
   std::vector<Vec3> x_before;
   std::vector<double> quad_normals;  // compute_normals' scratch
   std::vector<double> distance;      // signed distance to the contact surface
+  // Per mesh obstacle, each particle's last query (bounds the next search only).
+  std::vector<MeshQueryCache> mesh_cache;
   std::vector<double> adhesion;      // |adhesion force| per particle, N
   std::vector<std::uint8_t> border;  // border of the contact region
   std::vector<double> pocket_sums;   // scratch for the implicit air correction

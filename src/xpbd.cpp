@@ -253,7 +253,7 @@ void project_self_collision(const Model& m, State& s, Workspace& w, double h) {
 void collide_with_friction(const Model& m, State& s, Workspace& w,
                            std::vector<std::uint8_t>& touched, double h) {
   w.x_before_collide = s.x;
-  collide(m, s, &touched);
+  collide(m, s, &touched, nullptr, &w);
   const double inv_h = 1.0 / h;
   for_each_particle_block(m, [&](int first, int end) {
     for (int k = 0; k < 3; ++k) {
@@ -265,8 +265,9 @@ void collide_with_friction(const Model& m, State& s, Workspace& w,
   });
   const double mu = m.params.friction.mu;
   if (mu == 0) return;
+
   const bool with_load = m.params.friction.normal == FrictionNormal::Contact;
-  const auto surface = static_cast<std::uint8_t>(m.contact_surface);
+  const std::uint8_t surface = m.contact_code();
   // Per particle, from its flags: 0 no friction, 1 friction from its load,
   // 2 friction from its load and its adhesion (on the contact surface).
   const auto kind = [&](int i) {
@@ -317,6 +318,9 @@ void collide_with_friction(const Model& m, State& s, Workspace& w,
       }
     });
   });
+  // Friction moved particles along the surface: on a curved mesh that chord
+  // dips inside (on the ball it is left as it was, its results unchanged).
+  if (!m.obstacles.empty()) collide_with_meshes(m, s, w);
 }
 
 }  // namespace wetcloth::detail

@@ -6,9 +6,14 @@
 #include <Eigen/LU>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <map>
+#include <mutex>
 #include <numbers>
 #include <stdexcept>
 #include <string>
+
+#include "wetcloth/output.hpp"
 
 namespace wetcloth::viewer {
 
@@ -394,9 +399,58 @@ Camera scene_view(const Params& p) {
 }
 
 namespace {
+// The scene's mesh obstacles for drawing, read once per scene (a stage is
+// made again for every tile of a comparison): none when it has none, or
+// when they do not load (load_scene has said why already).
+std::shared_ptr<const Stage::Obstacles> scene_obstacles(const Params& p) {
+  if (p.obstacles.empty()) return nullptr;
+  std::string key = p.scene_dir;
+  for (const auto& [name, o] : p.obstacles) {
+    char t[256];
+    std::snprintf(t, sizeof t, "|%s %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g %.17g",
+                  name.c_str(), o.translate[0], o.translate[1], o.translate[2], o.rotate[0],
+                  o.rotate[1], o.rotate[2], o.scale[0], o.scale[1], o.scale[2]);
+    key += t + o.mesh;
+  }
+  static std::mutex mutex;
+  static std::map<std::string, std::shared_ptr<const Stage::Obstacles>> cache;
+  const std::lock_guard<std::mutex> lock(mutex);
+  if (const auto it = cache.find(key); it != cache.end()) return it->second;
+  auto out = std::make_shared<Stage::Obstacles>();
+  try {
+    Params only = p;
+    only.table.enabled = only.ball.enabled = false;
+    for (const NamedMesh& mesh : obstacle_meshes(only)) {
+      const int base = static_cast<int>(out->position.size());
+      for (const Vec3& x : mesh.points) out->position.push_back(x.cast<float>());
+      out->normal.resize(out->position.size(), Vec3f::Zero());
+      for (const auto& t : mesh.triangles) {
+        out->triangles.push_back({base + t[0], base + t[1], base + t[2]});
+        const Vec3 n =
+            (mesh.points[t[1]] - mesh.points[t[0]]).cross(mesh.points[t[2]] - mesh.points[t[0]]);
+        for (int k : t) out->normal[base + k] += n.cast<float>();  // area-weighted
+      }
+    }
+  } catch (const std::exception&) {
+    out->position.clear(), out->normal.clear(), out->triangles.clear();
+  }
+  for (auto& n : out->normal) n.normalize();
+  if (!out->position.empty()) {
+    out->lo = out->hi = out->position[0];
+    for (const auto& x : out->position)
+      out->lo = out->lo.cwiseMin(x), out->hi = out->hi.cwiseMax(x);
+  }
+  return cache[key] = out->position.empty() ? nullptr : out;
+}
+
 // Widens a box round the cloth to the obstacles in view: the table when the
-// cloth is within half its size of it (not under a hanging flag), the ball.
+// cloth is within half its size of it (not under a hanging flag), the ball,
+// the mesh obstacles.
 void add_obstacles(const Params& p, Vec3f& lo, Vec3f& hi) {
+  if (const auto meshes = scene_obstacles(p)) {
+    lo = lo.cwiseMin(meshes->lo);
+    hi = hi.cwiseMax(meshes->hi);
+  }
   const float size = static_cast<float>(std::max(p.cloth.size[0], p.cloth.size[1]));
   const float table = static_cast<float>(p.table.height);
   if (p.table.enabled && lo.z() - table < size * 0.5f) lo.z() = std::min(lo.z(), table);
@@ -454,6 +508,7 @@ Stage stage_from(const Params& p) {
   s.ball_center =
       Eigen::Vector3d(p.ball.center[0], p.ball.center[1], p.ball.center[2]).cast<float>();
   s.ball_radius = static_cast<float>(p.ball.radius);
+  s.obstacles = scene_obstacles(p);
   if (s.table) {
     s.ground_z = static_cast<float>(p.table.height);
   } else {  // no table: the grid a little below the lowest thing in the scene
@@ -463,6 +518,7 @@ Stage stage_from(const Params& p) {
     if (p.cloth.orientation == Orientation::Vertical)
       low -= static_cast<float>(p.cloth.size[1]) * 0.75f;
     if (s.ball) low = std::min(low, s.ball_center.z() - s.ball_radius);
+    if (s.obstacles) low = std::min(low, s.obstacles->lo.z());
     s.ground_z = low - (p.cloth.orientation == Orientation::Vertical ? 0.0f : 0.1f);
   }
   return s;
@@ -477,6 +533,8 @@ struct Renderer::Impl {
   GLuint lit[3][2] = {};  // [material][shadows], compiled when first used
   GLuint empty_vao = 0;
   Mesh cloth, sphere, quad;
+  Mesh obstacles;  // the stage's mesh obstacles, as last uploaded
+  const Stage::Obstacles* uploaded = nullptr;
   GLuint line_vao = 0, line_vbo = 0;
   GLuint shadow_tex = 0, shadow_fbo = 0;
   std::vector<float> vertices;
@@ -491,6 +549,7 @@ struct Renderer::Impl {
     cloth.create();
     sphere.create();
     quad.create();
+    obstacles.create();
 
     // Unit sphere (ball, grab marker).
     std::vector<float> v;
@@ -553,6 +612,7 @@ struct Renderer::Impl {
     glDeleteVertexArrays(1, &empty_vao);
     cloth.destroy();
     sphere.destroy();
+    obstacles.destroy();
     quad.destroy();
     glDeleteVertexArrays(1, &line_vao);
     glDeleteBuffers(1, &line_vbo);
@@ -593,6 +653,16 @@ void Renderer::draw(const ClothMesh& cloth, const Stage& stage, const Camera& ca
                     int height, const DrawOptions& opt) {
   Impl& r = *impl_;
   r.upload_cloth(cloth);
+  if (stage.obstacles && stage.obstacles.get() != r.uploaded) {
+    std::vector<float> v;
+    std::vector<unsigned> idx;
+    const Stage::Obstacles& o = *stage.obstacles;
+    for (std::size_t k = 0; k < o.position.size(); ++k)
+      push(v, o.position[k], o.normal[k], Vec3f(0.80f, 0.78f, 0.74f));  // a pale stone
+    for (const auto& t : o.triangles) idx.insert(idx.end(), t.begin(), t.end());
+    r.obstacles.upload(v, idx, GL_STATIC_DRAW);
+    r.uploaded = stage.obstacles.get();
+  }
   const Mat4f identity = Mat4f::Identity();
   // The ball drawn a hair smaller than it is: the cloth resting on it may sink into it
   // by a fraction of a millimetre, which would show as specks of ball through the cloth.
@@ -606,6 +676,7 @@ void Renderer::draw(const ClothMesh& cloth, const Stage& stage, const Camera& ca
     lo = lo.cwiseMin(stage.ball_center - Vec3f::Constant(stage.ball_radius));
     hi = hi.cwiseMax(stage.ball_center + Vec3f::Constant(stage.ball_radius));
   }
+  if (stage.obstacles) lo = lo.cwiseMin(stage.obstacles->lo), hi = hi.cwiseMax(stage.obstacles->hi);
   if (lo.x() > hi.x()) lo = hi = Vec3f::Zero();
   const Vec3f center = (lo + hi) / 2;
   const float radius = (hi - lo).norm() / 2 + 0.02f;
@@ -637,6 +708,10 @@ void Renderer::draw(const ClothMesh& cloth, const Stage& stage, const Camera& ca
     if (stage.ball) {
       set(r.depth, "u_model", ball_model);
       r.sphere.draw();
+    }
+    if (stage.obstacles) {
+      set(r.depth, "u_model", identity);
+      r.obstacles.draw();
     }
     glDisable(GL_POLYGON_OFFSET_FILL);
   }
@@ -683,6 +758,16 @@ void Renderer::draw(const ClothMesh& cloth, const Stage& stage, const Camera& ca
     p = use_lit(kPlain, true);
     set(p, "u_model", ball_model);
     r.sphere.draw();
+  }
+  if (stage.obstacles) {
+    // Pushed back a little, as the ball is drawn a hair small: the cloth
+    // resting on the mesh would show specks of it through.
+    glEnable(GL_POLYGON_OFFSET_FILL);
+    glPolygonOffset(2.0f, 8.0f);
+    p = use_lit(kPlain, true);
+    set(p, "u_model", identity);
+    r.obstacles.draw();
+    glDisable(GL_POLYGON_OFFSET_FILL);
   }
 
   // The ground in two pieces: a patch where shadows can fall (the casters' box

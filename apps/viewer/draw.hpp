@@ -58,6 +58,14 @@ struct Stage {
   bool ball = false;
   Vec3f ball_center{0, 0, 0};
   float ball_radius = 0;
+  // The [obstacle.NAME] meshes, triangles in float (shared: a stage made
+  // again from the same scene reuses them, and the renderer uploads them once).
+  struct Obstacles {
+    std::vector<Vec3f> position, normal;  // per vertex, normals smoothed
+    std::vector<std::array<int, 3>> triangles;
+    Vec3f lo{0, 0, 0}, hi{0, 0, 0};
+  };
+  std::shared_ptr<const Obstacles> obstacles;
 };
 Stage stage_from(const Params& p);
 

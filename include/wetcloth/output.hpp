@@ -93,13 +93,17 @@ inline Vec3 to_up(const Vec3& x, UpAxis up) {
 // normals, triangles.
 std::string cloth_obj(const Model& m, const State& s, UpAxis up = UpAxis::Z);
 
-// An obstacle as a triangle mesh: the table (a square around the cloth), the ball.
+// An obstacle as a triangle mesh: the table (a square around the cloth), the
+// ball, and each [obstacle.NAME] (named NAME) as the simulation has it.
 struct NamedMesh {
   std::string name;
   std::vector<Vec3> points;
   std::vector<std::array<int, 3>> triangles;  // 0-based
 };
 std::vector<NamedMesh> obstacle_meshes(const Model& m);
+// The same from a scene's parameters (its mesh files read again; throws
+// SceneError as load_scene would), for a viewer that has no Model.
+std::vector<NamedMesh> obstacle_meshes(const Params& p);
 std::string obstacles_obj(const Model& m, UpAxis up = UpAxis::Z);
 
 // metrics.csv, one row per output frame.

@@ -26,8 +26,9 @@ enum class HandleType { Force, Move, Pin };
 WETCLOTH_CHOICE(HandleType, "force", "move", "pin")
 enum class Orientation { Horizontal, Vertical };  // the xy plane, the xz plane
 WETCLOTH_CHOICE(Orientation, "horizontal", "vertical")
-enum class SurfaceChoice { Table, Ball, None };
-WETCLOTH_CHOICE(SurfaceChoice, "table", "ball", "none")
+// Obstacle: the [obstacle.NAME] whose `contact` is true (a triangle mesh).
+enum class SurfaceChoice { Table, Ball, None, Obstacle };
+WETCLOTH_CHOICE(SurfaceChoice, "table", "ball", "none", "obstacle")
 enum class FrictionNormal { Contact, Adhesion };  // adhesion + load; the paper's adhesion alone
 WETCLOTH_CHOICE(FrictionNormal, "contact", "adhesion")
 enum class AirModel { Exchange, Sealed, Vented, Off };
@@ -59,6 +60,18 @@ struct HandleParams {
   double max_height = 0;    // force: height cap above the table, m (0: none)
   double max_travel = 0;    // force, move: distance the hand travels before it stops, m (0: none)
   double start = 0;         // time the handle starts acting, s (a late pin holds where it is then)
+};
+
+// A fixed obstacle made of a triangle mesh ([obstacle.NAME], docs/guide.md
+// "Obstacles"): the file's points p become R (S p) + translate, S the
+// per-axis scale, R the rotation about x, then y, then z (fixed axes).
+struct ObstacleParams {
+  std::string mesh;          // OBJ file, relative to the scene file's folder
+  Vec3d translate{0, 0, 0};  // m
+  Vec3d rotate{0, 0, 0};     // degrees about x, y, z, applied in that order
+  Vec3d scale{1, 1, 1};      // per axis (the same three: uniform)
+  double thickness = 0;      // open meshes: a shell this thick about the surface, m
+  bool contact = false;      // the contact surface (with contact.surface = "obstacle")
 };
 
 struct Params {
@@ -192,7 +205,8 @@ struct Params {
     double checkpoint_every = 0;  // s of simulated time between checkpoints; 0: none
   } run;
 
-  std::map<std::string, HandleParams> handles;  // [handle.NAME]
+  std::map<std::string, HandleParams> handles;      // [handle.NAME]
+  std::map<std::string, ObstacleParams> obstacles;  // [obstacle.NAME]
 };
 
 // Humidity-dependent quantities (MODEL.md sections 1, 4, 6).

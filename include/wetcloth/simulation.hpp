@@ -102,7 +102,13 @@ struct Handle {
   std::vector<Vec3> anchor;  // positions at t = 0 (move, pin)
 };
 
-enum class SurfaceKind { None, Table, Ball };
+// Mesh: an [obstacle.NAME] (Model::obstacles). Where a byte names the
+// surface a particle touched, obstacle k is kMeshCode + k.
+enum class SurfaceKind { None, Table, Ball, Mesh };
+constexpr int kMeshCode = 3;
+constexpr int kMostObstacles = 250;  // codes up to 252 fit a byte
+// A triangle-mesh obstacle, built (src/mesh_obstacle.hpp).
+struct MeshObstacle;
 
 // A spring of the grid's stencil, as a forward offset: particle (i, j) is tied
 // to (i + di, j + dj). Eight offsets and their mirror images are all the springs.
@@ -151,6 +157,16 @@ struct Model {
   int measured_handle = -1;  // the one the metrics follow: the first that is not a pin, else the
                              // first pin (-1: no handle)
   SurfaceKind contact_surface = SurfaceKind::None;
+  // The [obstacle.NAME] tables, in name order, transformed and ready to query;
+  // contact_obstacle: the one that is the contact surface (-1: none).
+  std::vector<std::shared_ptr<const MeshObstacle>> obstacles;
+  int contact_obstacle = -1;
+  // The byte that names the contact surface (SurfaceKind, or kMeshCode + k).
+  std::uint8_t contact_code() const {
+    return static_cast<std::uint8_t>(contact_surface == SurfaceKind::Mesh
+                                         ? kMeshCode + contact_obstacle
+                                         : static_cast<int>(contact_surface));
+  }
   int index(int i, int j) const { return j * nu + i; }
   // Spring e of a set: its stiffness (N/m) and damping (N·s/m).
   SpringConstants constants(const SpringSet& set, std::size_t e) const {

@@ -9,10 +9,14 @@ namespace wetcloth::detail {
 namespace {
 
 // Particles whose gap to the surface holds trapped air: above the table, or
-// within the band around the ball.
+// within the band around the ball or a mesh obstacle (its distance is along
+// the normal from its closest point).
+bool banded(const Model& m) {
+  return m.contact_surface == SurfaceKind::Ball || m.contact_surface == SurfaceKind::Mesh;
+}
 bool holds_air(const Model& m, double d) {
   if (d <= 0) return false;
-  return m.contact_surface != SurfaceKind::Ball || d < m.params.air.band;
+  return !banded(m) || d < m.params.air.band;
 }
 
 // The gap counted in V_sum: the air film a resting cloth keeps in its weave
@@ -23,8 +27,7 @@ bool holds_air(const Model& m, double d) {
 // starts flat traps no air at all, and `sealed` holds a full vacuum.
 double air_gap(const Model& m, double d) {
   const double above = std::max(d, 0.0);
-  return m.params.air.film +
-         (m.contact_surface == SurfaceKind::Ball ? std::min(above, m.params.air.band) : above);
+  return m.params.air.film + (banded(m) ? std::min(above, m.params.air.band) : above);
 }
 
 // Advances one pocket's V_atm over dt while V_sum grows linearly from v_old

@@ -77,7 +77,7 @@ void apply_friction(const Model& m, State& s, const Workspace& w,
   if (!with_load) return;
   for_each_particle(m, [&](int i) {
     if (m.driven[i] || s.contact[i] || touched[i] == 0) return;
-    const Vec3 n = query_surface(m.params, static_cast<SurfaceKind>(touched[i]), s.x[i]).normal;
+    const Vec3 n = query_code(m, touched[i], s.x[i]).normal;
     slow_down(m, s, i, n, std::max(0.0, -w.force[i].dot(n)), mu, dt);
   });
 }

@@ -1,0 +1,63 @@
+#!/usr/bin/env bash
+# Mesh obstacles from the command line: a bad mesh, an open mesh with no
+# thickness, a path out of the scene's folder, a missing file exit 2 from
+# `wetcloth check`, naming the file and the key; the built-in scenes with
+# obstacles check and run (briefly, coarse), and their obstacles reach
+# obstacles.obj and the caches.
+set -u
+W="$1"
+T=$(mktemp -d)
+trap 'rm -rf "$T"' EXIT
+fails=0; passes=0
+ok()  { passes=$((passes+1)); echo "ok: $1"; }
+bad() { fails=$((fails+1)); echo "FAIL: $1"; }
+
+mkdir -p "$T/scene/meshes"
+printf 'v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n' > "$T/scene/meshes/plate.obj"
+printf 'v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n' > "$T/scene/meshes/flat.obj"
+printf 'v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 7\n' > "$T/scene/meshes/index.obj"
+printf 'not an obj file at all\n' > "$T/scene/meshes/text.obj"
+echo 'v 0 0 0' > "$T/outside.obj"
+
+# expect_error NAME OBSTACLE_TABLE KEY FILE: check exits 2 and says KEY and FILE.
+expect_error() {
+  local name="$1" table="$2" key="$3" file="$4"
+  printf '[obstacle.thing]\n%b' "$table" > "$T/scene/$name.toml"
+  "$W" check "$T/scene/$name.toml" >/dev/null 2>"$T/err"; local code=$?
+  if [ $code -eq 2 ] && grep -q "$key" "$T/err" && grep -q "$file" "$T/err"; then
+    ok "$name: exit 2, names $key and $file"
+  else
+    bad "$name: exit $code: $(cat "$T/err")"
+  fi
+}
+expect_error open 'mesh = "meshes/plate.obj"\n' obstacle.thing.thickness plate.obj
+expect_error degenerate 'mesh = "meshes/flat.obj"\n' obstacle.thing.mesh flat.obj
+expect_error bad-index 'mesh = "meshes/index.obj"\n' obstacle.thing.mesh index.obj
+expect_error missing 'mesh = "meshes/none.obj"\n' obstacle.thing.mesh none.obj
+expect_error outside 'mesh = "../outside.obj"\n' obstacle.thing.mesh outside.obj
+expect_error absolute "mesh = \"$T/outside.obj\"\n" obstacle.thing.mesh outside.obj
+expect_error no-mesh 'scale = [1, 1, 1]\n' obstacle.thing.mesh 'name the obstacle'
+expect_error typo 'mesh = "meshes/plate.obj"\nthicknes = 0.01\n' obstacle.thing.thicknes thickness
+
+# An open mesh with a thickness checks.
+printf '[obstacle.thing]\nmesh = "meshes/plate.obj"\nthickness = 0.01\ntranslate = [-0.5, -0.5, -0.1]\n' \
+  > "$T/scene/plate.toml"
+"$W" check "$T/scene/plate.toml" >"$T/out" 2>"$T/err" && grep -q '^\[obstacle.thing\]' "$T/out" &&
+  ok "an open mesh with a thickness checks" || bad "plate: $(cat "$T/err")"
+
+# The built-in scenes with obstacles: check, and a short coarse run whose
+# obstacles.obj and caches hold the mesh.
+for scene in bowl-drape towel-rail mannequin-drape; do
+  "$W" check "$scene" >/dev/null 2>"$T/err" && ok "check $scene" || bad "check $scene: $(cat "$T/err")"
+done
+"$W" run mannequin-drape --grid 15 --duration 0.05 --export usd,vtk --out "$T/run" --quiet \
+  2>"$T/err" >/dev/null; code=$?
+if [ $code -eq 0 ] && grep -q '^o torso' "$T/run/obstacles.obj" &&
+   grep -q 'torso' "$T/run/cloth.usda" && [ -s "$T/run/vtk/obstacles.vtp" ]; then
+  ok "mannequin-drape runs; the torso is in obstacles.obj, cloth.usda and obstacles.vtp"
+else
+  bad "mannequin-drape run: exit $code: $(cat "$T/err")"
+fi
+
+echo "$passes passed, $fails failed"
+[ $fails -eq 0 ]

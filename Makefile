@@ -47,7 +47,8 @@ test-sanitize: deps
 # Python or benchmarks), a subset of the unit tests (wetcloth_tests_subset,
 # tests/CMakeLists.txt), the fuzz corpus replay, the fault and signal tests,
 # the kill-and-resume test and a short run of every built-in scene on 1 and 2
-# threads. About 17 minutes on a fresh clone on 2 cores (docs/performance.md).
+# threads. About 20 minutes on a fresh clone on 2 idle cores (estimated from
+# CPU times; docs/performance.md).
 SAN_CI_BUILD ?= build-sanitize-ci
 # Two tests of the subset take 1.5 and 2.5 minutes under the sanitizers: left to make test-sanitize.
 SAN_CI_UNIT_FILTER = -StrainLimit.NoStructuralSpringEndsLongerThanTheLimit:SelfCollision.KeepsTwoFoldedLayersApart

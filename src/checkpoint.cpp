@@ -20,7 +20,7 @@ namespace wetcloth {
 namespace {
 
 constexpr char kMagic[16] = "WETCLOTH-STATE";
-constexpr std::uint32_t kVersion = 2;  // 1 had no run record: still read
+constexpr std::uint32_t kVersion = 3;  // 1 had no run record, 2 no scene folder: still read
 
 std::uint64_t fnv1a(const std::string& bytes) {
   std::uint64_t h = 1469598103934665603ULL;
@@ -128,6 +128,9 @@ void save_checkpoint(const std::filesystem::path& path, const Params& params, co
   const std::string toml = to_toml(params);
   w.pod(static_cast<std::uint64_t>(toml.size()));
   w.out += toml;
+  // Where the scene's meshes are found (Params::scene_dir): not a key.
+  w.pod(static_cast<std::uint64_t>(params.scene_dir.size()));
+  w.out += params.scene_dir;
   fields(w, const_cast<State&>(state));  // the writer only reads
   w.pod(static_cast<std::uint64_t>(run.size()));
   w.out += run;
@@ -146,7 +149,7 @@ Checkpoint load_checkpoint(const std::filesystem::path& path) {
     r.bad("not a wetcloth checkpoint");
   r.at = sizeof kMagic;
   const auto version = r.pod<std::uint32_t>();
-  if (version != 1 && version != kVersion)
+  if (version < 1 || version > kVersion)
     r.bad("a checkpoint of format " + std::to_string(version) +
           "; this wetcloth reads formats 1 to " + std::to_string(kVersion));
   std::uint64_t stored;
@@ -158,6 +161,12 @@ Checkpoint load_checkpoint(const std::filesystem::path& path) {
   const std::string toml(bytes, r.at, length);
   r.at += length;
   c.params = parse_scene(toml, path.string() + " (its scene)");
+  if (version >= 3) {
+    const std::size_t dir = r.count(1);
+    if (dir > bytes.size() - 8 - r.at) r.bad("the checkpoint is cut short");
+    c.params.scene_dir.assign(bytes, r.at, dir);
+    r.at += dir;
+  }
   fields(r, c.state);
   if (version >= 2) {
     const std::size_t run = r.count(1);

@@ -1212,12 +1212,16 @@ void check_value(const ParamDef& d, const ParamValue& value, const std::string& 
 
 void validate(const Params& p) {
   for (const ParamDef& d : param_defs()) {
-    if (d.key.rfind("handle.*.", 0) != 0) {
+    // [handle.NAME] and [obstacle.NAME] keys, for each such table.
+    if (d.key.rfind("handle.*.", 0) == 0) {
+      for (const auto& [name, h] : p.handles)
+        check_value(d, d.get(p, name), "handle." + name + d.key.substr(8));
+    } else if (d.key.rfind("obstacle.*.", 0) == 0) {
+      for (const auto& [name, o] : p.obstacles)
+        check_value(d, d.get(p, name), "obstacle." + name + d.key.substr(10));
+    } else {
       check_value(d, d.get(p, ""), d.key);
-      continue;
     }
-    for (const auto& [name, h] : p.handles)
-      check_value(d, d.get(p, name), "handle." + name + d.key.substr(8));
   }
   check_consistency(p, kInCode, {}, toml::table{});
 }

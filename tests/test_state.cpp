@@ -142,5 +142,25 @@ TEST(Checkpoint, KeepsTheRunsRecord) {
   fs::remove(file);
 }
 
+// A scene's meshes are found where the scene was: a checkpoint of a mesh
+// cloth (a built-in scene's, built into the program) builds its model again.
+TEST(Checkpoint, KeepsWhereTheScenesMeshesAre) {
+  namespace fs = std::filesystem;
+  const fs::path file = fs::temp_directory_path() / "wetcloth_test_checkpoint_mesh.state";
+  const Params p = load_scene("drape-disc");
+  ASSERT_EQ(p.scene_dir, "builtin:");
+  Simulation sim(p);
+  ASSERT_TRUE(sim.advance_to(0.01));
+  save_checkpoint(file, p, sim.state());
+  const Checkpoint c = load_checkpoint(file);
+  EXPECT_EQ(c.params.scene_dir, p.scene_dir);
+  Simulation again(c.params);
+  again.restore(c.state);
+  ASSERT_TRUE(again.advance_to(0.02));
+  ASSERT_TRUE(sim.advance_to(0.02));
+  EXPECT_TRUE(same_bits(again.state().x, sim.state().x));
+  fs::remove(file);
+}
+
 }  // namespace
 }  // namespace wetcloth

@@ -133,7 +133,9 @@ TEST(MeshObstacle, SphereMeshGivesTheBallsDistanceWithinTheChordError) {
       const Vec3 x = c + (r + off) * dir_k;
       const MeshObstacle::Hit h = o->query(x);
       ASSERT_NEAR(h.distance, off, chord + 1e-12) << "direction " << k << ", offset " << off;
-      if (std::abs(off) >= 1e-3) EXPECT_GT(h.normal.dot(dir_k), std::cos(0.05));
+      if (std::abs(off) >= 1e-3) {
+        EXPECT_GT(h.normal.dot(dir_k), std::cos(0.05));
+      }
       // A bounded search gives the same bits.
       const MeshObstacle::Hit b = o->query_within(x, h.unsigned_distance * 1.001 + 1e-9);
       ASSERT_EQ(b.distance, h.distance);
@@ -148,7 +150,7 @@ TEST(MeshObstacle, SphereMeshGivesTheBallsDistanceWithinTheChordError) {
   dir.write("meshes/inverted.obj", inverted.text());
   p.obstacles["mesh"].mesh = "meshes/inverted.obj";
   const auto flipped = build_mesh_obstacle(p, "mesh");
-  for (const Vec3 x : {Vec3(c + Vec3(0, 0, r + 0.003)), Vec3(c + Vec3(0.02, 0.01, 0.0))}) {
+  for (const Vec3& x : {Vec3(c + Vec3(0, 0, r + 0.003)), Vec3(c + Vec3(0.02, 0.01, 0.0))}) {
     EXPECT_EQ(flipped->query(x).distance, o->query(x).distance);
     EXPECT_EQ(flipped->query(x).normal, o->query(x).normal);
   }

@@ -365,7 +365,7 @@ void CacheWriter::add_frame(const Simulation& sim) {
   }
 }
 
-void CacheWriter::finish(bool keep_samples) {
+void CacheWriter::finish() {
   if (finished_) return;
   finished_ = true;
   if (!formats_.usd) return;
@@ -440,7 +440,9 @@ void CacheWriter::finish(bool keep_samples) {
     fs::remove(tmp, ec);
     throw_output_error(path, "cannot rename " + tmp.string() + " to it", ec.value());
   }
-  if (keep_samples) return;
+}
+
+void CacheWriter::remove_samples() {
   spools_.clear();
   if (std::error_code ec; fs::remove_all(dir_ / kSamples, ec), ec)
     throw_output_error(dir_ / kSamples, "cannot remove", ec.value());

@@ -184,6 +184,10 @@ int main(int argc, char** argv) {
                            "may be given)");
         out = resume_dir;
         if (cli::run_ended_whole(out)) {
+          // Killed in its last moment, between removing the checkpoint and
+          // the USD samples: the samples go now.
+          std::error_code ec;
+          std::filesystem::remove_all(out / ".cloth.usda.samples", ec);
           if (!quiet)
             std::printf("%s: the run ended whole (summary.json); nothing to resume\n", out.c_str());
           return 0;

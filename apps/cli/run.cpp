@@ -543,16 +543,13 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress,
   }
   if (progress) std::fprintf(stderr, "\n");
   metrics->close();
-  if (caches) caches->finish(r.code != kOk);  // a run that may resume keeps its USD samples
+  if (caches) caches->finish();
   if (first_json.is_null()) {
     r.first = r.final = sim.metrics();
     first_json = final_json = metrics_json(r.first);
   } else if (written_at_step < 0) {
     r.final = sim.metrics();  // a resumed run that had no frame left: the state's
   }
-  if (r.code == kOk)  // whole: nothing to resume
-    if (std::error_code ec; fs::remove(checkpoint_file, ec), ec)
-      throw_output_error(checkpoint_file, "cannot remove", ec.value());
   r.peak_deficit_pa = sim.state().peak_deficit;
   r.steps = sim.state().steps;
   r.wall_seconds = wall_before + wall();
@@ -588,6 +585,14 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress,
   s["final"] = final_json;  // the last row's (JSON has no inf: a row never has one)
   if (resume) s["resumed_at_s"] = resume->state.time;
   write_file_atomic(out / "summary.json", s.dump(2) + "\n");
+  // Whole: nothing to resume. The checkpoint goes once cloth.usda and
+  // summary.json are written, the USD samples after it: a run killed at any
+  // moment either resumes from its checkpoint or has ended whole.
+  if (r.code == kOk) {
+    if (std::error_code ec; fs::remove(checkpoint_file, ec), ec)
+      throw_output_error(checkpoint_file, "cannot remove", ec.value());
+    if (caches) caches->remove_samples();
+  }
   return r;
 }
 

@@ -78,8 +78,9 @@ class CacheWriter {
   // The frames so far, flushed (and with `durable`, on the disk).
   CachePosition position(bool durable);
   // Writes what is written at the end (cloth.usda); further frames are refused.
-  // The USD samples are removed unless `keep_samples` (a run that may resume).
-  void finish(bool keep_samples = false);
+  // The USD samples stay (a run may still resume from them) until remove_samples.
+  void finish();
+  void remove_samples();
 
  private:
   struct Spool;  // a time-sampled USD attribute's samples, in a file of their own

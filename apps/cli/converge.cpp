@@ -43,7 +43,7 @@ std::string format_time(double t) {
 std::function<int()> add_converge_command(CLI::App& app) {
   struct Options {
     SceneOptions scene;
-    std::vector<double> dts{5e-5, 2.5e-5, 1.25e-5};
+    std::vector<double> dts;  // default: the scene's step, halved and halved again
     std::string out;
     unsigned jobs = std::max(1u, std::thread::hardware_concurrency());
     bool quiet = false;
@@ -52,7 +52,7 @@ std::function<int()> add_converge_command(CLI::App& app) {
   auto* cmd =
       app.add_subcommand("converge", "run a scene at several time steps: is the result converged?");
   cmd->add_option("scene", o->scene.scene, "scene: a TOML file, or a built-in name")->required();
-  cmd->add_option("--dt", o->dts, "time steps, s (default 5e-5,2.5e-5,1.25e-5)")
+  cmd->add_option("--dt", o->dts, "time steps, s (default: the scene's, its half and its quarter)")
       ->delimiter(',')
       ->check(in_range_of("integrator.dt"));
   cmd->add_option("--set", o->scene.sets, "override a parameter, KEY=VALUE (repeatable)")
@@ -77,6 +77,11 @@ std::function<int()> add_converge_command(CLI::App& app) {
   return [cmd, o]() -> int {
     if (!*cmd) return -1;
     std::vector<double> dts = o->dts;
+    if (dts.empty()) {
+      const double dt =
+          load_on_grid(o->scene.scene, o->scene.overrides(), o->scene.grid).integrator.dt;
+      dts = {dt, dt / 2, dt / 4};
+    }
     std::sort(dts.rbegin(), dts.rend());
     if (std::adjacent_find(dts.begin(), dts.end()) != dts.end()) {
       std::fprintf(stderr, "wetcloth converge: error: --dt: a time step is given twice\n");

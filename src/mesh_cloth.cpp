@@ -307,6 +307,14 @@ void build_mesh_cloth(Model& m, const Params& p) {
   double total = 0;
   for (const double l : m.structural.rest) total += l;
   m.spacing = m.structural.size() ? total / m.structural.size() : 0.0;
+  // As a grid's particles along its longer side (xpbd_substeps).
+  double longest = 0;
+  for (int c = 0; c < 3; ++c) {
+    double lo = detail::kInf, hi = -detail::kInf;
+    for (const auto& q : mesh.position) lo = std::min(lo, q[c]), hi = std::max(hi, q[c]);
+    longest = std::max(longest, p.cloth.mesh_scale * (hi - lo));
+  }
+  m.along = m.spacing > 0 ? static_cast<int>(std::lround(longest / m.spacing)) + 1 : 0;
   std::vector<int> strain_list_start, strain_list;
   lists(n, strain_pairs, strain_list_start, strain_list);
   const int reach = std::max(

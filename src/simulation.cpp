@@ -206,6 +206,7 @@ void Simulation::set_params(const Params& p) {
   start_thread_choice();
   if (!same_grid) reset();
   ws_->strain_springs.clear();  // their lengths may have changed: ordered again next step
+  ws_->mesh_cache.clear();      // an obstacle may have moved: its last answers bound nothing
 }
 
 void Simulation::grab(int particle, const Vec3& target, double stiffness) {

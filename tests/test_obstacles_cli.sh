@@ -59,5 +59,20 @@ else
   bad "mannequin-drape run: exit $code: $(cat "$T/err")"
 fi
 
+# Obstacles' keys in sweeps, as handles': obstacle.NAME.KEY.
+"$W" sweep towel-rail --vary "obstacle.rail.translate=[0,0,0.6],[0,0,0.55]" --grid 9 --list >"$T/l" 2>"$T/err" &&
+  [ "$(cut -f2 "$T/l" | tr '\n' ' ')" = "translate=0x0x0.6 translate=0x0x0.55 " ] &&
+  ok "sweep --vary obstacle.rail.translate" || bad "sweep obstacle key: $(cat "$T/l" "$T/err")"
+"$W" sweep towel-rail --vary "obstacle.rail.translate=[0,0,0.6],[0,0,0.55]" --grid 9 --duration 0.02 \
+  --no-plots --quiet --out "$T/sweep" >/dev/null 2>"$T/err" &&
+  head -1 "$T/sweep/sweep.csv" | grep -q '^case,obstacle.rail.translate,' &&
+  grep -q '^translate=0x0x0.55,"\[0, 0, 0.55\]",' "$T/sweep/sweep.csv" &&
+  grep -q '^translate = \[0.0, 0.0, 0.55\]$' "$T/sweep/translate=0x0x0.55/scene.toml" &&
+  ok "the obstacle sweep runs: sweep.csv's column, each case's scene" ||
+  bad "obstacle sweep: $(cat "$T/err"; cat "$T/sweep/sweep.csv" 2>&1 | cut -c1-120)"
+"$W" sweep towel-rail --vary "obstacle.pole.scale=[1,1,1],[2,2,2]" --list >/dev/null 2>"$T/err"; code=$?
+[ $code -eq 2 ] && grep -q "obstacle.pole: the scene has no such obstacle" "$T/err" &&
+  ok "sweep: an unknown obstacle exits 2, named" || bad "unknown obstacle: exit $code, $(cat "$T/err")"
+
 echo "$passes passed, $fails failed"
 [ $fails -eq 0 ]

@@ -154,6 +154,38 @@ const char* signal_name(int sig) {
   return sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : "a signal";
 }
 
+// A run's scene.toml runs from its folder: the meshes the scene names go to
+// OUT/meshes/ (a built-in scene's from the copies in the program), and its
+// keys name them there. P with those paths; with `files`, each file's path in
+// OUT and its text. One file named twice is copied once; two files of one
+// name become meshes/NAME and meshes/2-NAME.
+Params with_output_meshes(const Params& p,
+                          std::vector<std::pair<std::string, std::string>>* files = nullptr) {
+  Params q = p;
+  std::vector<std::pair<std::string, std::string>> placed;  // the scene's path, the new one
+  const auto place = [&](const std::string& key, std::string& path) {
+    if (path.empty()) return;
+    const std::string from = fs::path(path).lexically_normal().generic_string();
+    for (const auto& [source, to] : placed)
+      if (source == from) {
+        path = to;
+        return;
+      }
+    const std::string name = fs::path(from).filename().string();
+    std::string to = "meshes/" + name;
+    for (int k = 2; std::any_of(placed.begin(), placed.end(),
+                                [&](const auto& e) { return e.second == to; });
+         ++k)
+      to = "meshes/" + std::to_string(k) + "-" + name;
+    placed.emplace_back(from, to);
+    if (files) files->emplace_back(to, scene_file_text(p, key, path));
+    path = to;
+  };
+  place("cloth.mesh", q.cloth.mesh);
+  for (auto& [name, o] : q.obstacles) place("obstacle." + name + ".mesh", o.mesh);
+  return q;
+}
+
 }  // namespace
 
 ResourceEstimate estimate_resources(const Params& p) {
@@ -287,8 +319,9 @@ ResumePoint load_resume_point(const fs::path& dir) {
   Params compared = c.params;
   compared.integrator.threads = folder.integrator.threads;
   compared.run.checkpoint_every = folder.run.checkpoint_every;
-  const std::string mine = to_toml(compared), theirs = to_toml(folder);
-  if (mine != theirs) {
+  // scene.toml names the meshes it copied (or, from an older run, the scene's).
+  const std::string mine = to_toml(with_output_meshes(compared)), theirs = to_toml(folder);
+  if (mine != theirs && to_toml(compared) != theirs) {
     std::istringstream a(mine), b(theirs);
     std::string la, lb;
     while (std::getline(a, la) && std::getline(b, lb) && la == lb) {
@@ -411,9 +444,15 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress,
     if (p.run.meshes)
       if (std::error_code ec; fs::create_directories(out / "frames", ec), ec)
         throw_output_error(out / "frames", "cannot make the folder", ec.value());
+    std::vector<std::pair<std::string, std::string>> meshes;
+    const Params written = with_output_meshes(p, &meshes);
+    if (!meshes.empty())
+      if (std::error_code ec; fs::create_directories(out / "meshes", ec), ec)
+        throw_output_error(out / "meshes", "cannot make the folder", ec.value());
+    for (const auto& [path, text] : meshes) write_file_atomic(out / path, text);
     write_file_atomic(out / "scene.toml", "# resolved by wetcloth " WETCLOTH_VERSION
                                           "; `wetcloth run` this file to reproduce the run\n" +
-                                              to_toml(p));
+                                              to_toml(written));
     write_file_atomic(out / "obstacles.obj", obstacles_obj(sim.model(), up));
     if (formats.any()) caches.emplace(out, sim, formats, up, p.run.fps);
     metrics.emplace(out / "metrics.csv");

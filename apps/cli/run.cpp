@@ -190,20 +190,26 @@ Params with_output_meshes(const Params& p,
 
 ResourceEstimate estimate_resources(const Params& p) {
   ResourceEstimate e;
-  const double n = static_cast<double>(p.cloth.resolution[0]) * p.cloth.resolution[1];
+  // A mesh cloth's particles are its vertices (cloth.resolution is not used).
+  const bool grid = p.cloth.mesh.empty();
+  const ClothMeshSize mesh = grid ? ClothMeshSize{} : cloth_mesh_size(p);
+  const double n = grid ? static_cast<double>(p.cloth.resolution[0]) * p.cloth.resolution[1]
+                        : static_cast<double>(mesh.vertices);
+  const double triangles = grid ? 2 * n : static_cast<double>(mesh.triangles);
   // Measured (peak RSS of pull-straight at 101 x 101 and 301 x 301, 1.5 kB a
   // particle; the 2001 x 2001 hang, 0.9 kB): about
   // kBytesPerParticle a particle, and self-collision's pair lists, which grow
   // with the particles within its distance (a disc of (distance / spacing)²).
-  const double spacing = std::min(p.cloth.size[0] / (p.cloth.resolution[0] - 1),
-                                  p.cloth.size[1] / (p.cloth.resolution[1] - 1));
-  const double near = p.self_collision.enabled
+  const double spacing = grid ? std::min(p.cloth.size[0] / (p.cloth.resolution[0] - 1),
+                                         p.cloth.size[1] / (p.cloth.resolution[1] - 1))
+                              : mesh.mean_edge;
+  const double near = p.self_collision.enabled && spacing > 0
                           ? std::min(n, 3.15 * std::pow(p.self_collision.distance / spacing, 2))
                           : 0;
   e.memory_bytes = 64e6 + n * (kBytesPerParticle + 16 * near);
   const double frames = static_cast<double>(last_frame_index(p.run.duration, p.run.fps)) + 1;
-  // An OBJ frame: a position, a normal and two triangles a particle.
-  e.disk_bytes = frames * (300 + (p.run.meshes ? 140 * n : 0)) + 1e5;
+  // An OBJ frame: a position and a normal a particle (70 bytes), a triangle 35.
+  e.disk_bytes = frames * (300 + (p.run.meshes ? 70 * n + 35 * triangles : 0)) + 1e5;
   return e;
 }
 
@@ -249,10 +255,14 @@ void check_resources(const Params& p, const fs::path& out, const std::string& so
   const double mem = available_memory();
   const std::string force = "; --force runs it all the same";
   if (mem >= 0 && e.memory_bytes > mem)
-    throw SceneError(source + ": cloth.resolution = [" + std::to_string(p.cloth.resolution[0]) +
-                     ", " + std::to_string(p.cloth.resolution[1]) + "] needs about " +
-                     gigabytes(e.memory_bytes) + " of memory, more than the " + gigabytes(mem) +
-                     " available" + force);
+    throw SceneError(source + ": " +
+                     (p.cloth.mesh.empty()
+                          ? "cloth.resolution = [" + std::to_string(p.cloth.resolution[0]) +
+                                ", " + std::to_string(p.cloth.resolution[1]) + "]"
+                          : "cloth.mesh = \"" + p.cloth.mesh + "\" (" +
+                                std::to_string(cloth_mesh_size(p).vertices) + " vertices)") +
+                     " needs about " + gigabytes(e.memory_bytes) + " of memory, more than the " +
+                     gigabytes(mem) + " available" + force);
   fs::path at = fs::absolute(out);
   std::error_code ec;
   while (!fs::exists(at, ec) && at.has_parent_path() && at != at.parent_path())

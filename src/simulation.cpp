@@ -563,8 +563,7 @@ std::string Simulation::blow_up_reason() const {
     o << lead << "integrator.dt = " << p.integrator.dt << " s is too large for the springs ("
       << (model_.grid ? detail::step_limit_springs_text(p) + " at this spacing"
                       : std::string("the mesh's stiffest of each kind"))
-      << ") and the lightest particle ("
-      << m_min << " kg): the explicit limit is about " << limit
+      << ") and the lightest particle (" << m_min << " kg): the explicit limit is about " << limit
       << " s. Lower integrator.dt, or the stiffness (material.*, springs.*_k, self_collision.k).";
     return o.str();
   }

@@ -173,8 +173,8 @@ Params with_output_meshes(const Params& p,
       }
     const std::string name = fs::path(from).filename().string();
     std::string to = "meshes/" + name;
-    for (int k = 2; std::any_of(placed.begin(), placed.end(),
-                                [&](const auto& e) { return e.second == to; });
+    for (int k = 2;
+         std::any_of(placed.begin(), placed.end(), [&](const auto& e) { return e.second == to; });
          ++k)
       to = "meshes/" + std::to_string(k) + "-" + name;
     placed.emplace_back(from, to);
@@ -257,8 +257,8 @@ void check_resources(const Params& p, const fs::path& out, const std::string& so
   if (mem >= 0 && e.memory_bytes > mem)
     throw SceneError(source + ": " +
                      (p.cloth.mesh.empty()
-                          ? "cloth.resolution = [" + std::to_string(p.cloth.resolution[0]) +
-                                ", " + std::to_string(p.cloth.resolution[1]) + "]"
+                          ? "cloth.resolution = [" + std::to_string(p.cloth.resolution[0]) + ", " +
+                                std::to_string(p.cloth.resolution[1]) + "]"
                           : "cloth.mesh = \"" + p.cloth.mesh + "\" (" +
                                 std::to_string(cloth_mesh_size(p).vertices) + " vertices)") +
                      " needs about " + gigabytes(e.memory_bytes) + " of memory, more than the " +

@@ -307,6 +307,14 @@ void build_mesh_cloth(Model& m, const Params& p) {
   double total = 0;
   for (const double l : m.structural.rest) total += l;
   m.spacing = m.structural.size() ? total / m.structural.size() : 0.0;
+  // As a grid's particles along its longer side (xpbd_substeps).
+  double longest = 0;
+  for (int c = 0; c < 3; ++c) {
+    double lo = detail::kInf, hi = -detail::kInf;
+    for (const auto& q : mesh.position) lo = std::min(lo, q[c]), hi = std::max(hi, q[c]);
+    longest = std::max(longest, p.cloth.mesh_scale * (hi - lo));
+  }
+  m.along = m.spacing > 0 ? static_cast<int>(std::lround(longest / m.spacing)) + 1 : 0;
   std::vector<int> strain_list_start, strain_list;
   lists(n, strain_pairs, strain_list_start, strain_list);
   const int reach = std::max(
@@ -331,6 +339,26 @@ void build_mesh_cloth(Model& m, const Params& p) {
     m.ring.insert(m.ring.end(), seen.begin(), seen.end());
     m.ring_start[k + 1] = static_cast<int>(m.ring.size());
   }
+}
+
+ClothMeshSize cloth_mesh_size(const Params& p) {
+  const TriangleMesh mesh = load_scene_mesh(p, "cloth.mesh", p.cloth.mesh);
+  // The structural springs' edges: the quads' sides, the lone triangles' edges.
+  std::map<std::pair<int, int>, double> edges;
+  const auto edge = [&](int a, int b) {
+    edges[{std::min(a, b), std::max(a, b)}] = (at(mesh, b) - at(mesh, a)).norm();
+  };
+  for (const auto& d : mesh.quads)
+    for (int c = 0; c < 4; ++c) edge(d[c], d[(c + 1) % 4]);
+  const std::vector<int> quad = quad_of_triangle(mesh);
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+    if (quad[t] < 0)
+      for (int c = 0; c < 3; ++c) edge(mesh.triangles[t][c], mesh.triangles[t][(c + 1) % 3]);
+  double total = 0;
+  for (const auto& [unused, l] : edges) total += l;
+  return {static_cast<long long>(mesh.position.size()),
+          static_cast<long long>(mesh.triangles.size()),
+          edges.empty() ? 0.0 : p.cloth.mesh_scale * total / static_cast<double>(edges.size())};
 }
 
 void check_cloth_mesh(const Params& p, const std::string& source) {

@@ -140,13 +140,12 @@ fs::path resolve_scene_path(const Params& p, const std::string& key, const std::
   return full;
 }
 
-TriangleMesh load_scene_mesh(const Params& p, const std::string& key, const std::string& path,
-                             const MeshRules& rules) {
+std::string scene_file_text(const Params& p, const std::string& key, const std::string& path) {
   const fs::path where = resolve_scene_path(p, key, path);
   if (p.scene_dir == "builtin:") {
     const std::string name = fs::path(path).lexically_normal().generic_string();
     for (const auto& b : builtin_mesh_texts())
-      if (b.name == name) return read_obj(b.text, "scenes/" + name, rules);
+      if (b.name == name) return b.text;
     throw SceneError("Params: " + key + ": \"" + path + "\" is not a built-in mesh");
   }
   std::error_code ec;
@@ -159,7 +158,15 @@ TriangleMesh load_scene_mesh(const Params& p, const std::string& key, const std:
   std::ostringstream text;
   text << in.rdbuf();
   if (!in) throw SceneError("Params: " + key + ": " + where.string() + ": cannot read the file");
-  return read_obj(text.str(), where.string(), rules);
+  return text.str();
+}
+
+TriangleMesh load_scene_mesh(const Params& p, const std::string& key, const std::string& path,
+                             const MeshRules& rules) {
+  const std::string text = scene_file_text(p, key, path);
+  if (p.scene_dir == "builtin:")
+    return read_obj(text, "scenes/" + fs::path(path).lexically_normal().generic_string(), rules);
+  return read_obj(text, resolve_scene_path(p, key, path).string(), rules);
 }
 
 }  // namespace wetcloth

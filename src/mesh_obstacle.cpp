@@ -13,6 +13,7 @@
 #include <map>
 #include <numbers>
 
+#include "detail.hpp"
 #include "mesh_io.hpp"
 #include "wetcloth/scene.hpp"
 
@@ -215,6 +216,16 @@ std::shared_ptr<const MeshObstacle> build_mesh_obstacle(const Params& p, const s
 }
 
 void check_obstacle_meshes(const Params& p, const std::string& source) {
+  // Where the cloth starts: the grid's points, or a mesh cloth's vertices
+  // (check_cloth_mesh has read its file).
+  std::vector<Vec3> start;
+  if (!p.obstacles.empty() && p.cloth.mesh.empty()) {
+    for (int j = 0; j < p.cloth.resolution[1]; ++j)
+      for (int i = 0; i < p.cloth.resolution[0]; ++i)
+        start.push_back(cloth_start_position(p, i, j));
+  } else if (!p.obstacles.empty()) {
+    start = mesh_cloth_positions(p, load_scene_mesh(p, "cloth.mesh", p.cloth.mesh));
+  }
   for (const auto& [name, op] : p.obstacles) {
     std::shared_ptr<const MeshObstacle> o;
     try {
@@ -226,14 +237,12 @@ void check_obstacle_meshes(const Params& p, const std::string& source) {
     }
     // A cloth that starts inside the obstacle would be flung out at the first step.
     double deepest = 0;
-    for (int j = 0; j < p.cloth.resolution[1]; ++j)
-      for (int i = 0; i < p.cloth.resolution[0]; ++i) {
-        const Vec3 x = cloth_start_position(p, i, j);
-        if ((x.array() < o->lo.array() - o->half_thickness).any() ||
-            (x.array() > o->hi.array() + o->half_thickness).any())
-          continue;  // outside its box
-        deepest = std::min(deepest, o->query(x).distance);
-      }
+    for (const Vec3& x : start) {
+      if ((x.array() < o->lo.array() - o->half_thickness).any() ||
+          (x.array() > o->hi.array() + o->half_thickness).any())
+        continue;  // outside its box
+      deepest = std::min(deepest, o->query(x).distance);
+    }
     if (deepest < -1e-9) {
       char mm[32];
       std::snprintf(mm, sizeof mm, "%.3g", -deepest * 1000);

@@ -103,6 +103,19 @@ double explicit_step_limit(const Params& p) {
   return k > 0 ? 2.0 / std::sqrt(8.0 * k / m_min) : 1.0;
 }
 
+double explicit_step_limit(const Model& m) {
+  if (m.grid) return explicit_step_limit(m.params);
+  // The grid's rule, with the mesh's stiffest springs and lightest particle.
+  const auto stiffest = [](const SpringSet& s) {
+    return s.k.empty() ? 0.0 : *std::max_element(s.k.begin(), s.k.end());
+  };
+  const double ks = stiffest(m.structural), kb = stiffest(m.bending);
+  const double chain = ks >= 4 * kb ? ks : (2 * ks + 4 * kb + ks * ks / (4 * kb)) / 4;
+  const double k = chain + stiffest(m.shear);
+  const double m_min = m.mass.empty() ? 0.0 : *std::min_element(m.mass.begin(), m.mass.end());
+  return k > 0 && m_min > 0 ? 2.0 / std::sqrt(8.0 * k / m_min) : 1.0;
+}
+
 namespace {
 
 void add_spring(SpringSet& s, const Model& m, int edge, int i0, int j0) {

@@ -294,7 +294,8 @@ std::vector<ParamDef> make_defs() {
       field("integrator.dt", "s", 1e-9, 1, "time step", P(integrator.dt)),
       field("integrator.substeps", "", 0, 10000,
             "xpbd: substeps a step, each one sweep of the constraints (0: 10, and one per 10 "
-            "particles past 101 along the cloth's longer side)",
+            "particles past 101 along the cloth's longer side; a mesh cloth has its longest "
+            "side over its mean edge, plus one)",
             P(integrator.substeps)),
       field("integrator.threads", "", 0, 1024,
             "threads of the step (0: all cores, or one where that is faster, timed as it runs; "

@@ -206,6 +206,7 @@ void Simulation::set_params(const Params& p) {
   start_thread_choice();
   if (!same_grid) reset();
   ws_->strain_springs.clear();  // their lengths may have changed: ordered again next step
+  ws_->mesh_cache.clear();      // an obstacle may have moved: its last answers bound nothing
 }
 
 void Simulation::grab(int particle, const Vec3& target, double stiffness) {
@@ -342,6 +343,11 @@ int xpbd_substeps(const Params& p) {
   return static_cast<int>(10 + std::max(0LL, (longer - 101 + 9) / 10));
 }
 
+int xpbd_substeps(const Model& m) {
+  if (m.grid || m.params.integrator.substeps > 0) return xpbd_substeps(m.params);
+  return static_cast<int>(10 + std::max(0, (m.along - 101 + 9) / 10));
+}
+
 // XPBD in substeps (xpbd.cpp): per substep the external forces move the
 // particles, the constraints are projected once, then contact and friction;
 // the air and the contact state follow every substep (the air is stiff: a
@@ -352,7 +358,7 @@ void Simulation::xpbd_step() {
   State& s = state_;
   Workspace& w = *ws_;
   const double dt = m.params.integrator.dt, c = m.params.forces.viscous_damping;
-  const int substeps = xpbd_substeps(m.params);
+  const int substeps = xpbd_substeps(m);
   const double h = dt / substeps, inv_h2 = 1.0 / (h * h);
   Vec3 rig = Vec3::Zero();
   for (int k = 0; k < substeps; ++k) {
@@ -501,7 +507,7 @@ std::string Simulation::blow_up_reason() const {
                          })));
   if (vmax <= p.integrator.max_speed) return {};
   const double m_min = *std::min_element(model_.mass.begin(), model_.mass.end());
-  const double limit = explicit_step_limit(p);
+  const double limit = explicit_step_limit(model_);
   std::ostringstream o;
   o << "the simulation blew up at t = " << state_.time << " s (";
   if (std::isfinite(vmax))
@@ -538,7 +544,7 @@ std::string Simulation::blow_up_reason() const {
     lead = " Or: ";
   }
   if (p.integrator.type == IntegratorType::Xpbd) {
-    o << lead << "integrator.dt = " << p.integrator.dt << " s in " << xpbd_substeps(p)
+    o << lead << "integrator.dt = " << p.integrator.dt << " s in " << xpbd_substeps(model_)
       << " substeps (integrator.substeps = " << p.integrator.substeps
       << ") is too coarse for a force this large: raise integrator.substeps, or look at the "
          "handles' forces (handle.*.force), the trapped air (air.model) and self_collision.k.";
@@ -555,8 +561,9 @@ std::string Simulation::blow_up_reason() const {
   }
   if (p.integrator.dt > limit) {
     o << lead << "integrator.dt = " << p.integrator.dt << " s is too large for the springs ("
-      << detail::step_limit_springs_text(p) << " at this spacing) and the lightest particle ("
-      << m_min << " kg): the explicit limit is about " << limit
+      << (model_.grid ? detail::step_limit_springs_text(p) + " at this spacing"
+                      : std::string("the mesh's stiffest of each kind"))
+      << ") and the lightest particle (" << m_min << " kg): the explicit limit is about " << limit
       << " s. Lower integrator.dt, or the stiffness (material.*, springs.*_k, self_collision.k).";
     return o.str();
   }

@@ -64,6 +64,11 @@ expect_bad mesh_run "cloth.obj: face 1 is degenerate" "$T/mesh_degenerate/scene.
 "$W" run drape-disc --set run.duration=0.01 --out "$T/disc" --quiet --export usd,pc2,vtk &&
   [ "$(grep -c '^vt ' "$T/disc/frames/frame_00000.obj")" = 1951 ] &&
   ok "run a mesh cloth: its UVs in the frames" || bad "run drape-disc"
+# A mesh cloth's memory estimate counts its vertices, not cloth.resolution's
+# grid (which it ignores: at 2001 x 2001 the grid would be refused).
+"$W" run drape-disc --set 'cloth.resolution=[2001,2001]' --duration 0.001 --out "$T/discmem" \
+  --quiet 2>"$T/err" && ok "a mesh cloth's memory estimate: its vertices" ||
+  bad "mesh cloth memory estimate: $(cat "$T/err")"
 expect_bad name       "no-such-scene"                   no-such-scene
 expect_bad set        "--humidity: value 2 is out of range [0, 1]" hang --humidity 2
 expect_bad duration   "--duration: value -1 is out of range" hang --duration -1

@@ -168,6 +168,28 @@ TEST(MeshCloth, TheGridsQuadsMakeTheGridsModel) {
   EXPECT_EQ(sorted(mesh.triangles), sorted(grid.triangles));
 }
 
+// The step's defaults from the mesh as from the grid it is: xpbd's substeps
+// by the particles along the longer side (131: 13 substeps, where a mesh
+// cloth had the default grid's 10), the explicit step's limit by the stiffest
+// springs and the lightest particle.
+TEST(MeshCloth, StepDefaultsComeFromTheMesh) {
+  const Params p =
+      load_scene("pull-straight", {"cloth.resolution=[131,11]", "cloth.size=[0.39,0.03]",
+                                   "integrator.type=xpbd", "integrator.dt=0.004166666666666667"});
+  const Model grid = build_model(p);
+  const Model mesh = build_model(with_mesh(p, "long", grid_obj(p)));
+  EXPECT_EQ(xpbd_substeps(p), 13);
+  EXPECT_EQ(xpbd_substeps(grid), 13);
+  EXPECT_EQ(mesh.along, 131);
+  EXPECT_EQ(xpbd_substeps(mesh), 13);
+  EXPECT_NEAR(explicit_step_limit(mesh), explicit_step_limit(p), 1e-9 * explicit_step_limit(p));
+  EXPECT_EQ(explicit_step_limit(grid), explicit_step_limit(p));
+  // Set substeps win, as on the grid.
+  Params set = with_mesh(p, "long", grid_obj(p));
+  set.integrator.substeps = 4;
+  EXPECT_EQ(xpbd_substeps(build_model(set)), 4);
+}
+
 // The grid read from a file runs the general kernels (mesh_cloth.cpp), the
 // built-in grid its stencil's: the same physics, summed in another order, and
 // the springs' damping by one Gauss-Seidel sweep where the grid solves it by

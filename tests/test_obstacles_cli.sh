@@ -6,6 +6,7 @@
 # obstacles.obj and the caches.
 set -u
 W="$1"
+SRC=$(cd "$(dirname "$0")/.." && pwd)
 T=$(mktemp -d)
 trap 'rm -rf "$T"' EXIT
 fails=0; passes=0
@@ -47,7 +48,7 @@ printf '[obstacle.thing]\nmesh = "meshes/plate.obj"\nthickness = 0.01\ntranslate
 
 # The built-in scenes with obstacles: check, and a short coarse run whose
 # obstacles.obj and caches hold the mesh.
-for scene in bowl-drape towel-rail mannequin-drape; do
+for scene in bowl-drape towel-rail mannequin-drape sleeve-pull; do
   "$W" check "$scene" >/dev/null 2>"$T/err" && ok "check $scene" || bad "check $scene: $(cat "$T/err")"
 done
 "$W" run mannequin-drape --grid 15 --duration 0.05 --export usd,vtk --out "$T/run" --quiet \
@@ -58,6 +59,48 @@ if [ $code -eq 0 ] && grep -q '^o torso' "$T/run/obstacles.obj" &&
 else
   bad "mannequin-drape run: exit $code: $(cat "$T/err")"
 fi
+
+# A run's folder runs anywhere: the meshes its scene names are copied to
+# OUT/meshes/ (a built-in scene's from the program), scene.toml names them
+# there, and running that scene.toml, from another place, gives the same bits.
+"$W" run sleeve-pull --duration 0.05 --out "$T/sleeve" --quiet 2>"$T/err" >/dev/null &&
+  cmp -s "$T/sleeve/meshes/arm.obj" "$SRC/scenes/meshes/arm.obj" &&
+  cmp -s "$T/sleeve/meshes/cloth_sleeve.obj" "$SRC/scenes/meshes/cloth_sleeve.obj" &&
+  grep -q '^mesh = "meshes/cloth_sleeve.obj"$' "$T/sleeve/scene.toml" &&
+  mv "$T/sleeve" "$T/moved" && "$W" run "$T/moved/scene.toml" --out "$T/again" --quiet 2>"$T/err" &&
+  cmp -s "$T/moved/metrics.csv" "$T/again/metrics.csv" &&
+  ok "a built-in mesh scene's run: its meshes copied, its scene.toml runs moved, the same bits" ||
+  bad "sleeve-pull's scene.toml: $(cat "$T/err")"
+# A scene of its own, with two meshes of one name in two folders.
+mkdir -p "$T/own/a" "$T/own/b"
+cp "$T/scene/meshes/plate.obj" "$T/own/a/plate.obj"
+sed 's/^v 1 1 0$/v 1 1.5 0/' "$T/scene/meshes/plate.obj" > "$T/own/b/plate.obj"
+printf 'name = "own"\n[cloth]\nmesh = "a/plate.obj"\nmesh_scale = 0.2\ncenter = [0, 0, 0.05]\n' > "$T/own/own.toml"
+printf '[obstacle.shelf]\nmesh = "b/plate.obj"\nthickness = 0.004\nscale = [0.3, 0.3, 1]\n' >> "$T/own/own.toml"
+printf 'translate = [-0.1, -0.1, 0]\n[run]\nduration = 0.05\n' >> "$T/own/own.toml"
+"$W" run "$T/own/own.toml" --out "$T/own-out" --quiet 2>"$T/err" >/dev/null &&
+  cmp -s "$T/own-out/meshes/plate.obj" "$T/own/a/plate.obj" &&
+  cmp -s "$T/own-out/meshes/2-plate.obj" "$T/own/b/plate.obj" &&
+  grep -q '^mesh = "meshes/2-plate.obj"$' "$T/own-out/scene.toml" &&
+  mv "$T/own-out" "$T/own-moved" && "$W" run "$T/own-moved/scene.toml" --out "$T/own-again" --quiet 2>"$T/err" &&
+  cmp -s "$T/own-moved/metrics.csv" "$T/own-again/metrics.csv" &&
+  ok "two meshes of one name: meshes/plate.obj and meshes/2-plate.obj; the same bits moved" ||
+  bad "own scene's copied meshes: $(cat "$T/err"; ls "$T/own-out/meshes" 2>&1)"
+
+# Obstacles' keys in sweeps, as handles': obstacle.NAME.KEY.
+"$W" sweep towel-rail --vary "obstacle.rail.translate=[0,0,0.6],[0,0,0.55]" --grid 9 --list >"$T/l" 2>"$T/err" &&
+  [ "$(cut -f2 "$T/l" | tr '\n' ' ')" = "translate=0x0x0.6 translate=0x0x0.55 " ] &&
+  ok "sweep --vary obstacle.rail.translate" || bad "sweep obstacle key: $(cat "$T/l" "$T/err")"
+"$W" sweep towel-rail --vary "obstacle.rail.translate=[0,0,0.6],[0,0,0.55]" --grid 9 --duration 0.02 \
+  --no-plots --quiet --out "$T/sweep" >/dev/null 2>"$T/err" &&
+  head -1 "$T/sweep/sweep.csv" | grep -q '^case,obstacle.rail.translate,' &&
+  grep -q '^translate=0x0x0.55,"\[0, 0, 0.55\]",' "$T/sweep/sweep.csv" &&
+  grep -q '^translate = \[0.0, 0.0, 0.55\]$' "$T/sweep/translate=0x0x0.55/scene.toml" &&
+  ok "the obstacle sweep runs: sweep.csv's column, each case's scene" ||
+  bad "obstacle sweep: $(cat "$T/err"; cat "$T/sweep/sweep.csv" 2>&1 | cut -c1-120)"
+"$W" sweep towel-rail --vary "obstacle.pole.scale=[1,1,1],[2,2,2]" --list >/dev/null 2>"$T/err"; code=$?
+[ $code -eq 2 ] && grep -q "obstacle.pole: the scene has no such obstacle" "$T/err" &&
+  ok "sweep: an unknown obstacle exits 2, named" || bad "unknown obstacle: exit $code, $(cat "$T/err")"
 
 echo "$passes passed, $fails failed"
 [ $fails -eq 0 ]

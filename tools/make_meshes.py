@@ -12,6 +12,8 @@ them in the program, tools/embed_scenes.cmake).
 
   bowl.obj   a bowl, a solid of revolution with a rounded rim (bowl-drape)
   rail.obj   a towel rail: a capsule along x (towel-rail)
+  arm.obj    an arm for a sleeve: a cylinder along x with flat ends rounded
+             at their edge (sleeve-pull)
   torso.obj  a mannequin's torso: the union of ellipsoids and capsules, cut
              flat at the hips and the neck (mannequin-drape)
 """
@@ -108,6 +110,28 @@ def capsule_x(length, radius, rings=24, segments=32):
     return pts, outward(pts, tris)
 
 
+def cylinder_x(length, radius, fillet, segments=48):
+    """A cylinder along x through the origin, its flat ends' edges rounded
+    by `fillet` (a sleeve pulled over the end slides round it)."""
+    profile = [(-length / 2, 0.0)]  # (x, r): revolved about x
+    for k in range(1, 4):  # the end's disc
+        profile.append((-length / 2, (radius - fillet) * k / 4))
+    for k in range(0, 7):  # the rounded edge
+        a = math.pi / 2 * k / 6
+        profile.append((-length / 2 + fillet * (1 - math.cos(a)), radius - fillet * (1 - math.sin(a))))
+    for k in range(1, 40):  # the wall, in rings 1 cm apart (on a 40 cm arm)
+        profile.append((-length / 2 + fillet + (length - 2 * fillet) * k / 40, radius))
+    for k in range(0, 7):
+        a = math.pi / 2 * k / 6
+        profile.append((length / 2 - fillet * (1 - math.sin(a)), radius - fillet * (1 - math.cos(a))))
+    for k in range(3, 0, -1):
+        profile.append((length / 2, (radius - fillet) * k / 4))
+    profile.append((length / 2, 0.0))
+    pts, tris = revolve([(r, x) for x, r in profile], segments)
+    pts = [(z, y, -x) for x, y, z in pts]  # as capsule_x: z becomes x
+    return pts, outward(pts, tris)
+
+
 def torso():
     """The union of ellipsoids and capsules, sliced at each height: every
     slice holds the z axis, so a ray from it leaves the body once (a star
@@ -181,6 +205,8 @@ def main():
     write_obj(os.path.join(out, "bowl.obj"), "a bowl, 22 cm across, 7.4 cm high", *bowl())
     write_obj(os.path.join(out, "rail.obj"), "a towel rail, 50 cm long, 2.4 cm thick",
               *capsule_x(0.5, 0.012))
+    write_obj(os.path.join(out, "arm.obj"), "an arm, 40 cm long, 4 cm in radius",
+              *cylinder_x(0.4, 0.04, 0.008))
     write_obj(os.path.join(out, "torso.obj"), "a mannequin's torso, 60 cm high", *torso())
 
 

@@ -154,24 +154,62 @@ const char* signal_name(int sig) {
   return sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : "a signal";
 }
 
+// A run's scene.toml runs from its folder: the meshes the scene names go to
+// OUT/meshes/ (a built-in scene's from the copies in the program), and its
+// keys name them there. P with those paths; with `files`, each file's path in
+// OUT and its text. One file named twice is copied once; two files of one
+// name become meshes/NAME and meshes/2-NAME.
+Params with_output_meshes(const Params& p,
+                          std::vector<std::pair<std::string, std::string>>* files = nullptr) {
+  Params q = p;
+  std::vector<std::pair<std::string, std::string>> placed;  // the scene's path, the new one
+  const auto place = [&](const std::string& key, std::string& path) {
+    if (path.empty()) return;
+    const std::string from = fs::path(path).lexically_normal().generic_string();
+    for (const auto& [source, to] : placed)
+      if (source == from) {
+        path = to;
+        return;
+      }
+    const std::string name = fs::path(from).filename().string();
+    std::string to = "meshes/" + name;
+    for (int k = 2;
+         std::any_of(placed.begin(), placed.end(), [&](const auto& e) { return e.second == to; });
+         ++k)
+      to = "meshes/" + std::to_string(k) + "-" + name;
+    placed.emplace_back(from, to);
+    if (files) files->emplace_back(to, scene_file_text(p, key, path));
+    path = to;
+  };
+  place("cloth.mesh", q.cloth.mesh);
+  for (auto& [name, o] : q.obstacles) place("obstacle." + name + ".mesh", o.mesh);
+  return q;
+}
+
 }  // namespace
 
 ResourceEstimate estimate_resources(const Params& p) {
   ResourceEstimate e;
-  const double n = static_cast<double>(p.cloth.resolution[0]) * p.cloth.resolution[1];
+  // A mesh cloth's particles are its vertices (cloth.resolution is not used).
+  const bool grid = p.cloth.mesh.empty();
+  const ClothMeshSize mesh = grid ? ClothMeshSize{} : cloth_mesh_size(p);
+  const double n = grid ? static_cast<double>(p.cloth.resolution[0]) * p.cloth.resolution[1]
+                        : static_cast<double>(mesh.vertices);
+  const double triangles = grid ? 2 * n : static_cast<double>(mesh.triangles);
   // Measured (peak RSS of pull-straight at 101 x 101 and 301 x 301, 1.5 kB a
   // particle; the 2001 x 2001 hang, 0.9 kB): about
   // kBytesPerParticle a particle, and self-collision's pair lists, which grow
   // with the particles within its distance (a disc of (distance / spacing)²).
-  const double spacing = std::min(p.cloth.size[0] / (p.cloth.resolution[0] - 1),
-                                  p.cloth.size[1] / (p.cloth.resolution[1] - 1));
-  const double near = p.self_collision.enabled
+  const double spacing = grid ? std::min(p.cloth.size[0] / (p.cloth.resolution[0] - 1),
+                                         p.cloth.size[1] / (p.cloth.resolution[1] - 1))
+                              : mesh.mean_edge;
+  const double near = p.self_collision.enabled && spacing > 0
                           ? std::min(n, 3.15 * std::pow(p.self_collision.distance / spacing, 2))
                           : 0;
   e.memory_bytes = 64e6 + n * (kBytesPerParticle + 16 * near);
   const double frames = static_cast<double>(last_frame_index(p.run.duration, p.run.fps)) + 1;
-  // An OBJ frame: a position, a normal and two triangles a particle.
-  e.disk_bytes = frames * (300 + (p.run.meshes ? 140 * n : 0)) + 1e5;
+  // An OBJ frame: a position and a normal a particle (70 bytes), a triangle 35.
+  e.disk_bytes = frames * (300 + (p.run.meshes ? 70 * n + 35 * triangles : 0)) + 1e5;
   return e;
 }
 
@@ -217,10 +255,14 @@ void check_resources(const Params& p, const fs::path& out, const std::string& so
   const double mem = available_memory();
   const std::string force = "; --force runs it all the same";
   if (mem >= 0 && e.memory_bytes > mem)
-    throw SceneError(source + ": cloth.resolution = [" + std::to_string(p.cloth.resolution[0]) +
-                     ", " + std::to_string(p.cloth.resolution[1]) + "] needs about " +
-                     gigabytes(e.memory_bytes) + " of memory, more than the " + gigabytes(mem) +
-                     " available" + force);
+    throw SceneError(source + ": " +
+                     (p.cloth.mesh.empty()
+                          ? "cloth.resolution = [" + std::to_string(p.cloth.resolution[0]) + ", " +
+                                std::to_string(p.cloth.resolution[1]) + "]"
+                          : "cloth.mesh = \"" + p.cloth.mesh + "\" (" +
+                                std::to_string(cloth_mesh_size(p).vertices) + " vertices)") +
+                     " needs about " + gigabytes(e.memory_bytes) + " of memory, more than the " +
+                     gigabytes(mem) + " available" + force);
   fs::path at = fs::absolute(out);
   std::error_code ec;
   while (!fs::exists(at, ec) && at.has_parent_path() && at != at.parent_path())
@@ -287,8 +329,9 @@ ResumePoint load_resume_point(const fs::path& dir) {
   Params compared = c.params;
   compared.integrator.threads = folder.integrator.threads;
   compared.run.checkpoint_every = folder.run.checkpoint_every;
-  const std::string mine = to_toml(compared), theirs = to_toml(folder);
-  if (mine != theirs) {
+  // scene.toml names the meshes it copied (or, from an older run, the scene's).
+  const std::string mine = to_toml(with_output_meshes(compared)), theirs = to_toml(folder);
+  if (mine != theirs && to_toml(compared) != theirs) {
     std::istringstream a(mine), b(theirs);
     std::string la, lb;
     while (std::getline(a, la) && std::getline(b, lb) && la == lb) {
@@ -411,9 +454,15 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress,
     if (p.run.meshes)
       if (std::error_code ec; fs::create_directories(out / "frames", ec), ec)
         throw_output_error(out / "frames", "cannot make the folder", ec.value());
+    std::vector<std::pair<std::string, std::string>> meshes;
+    const Params written = with_output_meshes(p, &meshes);
+    if (!meshes.empty())
+      if (std::error_code ec; fs::create_directories(out / "meshes", ec), ec)
+        throw_output_error(out / "meshes", "cannot make the folder", ec.value());
+    for (const auto& [path, text] : meshes) write_file_atomic(out / path, text);
     write_file_atomic(out / "scene.toml", "# resolved by wetcloth " WETCLOTH_VERSION
                                           "; `wetcloth run` this file to reproduce the run\n" +
-                                              to_toml(p));
+                                              to_toml(written));
     write_file_atomic(out / "obstacles.obj", obstacles_obj(sim.model(), up));
     if (formats.any()) caches.emplace(out, sim, formats, up, p.run.fps);
     metrics.emplace(out / "metrics.csv");

@@ -67,26 +67,37 @@ inline Varied parse_vary(const std::string& text) {
   return v;
 }
 
-// The parameter a key names (handle.NAME.KEY: handle.*.KEY), and its value in p.
-inline const ParamDef* def_of(const std::string& key, std::string* handle = nullptr) {
+// The parameter a key names (handle.NAME.KEY: handle.*.KEY; obstacle.NAME.KEY:
+// obstacle.*.KEY), and the NAME.
+inline const ParamDef* def_of(const std::string& key, std::string* name = nullptr) {
   std::string want = key;
-  if (key.rfind("handle.", 0) == 0) {
-    const auto dot = key.find('.', 7);
-    if (dot == std::string::npos) return nullptr;
-    if (handle) *handle = key.substr(7, dot - 7);
-    want = "handle.*." + key.substr(dot + 1);
-  }
+  for (const std::string kind : {"handle.", "obstacle."})
+    if (key.rfind(kind, 0) == 0) {
+      const auto dot = key.find('.', kind.size());
+      if (dot == std::string::npos) return nullptr;
+      if (name) *name = key.substr(kind.size(), dot - kind.size());
+      want = kind + "*." + key.substr(dot + 1);
+    }
   for (const ParamDef& d : param_defs())
     if (d.key == want) return &d;
   return nullptr;
 }
 
-inline std::string value_text(const Params& p, const std::string& key) {
-  std::string handle;
-  const ParamDef* d = def_of(key, &handle);
-  if (!d) throw SceneError(key + ": unknown key (wetcloth params lists the keys)");
-  if (!handle.empty() && !p.handles.count(handle))
+// Throws SceneError unless p has the handle or obstacle that KEY (of
+// definition d) names.
+inline void check_named(const Params& p, const std::string& key, const ParamDef& d,
+                        const std::string& name) {
+  if (d.key.rfind("handle.*.", 0) == 0 && !p.handles.count(name))
     throw SceneError(key + ": the scene has no such handle");
+  if (d.key.rfind("obstacle.*.", 0) == 0 && !p.obstacles.count(name))
+    throw SceneError(key + ": the scene has no such obstacle");
+}
+
+inline std::string value_text(const Params& p, const std::string& key) {
+  std::string name;
+  const ParamDef* d = def_of(key, &name);
+  if (!d) throw SceneError(key + ": unknown key (wetcloth params lists the keys)");
+  check_named(p, key, *d, name);
   // Numbers in their shortest exact text (100, not 100.0), strings unquoted.
   return std::visit(
       [](const auto& x) -> std::string {
@@ -106,7 +117,7 @@ inline std::string value_text(const Params& p, const std::string& key) {
           return o + "]";
         }
       },
-      d->get(p, handle));
+      d->get(p, name));
 }
 
 struct Case {

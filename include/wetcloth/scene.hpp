@@ -58,6 +58,19 @@ Params parse_scene(const std::string& toml_text, const std::string& source_name,
 // when a side would be under 3 or over cloth.resolution's range.
 Params at_resolution(Params p, long long grid);
 
+// The text of a file a scene names by `key` (cloth.mesh, obstacle.NAME.mesh):
+// from the scene file's folder, or a built-in scene's copy in the program.
+// `wetcloth run` copies them beside its scene.toml. Throws SceneError.
+std::string scene_file_text(const Params& p, const std::string& key, const std::string& path);
+
+// A mesh cloth's size (cloth.mesh), for estimates before the model is built:
+// its vertices (the particles), triangles and mean edge, m. Throws SceneError.
+struct ClothMeshSize {
+  long long vertices = 0, triangles = 0;
+  double mean_edge = 0;
+};
+ClothMeshSize cloth_mesh_size(const Params& p);
+
 // Every parameter, resolved, as TOML that load_scene reads back to the same Params
 // (an optional key left unset is a comment), with the springs' constants as
 // the model resolves them from the material and the spacing (springs_text).

@@ -140,6 +140,9 @@ struct Model {
   // self-collision's reach along the springs), sorted, as lists.
   std::vector<int> ring_start, ring;
   double spacing = 0;  // the grid's smaller step; a mesh's shortest mean edge, m
+  // A mesh cloth: its particles along its longer side, as a grid's (the
+  // file's bounding box's longest side over the mean edge, plus one).
+  int along = 0;
   std::vector<Vec3> rest_position;
   std::vector<double> area, mass, inv_mass;
   std::vector<std::uint8_t> on_border;  // on the cloth's border
@@ -183,6 +186,13 @@ Model build_model(const Params& p);
 // 10 particles past 101 along the longer side (a stretch must cross the cloth
 // in a step's sweeps).
 int xpbd_substeps(const Params& p);
+// The same for a built model, a mesh cloth's particles along its longer side
+// counted as Model::along (xpbd_substeps(Params) takes a mesh cloth's as the
+// default grid's, 51).
+int xpbd_substeps(const Model& m);
+// explicit_step_limit for a built model: on a mesh cloth, from its stiffest
+// spring of each kind and its lightest particle (on a grid, the same).
+double explicit_step_limit(const Model& m);
 // Where grid particle (i, j) starts: cloth.center, orientation and tilt.
 Vec3 cloth_start_position(const Params& p, int i, int j);
 // Humidity drives mass (section 1), permeability (eq. 5) and adhesion (eq. 13).

@@ -139,6 +139,7 @@ Params load(const py::object& scene, const std::vector<std::string>& sets,
   if (py::isinstance<Scene>(scene)) {
     const Params& base = scene.cast<const Scene&>().params;
     p = parse_scene(to_toml(base), base.name, sets);
+    p.scene_dir = base.scene_dir;  // where its meshes are: not a key, so not in the TOML
   } else if (py::isinstance<py::str>(scene) || py::hasattr(scene, "__fspath__")) {
     p = load_scene(py::str(py::module_::import("os").attr("fspath")(scene)).cast<std::string>(),
                    sets);
@@ -176,12 +177,11 @@ py::object to_python(const ParamValue& v) {
 
 py::object get_value(const Params& p, const std::string& raw) {
   const std::string key = normal_key(raw);
-  std::string handle;
-  const ParamDef* d = sweep::def_of(key, &handle);
+  std::string name;  // of the handle or obstacle
+  const ParamDef* d = sweep::def_of(key, &name);
   if (!d) throw SceneError(key + ": unknown key (wetcloth.params() lists the keys)");
-  if (!handle.empty() && !p.handles.count(handle))
-    throw SceneError(key + ": the scene has no such handle");
-  return to_python(d->get(p, handle));
+  sweep::check_named(p, key, *d, name);
+  return to_python(d->get(p, name));
 }
 
 py::dict metrics_dict(const Metrics& m) {
@@ -253,7 +253,8 @@ class PySimulation {
     Busy busy(*this);
     const std::string key = normal_key(raw);
     const Params& now = sim_.model().params;
-    const Params p = parse_scene(to_toml(now), now.name, {key + "=" + toml_value(key, value)});
+    Params p = parse_scene(to_toml(now), now.name, {key + "=" + toml_value(key, value)});
+    p.scene_dir = now.scene_dir;
     if (p.cloth.resolution != now.cloth.resolution)
       throw SceneError(key + ": the grid cannot change in a running Simulation (make a new one)");
     if (key == "cloth.humidity")
@@ -459,8 +460,8 @@ the whole state of a run.)doc")
           },
           "The metrics now: a dict of metrics.csv's columns.")
       .def("set", &PySimulation::set, py::arg("key"), py::arg("value"),
-           "Sets a parameter between steps (cloth.humidity live; handle.NAME.force ...). The grid "
-           "cannot change.")
+           "Sets a parameter between steps (cloth.humidity live; handle.NAME.force, "
+           "obstacle.NAME.translate ...). The grid cannot change.")
       .def(
           "get",
           [](const PySimulation& s, const std::string& key) {

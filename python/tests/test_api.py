@@ -68,6 +68,26 @@ def test_set_between_steps_and_handles():
     assert sim.time == pytest.approx(0.02)
 
 
+def test_obstacle_keys_get_and_set():
+    # obstacle.NAME.KEY as handle.NAME.KEY: read, set between steps (the
+    # obstacle is rebuilt where it now is), and named in errors.
+    sim = wetcloth.Simulation("towel-rail", {"run.duration": 0.1}, grid=9)
+    assert sim.get("obstacle.rail.translate") == [0.0, 0.0, 0.6]
+    assert sim.get("obstacle.rail.mesh") == "meshes/rail.obj"
+    sim.advance_to(0.05)
+    sim.set("obstacle.rail.translate", [0.0, 0.0, 0.5])
+    assert sim.get("obstacle.rail.translate") == [0.0, 0.0, 0.5]
+    sim.advance_to(0.1)
+    with pytest.raises(wetcloth.SceneError, match="obstacle.nope.scale: the scene has no such obstacle"):
+        sim.get("obstacle.nope.scale")
+    with pytest.raises(wetcloth.SceneError, match="obstacle.nope: the scene has no such obstacle"):
+        wetcloth.Simulation("towel-rail", {"obstacle.nope.scale": [1, 1, 1]}, grid=9)
+    # A Scene loaded once keeps where its meshes are.
+    scene = wetcloth.load_scene("towel-rail")
+    assert wetcloth.Simulation(scene, {"obstacle.rail.translate": [0, 0, 0.55]}, grid=9).get(
+        "obstacle.rail.translate") == [0.0, 0.0, 0.55]
+
+
 def test_positions_assignment():
     sim = wetcloth.Simulation("hang", **SMALL)
     x = sim.positions.copy()

@@ -8,9 +8,9 @@
 #include <tuple>
 #include <utility>
 
-#include "src/detail.hpp"
-#include "src/forces/spring_edges.hpp"
-#include "src/spatial_hash.hpp"
+#include "detail.hpp"
+#include "forces/spring_edges.hpp"
+#include "geometry/spatial_hash.hpp"
 #include "wetcloth/scene.hpp"
 
 using namespace wetcloth;

@@ -7,7 +7,7 @@
 #include <array>
 #include <limits>
 
-#include "mesh_obstacle.hpp"
+#include "geometry/mesh_obstacle.hpp"
 #include "wetcloth/simulation.hpp"
 #include "workspace.hpp"
 

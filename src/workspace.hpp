@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "mesh_obstacle.hpp"
+#include "geometry/mesh_obstacle.hpp"
 #include "wetcloth/simulation.hpp"
 
 namespace wetcloth {

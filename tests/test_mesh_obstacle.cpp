@@ -12,7 +12,7 @@
 
 #include "common.hpp"
 #include "detail.hpp"
-#include "mesh_obstacle.hpp"
+#include "geometry/mesh_obstacle.hpp"
 
 using namespace wetcloth;
 namespace fs = std::filesystem;

@@ -8,7 +8,7 @@
 
 #include "common.hpp"
 #include "detail.hpp"
-#include "spatial_hash.hpp"
+#include "geometry/spatial_hash.hpp"
 #include "wet_setups.hpp"
 
 using namespace wetcloth;

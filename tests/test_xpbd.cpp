@@ -1,4 +1,4 @@
-// The large-step integrator, XPBD in substeps (src/xpbd.cpp): laws with exact
+// The large-step integrator, XPBD in substeps (src/integrators/xpbd.cpp): laws with exact
 // answers, and agreement with the small-step reference.
 #include <gtest/gtest.h>
 

@@ -107,7 +107,7 @@ struct Handle {
 enum class SurfaceKind { None, Table, Ball, Mesh };
 constexpr int kMeshCode = 3;
 constexpr int kMostObstacles = 250;  // codes up to 252 fit a byte
-// A triangle-mesh obstacle, built (src/mesh_obstacle.hpp).
+// A triangle-mesh obstacle, built (src/geometry/mesh_obstacle.hpp).
 struct MeshObstacle;
 
 // A spring of the grid's stencil, as a forward offset: particle (i, j) is tied

@@ -4,8 +4,8 @@
 #include <cmath>
 #include <cstdlib>
 
-#include "../detail.hpp"
-#include "../spatial_hash.hpp"
+#include "detail.hpp"
+#include "geometry/spatial_hash.hpp"
 
 namespace wetcloth::detail {
 

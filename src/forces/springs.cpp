@@ -13,7 +13,7 @@
 //
 // The damping, in the symplectic step, is taken implicitly on its own
 // (apply_spring_damping, below).
-#include "spring_edges.hpp"
+#include "forces/spring_edges.hpp"
 
 namespace wetcloth::detail {
 

@@ -8,7 +8,7 @@
 #include <unordered_map>
 
 #include "detail.hpp"
-#include "mesh_io.hpp"
+#include "geometry/mesh_io.hpp"
 
 namespace wetcloth {
 

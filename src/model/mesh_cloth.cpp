@@ -15,7 +15,7 @@
 #include <tuple>
 
 #include "detail.hpp"
-#include "mesh_io.hpp"
+#include "geometry/mesh_io.hpp"
 #include "wetcloth/scene.hpp"
 
 namespace wetcloth {

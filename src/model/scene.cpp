@@ -20,7 +20,7 @@
 #include <type_traits>
 
 #include "detail.hpp"
-#include "mesh_obstacle.hpp"
+#include "geometry/mesh_obstacle.hpp"
 
 namespace wetcloth {
 

@@ -1,6 +1,6 @@
 // Obstacles made of triangle meshes: read, transformed, checked, and queried
 // for the signed distance through a CGAL AABB tree (MODEL.md section 3).
-#include "mesh_obstacle.hpp"
+#include "geometry/mesh_obstacle.hpp"
 
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
@@ -13,7 +13,7 @@
 #include <map>
 #include <numbers>
 
-#include "mesh_io.hpp"
+#include "geometry/mesh_io.hpp"
 #include "wetcloth/scene.hpp"
 
 namespace wetcloth {

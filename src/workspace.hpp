@@ -26,8 +26,9 @@ struct CollisionPair {
 struct Workspace {
   Vec3Array force, normal, surface_normal;
   std::vector<Vec3> x_before;
-  std::vector<double> quad_normals;  // compute_normals' scratch
-  std::vector<double> distance;      // signed distance to the contact surface
+  std::vector<double> quad_normals;   // compute_normals' scratch
+  std::vector<double> distance;       // signed distance to the contact surface
+  std::vector<std::uint8_t> touched;  // the surface each particle was pushed out of this step
   // Per mesh obstacle, each particle's last query (bounds the next search only).
   std::vector<MeshQueryCache> mesh_cache;
   std::vector<double> adhesion;      // |adhesion force| per particle, N
@@ -93,7 +94,7 @@ struct Workspace {
   std::vector<std::uint8_t> candidate_close;  // candidate within d_t this step
   Vec3Array candidates_anchor;
   double candidates_radius = 0;
-  // Implicit Euler, in columns (see implicit_euler.cpp): in float, the
+  // Implicit Euler, in columns (see integrators/implicit_euler.cpp): in float, the
   // matrix's 8 forward stencil edges' blocks and the block-Jacobi
   // preconditioner; in double, the conjugate-gradient vectors and the
   // matrix's diagonal blocks; per-row sums; the particles whose velocity the
@@ -110,7 +111,7 @@ struct Workspace {
   // tries thrown away included).
   Vec3Array v_start;
   long long substeps = 0, solves = 0;
-  // XPBD (xpbd.cpp): positions at the start of the substep, before contact;
+  // XPBD (integrators/xpbd.cpp): positions at the start of the substep, before contact;
   // the inverse masses the constraints see; a class's corrections (x, y, z
   // columns) and where along a row each class is; the particles the measured
   // handle holds and the constraints' impulse on them over the substep.

@@ -121,7 +121,7 @@ struct Model {
   Params params;
   // The rectangular grid (cloth.mesh unset): particle (i, j) is j nu + i, and
   // the step runs the grid's stencil kernels. A mesh cloth (cloth.mesh,
-  // mesh_cloth.cpp) has grid = false, nu = n, nv = 1 (one row: the passes in
+  // src/model/mesh_cloth.cpp) has grid = false, nu = n, nv = 1 (one row: the passes in
   // which each particle stands alone run unchanged) and runs the general
   // kernels, which follow the springs and the neighbour lists below, on one
   // thread.
@@ -188,7 +188,7 @@ Vec3 cloth_start_position(const Params& p, int i, int j);
 // Humidity drives mass (section 1), permeability (eq. 5) and adhesion (eq. 13).
 void set_humidity(Model& m, double omega);
 
-// How a pocket's deficit answers a change of V_sum over a step of Δt (air.cpp):
+// How a pocket's deficit answers a change of V_sum over a step of Δt (src/air/air.cpp):
 // dΔP/dV_sum = gas + spring (1 - e^(-Δt/τ)) τ/Δt, with 1/τ the seep rate.
 struct PocketAir {
   double gas = 0, spring = 0, seep_rate = 0;  // Pa/m³, Pa/m³, 1/s
@@ -322,18 +322,11 @@ class Simulation {
   int grab_particle_ = -1;
   Vec3 grab_target_ = Vec3::Zero();
   double grab_k_ = 0;
-  std::vector<std::uint8_t> touched_;  // obstacle each particle was pushed out of this step
 
   friend Workspace& detail_workspace(const Simulation& sim);
   ThreadChoice threads_;
 
-  void take_step();
-  void xpbd_step();
   void start_thread_choice();
-  void accumulate_forces(bool implicit);
-  double implicit_substep(double dt, int& halvings, double& strain);
-  void move_at_new_velocities(double h);
-  void finish_step(double h);
 };
 
 // Particle normals, area-weighted over the adjacent triangles.

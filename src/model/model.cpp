@@ -277,7 +277,7 @@ void build_grid(Model& m, const Params& p) {
                   d = m.index(i, j + 1);
         // Diagonals alternate like a chequerboard, so that on an odd grid the
         // mesh (and the normals) keep the cloth's mirror symmetries.
-        // compute_normals (simulation.cpp) follows this pattern quad by quad.
+        // compute_normals (forces/normals.cpp) follows this pattern quad by quad.
         if ((i + j) % 2 == 0) {
           m.triangles.push_back({a, b, cc});
           m.triangles.push_back({a, cc, d});

@@ -30,6 +30,59 @@ double footprint_diameter(const Model& m, const State& s) {
   return best;
 }
 
+// Wrinkles: mean |dihedral angle| over edges between two lifted triangles.
+double wrinkle_angle(const Model& m, const State& s) {
+  std::vector<Vec3> tn(m.triangles.size());
+  for (std::size_t t = 0; t < m.triangles.size(); ++t) {
+    const auto& tr = m.triangles[t];
+    tn[t] = (s.x[tr[1]] - s.x[tr[0]]).cross(s.x[tr[2]] - s.x[tr[0]]).normalized();
+  }
+  auto lifted = [&](int t) {
+    const auto& tr = m.triangles[t];
+    return !s.contact[tr[0]] && !s.contact[tr[1]] && !s.contact[tr[2]];
+  };
+  double sum = 0;
+  long count = 0;
+  for (const auto& [a, b] : m.triangle_pairs) {
+    if (!lifted(a) || !lifted(b)) continue;
+    sum += std::acos(std::clamp(tn[a].dot(tn[b]), -1.0, 1.0));
+    ++count;
+  }
+  return count ? sum / count : 0.0;
+}
+
+// The pull across the contact region's edge: the springs from lifted
+// particles to particles in contact, their elastic force on the latter along
+// the surface normal (the springs between two contact particles cancel). A
+// peel rig's force is the lifted part's weight and suction plus this.
+double front_pull(const Model& m, const State& s, const Vec3Array& surface_normal) {
+  double pull = 0;
+  if (m.contact_surface != SurfaceKind::None && !m.grid) {
+    for (const SpringSet* set : {&m.structural, &m.shear, &m.bending})
+      for (std::size_t e = 0; e < set->size(); ++e)
+        for (const auto& [k, o] :
+             {std::pair{set->a[e], set->b[e]}, std::pair{set->b[e], set->a[e]}}) {
+          if (!s.contact[k] || s.contact[o]) continue;
+          const Vec3 d = s.x[o] - s.x[k];
+          const double len = d.norm();
+          if (len > 0) pull += set->k[e] * (len - set->rest[e]) / len * d.dot(surface_normal[k]);
+        }
+  } else if (m.contact_surface != SurfaceKind::None)
+    for (int k = 0; k < m.n; ++k) {
+      if (!s.contact[k]) continue;
+      const int i = k % m.nu, j = k / m.nu;
+      for (const StencilEdge& e : m.stencil)
+        for (const int sign : {1, -1}) {
+          const int o = grid_neighbour(m, i, j, sign * e.di, sign * e.dj);
+          if (o < 0 || s.contact[o]) continue;
+          const Vec3 d = s.x[o] - s.x[k];
+          const double len = d.norm();
+          if (len > 0) pull += e.k * (len - e.rest) / len * d.dot(surface_normal[k]);
+        }
+    }
+  return pull;
+}
+
 }  // namespace
 
 Metrics Simulation::metrics() const {
@@ -77,54 +130,8 @@ Metrics Simulation::metrics() const {
     const double len = (s.x[m.structural.b[e]] - s.x[m.structural.a[e]]).norm();
     r.max_strain = std::max(r.max_strain, len / m.structural.rest[e] - 1.0);
   }
-  // Wrinkles: mean |dihedral angle| over edges between two lifted triangles.
-  std::vector<Vec3> tn(m.triangles.size());
-  for (std::size_t t = 0; t < m.triangles.size(); ++t) {
-    const auto& tr = m.triangles[t];
-    tn[t] = (s.x[tr[1]] - s.x[tr[0]]).cross(s.x[tr[2]] - s.x[tr[0]]).normalized();
-  }
-  auto lifted = [&](int t) {
-    const auto& tr = m.triangles[t];
-    return !s.contact[tr[0]] && !s.contact[tr[1]] && !s.contact[tr[2]];
-  };
-  double sum = 0;
-  long count = 0;
-  for (const auto& [a, b] : m.triangle_pairs) {
-    if (!lifted(a) || !lifted(b)) continue;
-    sum += std::acos(std::clamp(tn[a].dot(tn[b]), -1.0, 1.0));
-    ++count;
-  }
-  r.wrinkle_rad = count ? sum / count : 0.0;
-  if (m.contact_surface == SurfaceKind::None) r.wrinkle_rad = 0;
-  // The pull across the contact region's edge: the springs from lifted
-  // particles to particles in contact, their elastic force on the latter along
-  // the surface normal (the springs between two contact particles cancel). A
-  // peel rig's force is the lifted part's weight and suction plus this.
-  if (m.contact_surface != SurfaceKind::None && !m.grid) {
-    for (const SpringSet* set : {&m.structural, &m.shear, &m.bending})
-      for (std::size_t e = 0; e < set->size(); ++e)
-        for (const auto& [k, o] :
-             {std::pair{set->a[e], set->b[e]}, std::pair{set->b[e], set->a[e]}}) {
-          if (!s.contact[k] || s.contact[o]) continue;
-          const Vec3 d = s.x[o] - s.x[k];
-          const double len = d.norm();
-          if (len > 0)
-            r.front_pull_n +=
-                set->k[e] * (len - set->rest[e]) / len * d.dot(ws_->surface_normal[k]);
-        }
-  } else if (m.contact_surface != SurfaceKind::None)
-    for (int k = 0; k < m.n; ++k) {
-      if (!s.contact[k]) continue;
-      const int i = k % m.nu, j = k / m.nu;
-      for (const StencilEdge& e : m.stencil)
-        for (const int sign : {1, -1}) {
-          const int o = grid_neighbour(m, i, j, sign * e.di, sign * e.dj);
-          if (o < 0 || s.contact[o]) continue;
-          const Vec3 d = s.x[o] - s.x[k];
-          const double len = d.norm();
-          if (len > 0) r.front_pull_n += e.k * (len - e.rest) / len * d.dot(ws_->surface_normal[k]);
-        }
-    }
+  r.wrinkle_rad = m.contact_surface == SurfaceKind::None ? 0.0 : wrinkle_angle(m, s);
+  r.front_pull_n = front_pull(m, s, ws_->surface_normal);
   return r;
 }
 

@@ -384,28 +384,24 @@ std::vector<double> kept_row_times(const fs::path& path, long long bytes, long l
   return times;
 }
 
-}  // namespace
-
-RunResult run_scene(const Params& p, const fs::path& out, bool progress,
-                    const ResumePoint* resume) {
-  RunResult r;
-  Simulation sim(p);
-  if (resume) try {
-      sim.restore(resume->state);
-    } catch (const std::invalid_argument& e) {
-      throw SceneError(resume->file.string() + ": " + e.what());
-    }
-  if (std::error_code ec; fs::create_directories(out, ec), ec)
-    throw_output_error(out, "cannot make the folder", ec.value());
-  r.started = true;
-  const OutputLock lock(out);
-  const UpAxis up = p.run.up;
-  const ExportFormats formats = parse_export_formats(p.run.exports);
+// What a run writes to, and where its outputs stand after the last whole frame.
+struct RunOutputs {
   std::optional<CacheWriter> caches;
   std::optional<MetricsFile> metrics;
-  OutputsAt at;  // where the outputs stand after the last whole frame
-  long long substeps_before = 0;
+  OutputsAt at;
+  long long substeps_before = 0;  // a resumed run's, before the checkpoint
   double wall_before = 0;
+};
+
+// A new run's outputs started, or a resumed one's taken back to where its
+// checkpoint left them.
+void open_outputs(const Params& p, const fs::path& out, const Simulation& sim,
+                  const ResumePoint* resume, RunOutputs& o, RunResult& r) {
+  const UpAxis up = p.run.up;
+  const ExportFormats formats = parse_export_formats(p.run.exports);
+  auto& caches = o.caches;
+  auto& metrics = o.metrics;
+  auto& at = o.at;
   if (!resume) {
     clear_outputs(out);
     if (p.run.meshes)
@@ -420,7 +416,7 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress,
     at.metrics_bytes = metrics->size();
     if (caches) at.cache = caches->position(false);
   } else {
-    at = record_outputs(*resume, substeps_before, wall_before);
+    at = record_outputs(*resume, o.substeps_before, o.wall_before);
     const std::vector<double> times =
         kept_row_times(out / "metrics.csv", at.metrics_bytes, at.next_frame, resume->file);
     if (formats.any()) {
@@ -438,6 +434,64 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress,
     r.time_to_5cm_s = at.time_to_5cm_s;
     r.frame_peak_deficit_pa = at.frame_peak_deficit_pa;
   }
+}
+
+// summary.json: how the run ended, its size and speed, the last row.
+void write_summary(const fs::path& out, const Params& p, const Simulation& sim, const RunResult& r,
+                   const nlohmann::json& final_json, long long substeps_before,
+                   const ResumePoint* resume) {
+  const bool interrupted = r.code > 128;
+  nlohmann::json s;
+  s["scene"] = p.name;
+  s["version"] = WETCLOTH_VERSION;
+  s["status"] = r.code == kOk ? "ok" : interrupted ? "interrupted" : "blew up";
+  s["interrupted"] = interrupted;
+  if (interrupted) s["signal"] = signal_name(r.code - 128);
+  if (r.code != kOk) s["message"] = r.message;
+  s["steps"] = r.steps;
+  // More than steps where implicit Euler halved some.
+  s["substeps"] = substeps_before + sim.stats().substeps;
+  s["particles"] = sim.model().n;
+  // The count asked for (0: chosen as it ran), always a number; beside it how
+  // the choice went, or the count used (at most one thread per 1024 particles).
+  s["threads"] = p.integrator.threads;
+  if (const auto& c = sim.thread_choice(); c.automatic)
+    s["thread_choice"] = {
+        {"most", c.most}, {"steps_on_1", c.steps_on_one}, {"steps_on_most", c.steps_on_most}};
+  else
+    s["threads_used"] = sim.model().threads;
+  s["simulated_seconds"] = sim.state().time;
+  s["wall_seconds"] = r.wall_seconds;
+  s["realtime_factor"] = r.wall_seconds > 0 ? sim.state().time / r.wall_seconds : 0.0;
+  s["peak_pressure_deficit_pa"] = r.peak_deficit_pa;
+  s["final"] = final_json;  // the last row's (JSON has no inf: a row never has one)
+  if (resume) s["resumed_at_s"] = resume->state.time;
+  write_file_atomic(out / "summary.json", s.dump(2) + "\n");
+}
+
+}  // namespace
+
+RunResult run_scene(const Params& p, const fs::path& out, bool progress,
+                    const ResumePoint* resume) {
+  RunResult r;
+  Simulation sim(p);
+  if (resume) try {
+      sim.restore(resume->state);
+    } catch (const std::invalid_argument& e) {
+      throw SceneError(resume->file.string() + ": " + e.what());
+    }
+  if (std::error_code ec; fs::create_directories(out, ec), ec)
+    throw_output_error(out, "cannot make the folder", ec.value());
+  r.started = true;
+  const OutputLock lock(out);
+  const UpAxis up = p.run.up;
+  RunOutputs o;
+  open_outputs(p, out, sim, resume, o, r);
+  std::optional<CacheWriter>& caches = o.caches;
+  std::optional<MetricsFile>& metrics = o.metrics;
+  OutputsAt& at = o.at;  // where the outputs stand after the last whole frame
+  const long long substeps_before = o.substeps_before;
+  const double wall_before = o.wall_before;
   nlohmann::json first_json = at.first, final_json = at.final;
 
   const long long frames = last_frame_index(p.run.duration, p.run.fps);
@@ -559,32 +613,7 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress,
     r.message = std::string("interrupted by ") + signal_name(r.code - 128) +
                 " at t = " + format_number(sim.state().time) + " s";
 
-  nlohmann::json s;
-  s["scene"] = p.name;
-  s["version"] = WETCLOTH_VERSION;
-  s["status"] = r.code == kOk ? "ok" : interrupted ? "interrupted" : "blew up";
-  s["interrupted"] = interrupted;
-  if (interrupted) s["signal"] = signal_name(r.code - 128);
-  if (r.code != kOk) s["message"] = r.message;
-  s["steps"] = r.steps;
-  // More than steps where implicit Euler halved some.
-  s["substeps"] = substeps_before + sim.stats().substeps;
-  s["particles"] = sim.model().n;
-  // The count asked for (0: chosen as it ran), always a number; beside it how
-  // the choice went, or the count used (at most one thread per 1024 particles).
-  s["threads"] = p.integrator.threads;
-  if (const auto& c = sim.thread_choice(); c.automatic)
-    s["thread_choice"] = {
-        {"most", c.most}, {"steps_on_1", c.steps_on_one}, {"steps_on_most", c.steps_on_most}};
-  else
-    s["threads_used"] = sim.model().threads;
-  s["simulated_seconds"] = sim.state().time;
-  s["wall_seconds"] = r.wall_seconds;
-  s["realtime_factor"] = r.wall_seconds > 0 ? sim.state().time / r.wall_seconds : 0.0;
-  s["peak_pressure_deficit_pa"] = r.peak_deficit_pa;
-  s["final"] = final_json;  // the last row's (JSON has no inf: a row never has one)
-  if (resume) s["resumed_at_s"] = resume->state.time;
-  write_file_atomic(out / "summary.json", s.dump(2) + "\n");
+  write_summary(out, p, sim, r, final_json, substeps_before, resume);
   // Whole: nothing to resume. The checkpoint goes once cloth.usda and
   // summary.json are written, the USD samples after it: a run killed at any
   // moment either resumes from its checkpoint or has ended whole.

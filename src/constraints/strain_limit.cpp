@@ -147,6 +147,236 @@ void update_strain_order(const Model& m, State& s, Workspace& w) {
 // by 1 / (the most springs moving either of its ends), computed before any is
 // applied: a relaxation both ends share, so that momentum stays conserved (an
 // average per particle would scale each end of a spring differently).
+namespace {
+
+// One call of limit_strain: its passes' queue of springs (a min-heap of their
+// order, w.strain_heap), the corrections of a level and their relaxation.
+class StrainLimiter {
+ public:
+  StrainLimiter(const Model& m, State& s, Workspace& w, double dt)
+      : m_(m),
+        s_(s),
+        w_(w),
+        heap_(w.strain_heap),
+        touched_(w.strain_touched),
+        inv_dt2_(1.0 / (dt * dt)) {
+    for (int e = 0; e < kStrainOffsets; ++e) {
+      const double l = (1.0 + m.params.strain_limit.tau) * m.stencil[e].rest;
+      max_len2_[e] = l * l;
+    }
+  }
+
+  // The springs a pass looks at: those stretched at its start, and the springs
+  // of particles moved since. The first pass finds them in grid order, on
+  // every thread (a mesh cloth: in the springs' order); a later one takes
+  // those of the pass before and the springs of the particles it moved.
+  void queue_pass(int pass) {
+    heap_.clear();
+    if (pass > 0) {
+      for (const int k : w_.strain_moved) queue_springs_of(k, -1);
+      for (const int e : w_.strain_over) queue(e);
+    } else if (!m_.grid) {
+      queue_stretched_mesh();
+    } else {
+      flag_stretched_grid();
+      queue_flagged();
+    }
+  }
+  bool queued() const { return !heap_.empty(); }
+
+  // The queued springs level by level: returns whether any was corrected.
+  bool correct_queued() {
+    w_.strain_moved.clear();
+    w_.strain_over.clear();
+    bool corrected = false;  // a pass that corrects nothing ends the passes
+    for (int l = 0;;) {
+      if (heap_.empty()) {  // the last level's corrections may queue more springs
+        if (touched_.empty()) break;
+        finish_level(l);
+        continue;
+      }
+      const int e = heap_.front();
+      if (e >= level_end(l)) {
+        if (!touched_.empty()) {
+          finish_level(l);  // may queue springs of the levels before e's
+          continue;
+        }
+        while (e >= level_end(l)) ++l;
+      }
+      std::pop_heap(heap_.begin(), heap_.end(), std::greater<>());
+      heap_.pop_back();
+      w_.strain_queued[e] = 0;
+      corrected = correct(e) || corrected;
+    }
+    return corrected;
+  }
+
+ private:
+  const Model& m_;
+  State& s_;
+  Workspace& w_;
+  std::vector<int>& heap_;     // springs to look at, a min-heap of their order
+  std::vector<int>& touched_;  // particles with a correction in this level
+  const double inv_dt2_;
+  double max_len2_[kStrainOffsets];
+
+  bool fixed(int i) const { return m_.driven[i] || s_.held[i]; }
+  int level_end(int l) const { return w_.strain_levels[l + 1]; }
+
+  void queue(int order) {
+    if (w_.strain_queued[order]) return;
+    w_.strain_queued[order] = 1;
+    heap_.push_back(order);
+    std::push_heap(heap_.begin(), heap_.end(), std::greater<>());
+  }
+
+  // Particle k moved: its springs in later levels than l may now be stretched.
+  void queue_springs_of(int k, int l) {
+    const Model& m = m_;
+    if (!m.grid) {
+      for (int e = m.strain_start[k]; e < m.strain_start[k + 1]; ++e)
+        if (const int order = w_.strain_index[m.strain_spring[e]]; order >= level_end(l))
+          queue(order);
+      return;
+    }
+    const int i = k % m.nu, j = k / m.nu;
+    for (int e = 0; e < kStrainOffsets; ++e)
+      for (const int sign : {1, -1}) {
+        const int b = grid_neighbour(m, i, j, sign * m.stencil[e].di, sign * m.stencil[e].dj);
+        if (b < 0) continue;
+        const int order = w_.strain_index[kStrainOffsets * (sign > 0 ? k : b) + e];
+        if (order >= level_end(l)) queue(order);
+      }
+  }
+
+  // A mesh cloth's first pass: every stretched spring, in the springs' order.
+  void queue_stretched_mesh() {
+    const auto& springs = w_.strain_springs;
+    for (std::size_t e = 0; e < springs.size(); ++e) {
+      const auto& sp = springs[e];
+      if ((s_.x[sp.b] - s_.x[sp.a]).squaredNorm() > sp.max_len * sp.max_len) {
+        heap_.push_back(static_cast<int>(e));
+        w_.strain_queued[e] = 1;
+      }
+    }
+    std::make_heap(heap_.begin(), heap_.end(), std::greater<>());
+  }
+
+  // The grid's first pass: each stencil slot's strain_stretched flag, by rows
+  // on every thread.
+  void flag_stretched_grid() {
+    const Model& m = m_;
+    const State& s = s_;
+    Workspace& w = w_;
+    const double* max_len2 = max_len2_;
+    parallel_for(m, m.nv, [&](int j) {
+      // Locals: a byte store could alias the vectors, the model and the bounds.
+      const double *X = s.x.column(0), *Y = s.x.column(1), *Z = s.x.column(2);
+      const int nu = m.nu, row = j * nu;
+      std::uint8_t* flag = w.strain_stretched.data() + kStrainOffsets * std::size_t(row);
+      std::fill(flag, flag + kStrainOffsets * nu, 0);
+      for (int e = 0; e < kStrainOffsets; ++e) {
+        const StencilEdge& st = m.stencil[e];
+        if (j + st.dj >= m.nv) continue;
+        const int off = st.di + st.dj * nu, lo = std::max(0, -st.di), hi = std::min(nu, nu - st.di);
+        const double limit = max_len2[e];
+        // Squared lengths in a loop over doubles (it vectorises), then the
+        // flags: one loop over both would run 64 springs to a vector.
+        for (int a0 = row + lo; a0 < row + hi; a0 += kChunk) {
+          const int count = std::min(kChunk, row + hi - a0);
+          double len2[kChunk];
+#pragma omp simd
+          for (int k = 0; k < count; ++k) {
+            const int a = a0 + k;
+            const double dx = X[a + off] - X[a], dy = Y[a + off] - Y[a], dz = Z[a + off] - Z[a];
+            len2[k] = dx * dx + dy * dy + dz * dz;
+          }
+          for (int k = 0; k < count; ++k)
+            flag[kStrainOffsets * (a0 + k - row) + e] = len2[k] > limit;
+        }
+      }
+    });
+  }
+
+  // The flagged springs in grid order, eight flags at a time: most are zero
+  // (a serial pass over four bytes a particle).
+  void queue_flagged() {
+    const std::uint8_t* const flags = w_.strain_stretched.data();
+    const std::size_t slots = w_.strain_stretched.size();
+    std::size_t slot = 0;
+    for (; slot + 8 <= slots; slot += 8) {
+      std::uint64_t eight;
+      std::memcpy(&eight, flags + slot, 8);
+      if (eight == 0) continue;
+      for (std::size_t k = slot; k < slot + 8; ++k)
+        if (flags[k]) heap_.push_back(w_.strain_index[k]);
+    }
+    for (; slot < slots; ++slot)
+      if (flags[slot]) heap_.push_back(w_.strain_index[slot]);
+    std::make_heap(heap_.begin(), heap_.end(), std::greater<>());
+    for (const int order : heap_) w_.strain_queued[order] = 1;
+  }
+
+  // Spring e's correction, if it is stretched and an end can move; returns
+  // whether it made one.
+  bool correct(int e) {
+    const auto& sp = w_.strain_springs[e];
+    const Vec3 d = s_.x[sp.b] - s_.x[sp.a];
+    const double len2 = d.squaredNorm();
+    if (len2 <= sp.max_len * sp.max_len) return false;
+    // Shares by inverse mass; a pinned, driven or held end weighs infinitely.
+    const double inv_a = fixed(sp.a) ? 0.0 : m_.inv_mass[sp.a];
+    const double inv_b = fixed(sp.b) ? 0.0 : m_.inv_mass[sp.b];
+    if (inv_a + inv_b == 0) return false;  // both held: nothing can move
+    w_.strain_over.push_back(e);
+    const double wa = inv_a / (inv_a + inv_b), wb = inv_b / (inv_a + inv_b);
+    const double len = std::sqrt(len2);
+    w_.strain_corrections.push_back({sp.a, sp.b, wa, wb, d * ((len - sp.max_len) / len)});
+    if (wa > 0 && w_.strain_count[sp.a]++ == 0) touched_.push_back(sp.a);
+    if (wb > 0 && w_.strain_count[sp.b]++ == 0) touched_.push_back(sp.b);
+    return true;
+  }
+
+  // The force on a pinned, driven or held particle k from holding it against a
+  // correction: f, minus the momentum the free end gained over dt².
+  void react(int k, const Vec3& f) {
+    if (w_.strain_reaction[k] == Vec3::Zero()) w_.strain_reacting.push_back(k);
+    add(w_.strain_reaction[k], f);
+  }
+
+  // End of level l: each correction, relaxed by the most corrections that move
+  // either of its ends, then every moved particle by the sum of its shares.
+  void finish_level(int l) {
+    Workspace& w = w_;
+    for (const auto& c : w.strain_corrections) {
+      const int most =
+          std::max(c.wa > 0 ? w.strain_count[c.a] : 0, c.wb > 0 ? w.strain_count[c.b] : 0);
+      const Vec3 step = c.corr / static_cast<double>(most);
+      if (c.wa > 0) add(w.strain_delta[c.a], c.wa * step);
+      if (c.wb > 0) sub(w.strain_delta[c.b], c.wb * step);
+      // One end held: it takes minus the momentum the other gained.
+      if (c.wa == 0) react(c.a, (m_.mass[c.b] * inv_dt2_) * step);
+      if (c.wb == 0) react(c.b, -(m_.mass[c.a] * inv_dt2_) * step);
+    }
+    w.strain_corrections.clear();
+    for (const int k : touched_) {
+      if (!w.strain_saved[k]) {
+        w.strain_saved[k] = 1;
+        put(w.x_before[k], s_.x[k]);
+        w.strain_changed.push_back(k);
+      }
+      add(s_.x[k], w.strain_delta[k]);
+      put(w.strain_delta[k], Vec3::Zero());
+      w.strain_count[k] = 0;
+    }
+    for (const int k : touched_) queue_springs_of(k, l);
+    w.strain_moved.insert(w.strain_moved.end(), touched_.begin(), touched_.end());
+    touched_.clear();
+  }
+};
+
+}  // namespace
+
 void limit_strain(const Model& m, State& s, Workspace& w, double dt) {
   const auto& p = m.params.strain_limit;
   for (const int k : w.strain_reacting) put(w.strain_reaction[k], Vec3::Zero());
@@ -161,180 +391,14 @@ void limit_strain(const Model& m, State& s, Workspace& w, double dt) {
   w.strain_count.resize(m.n, 0);
   w.strain_reaction.resize(m.n, Vec3::Zero());  // zero but for strain_reacting
   w.strain_corrections.clear();
-  const auto& springs = w.strain_springs;
-  w.strain_stretched.resize(m.grid ? kStrainOffsets * std::size_t(m.n) : springs.size());
-  w.strain_queued.resize(springs.size(), 0);  // zero between passes
-  auto fixed = [&](int i) { return m.driven[i] || s.held[i]; };
-  double max_len2[kStrainOffsets];
-  for (int e = 0; e < kStrainOffsets; ++e) {
-    const double l = (1.0 + p.tau) * m.stencil[e].rest;
-    max_len2[e] = l * l;
-  }
-  const double inv_dt2 = 1.0 / (dt * dt);
-  const auto level_end = [&](int l) { return w.strain_levels[l + 1]; };
-  auto& heap = w.strain_heap;        // springs to look at, a min-heap of their order
-  auto& touched = w.strain_touched;  // particles with a correction in this level
-  auto queue = [&](int order) {
-    if (w.strain_queued[order]) return;
-    w.strain_queued[order] = 1;
-    heap.push_back(order);
-    std::push_heap(heap.begin(), heap.end(), std::greater<>());
-  };
-  // Particle k moved: its springs in later levels than l may now be stretched.
-  auto queue_springs_of = [&](int k, int l) {
-    if (!m.grid) {
-      for (int e = m.strain_start[k]; e < m.strain_start[k + 1]; ++e)
-        if (const int order = w.strain_index[m.strain_spring[e]]; order >= level_end(l))
-          queue(order);
-      return;
-    }
-    const int i = k % m.nu, j = k / m.nu;
-    for (int e = 0; e < kStrainOffsets; ++e)
-      for (const int sign : {1, -1}) {
-        const int b = grid_neighbour(m, i, j, sign * m.stencil[e].di, sign * m.stencil[e].dj);
-        if (b < 0) continue;
-        const int order = w.strain_index[kStrainOffsets * (sign > 0 ? k : b) + e];
-        if (order >= level_end(l)) queue(order);
-      }
-  };
-  // The force on a pinned, driven or held particle k from holding it against a
-  // correction: f, minus the momentum the free end gained over dt².
-  auto react = [&](int k, const Vec3& f) {
-    if (w.strain_reaction[k] == Vec3::Zero()) w.strain_reacting.push_back(k);
-    add(w.strain_reaction[k], f);
-  };
-  // End of level l: each correction, relaxed by the most corrections that move
-  // either of its ends, then every moved particle by the sum of its shares.
-  auto finish_level = [&](int l) {
-    for (const auto& c : w.strain_corrections) {
-      const int most =
-          std::max(c.wa > 0 ? w.strain_count[c.a] : 0, c.wb > 0 ? w.strain_count[c.b] : 0);
-      const Vec3 step = c.corr / static_cast<double>(most);
-      if (c.wa > 0) add(w.strain_delta[c.a], c.wa * step);
-      if (c.wb > 0) sub(w.strain_delta[c.b], c.wb * step);
-      // One end held: it takes minus the momentum the other gained.
-      if (c.wa == 0) react(c.a, (m.mass[c.b] * inv_dt2) * step);
-      if (c.wb == 0) react(c.b, -(m.mass[c.a] * inv_dt2) * step);
-    }
-    w.strain_corrections.clear();
-    for (const int k : touched) {
-      if (!w.strain_saved[k]) {
-        w.strain_saved[k] = 1;
-        put(w.x_before[k], s.x[k]);
-        w.strain_changed.push_back(k);
-      }
-      add(s.x[k], w.strain_delta[k]);
-      put(w.strain_delta[k], Vec3::Zero());
-      w.strain_count[k] = 0;
-    }
-    for (const int k : touched) queue_springs_of(k, l);
-    w.strain_moved.insert(w.strain_moved.end(), touched.begin(), touched.end());
-    touched.clear();
-  };
+  w.strain_stretched.resize(m.grid ? kStrainOffsets * std::size_t(m.n) : w.strain_springs.size());
+  w.strain_queued.resize(w.strain_springs.size(), 0);  // zero between passes
+  // The levels run in order, one after the other, but most springs are not
+  // stretched: each pass looks at those that can be, in the order of the levels.
+  StrainLimiter limiter(m, s, w, dt);
   for (int pass = 0; pass < p.passes; ++pass) {
-    // The levels run in order, one after the other, but most springs are not
-    // stretched. Only those stretched at the start of a pass, and the springs of
-    // particles moved since, can be; only they are looked at, in the order of
-    // the levels. The first pass finds them in grid order, on every thread; a
-    // later one takes those of the pass before and the springs of the particles
-    // it moved.
-    heap.clear();
-    if (pass > 0) {
-      for (const int k : w.strain_moved) queue_springs_of(k, -1);
-      for (const int e : w.strain_over) queue(e);
-    } else if (!m.grid) {  // a mesh cloth: every spring, in the springs' order
-      for (std::size_t e = 0; e < springs.size(); ++e) {
-        const auto& sp = springs[e];
-        if ((s.x[sp.b] - s.x[sp.a]).squaredNorm() > sp.max_len * sp.max_len) {
-          heap.push_back(static_cast<int>(e));
-          w.strain_queued[e] = 1;
-        }
-      }
-      std::make_heap(heap.begin(), heap.end(), std::greater<>());
-    } else {
-      parallel_for(m, m.nv, [&](int j) {
-        // Locals: a byte store could alias the vectors, the model and the bounds.
-        const double *X = s.x.column(0), *Y = s.x.column(1), *Z = s.x.column(2);
-        const int nu = m.nu, row = j * nu;
-        std::uint8_t* flag = w.strain_stretched.data() + kStrainOffsets * std::size_t(row);
-        std::fill(flag, flag + kStrainOffsets * nu, 0);
-        for (int e = 0; e < kStrainOffsets; ++e) {
-          const StencilEdge& st = m.stencil[e];
-          if (j + st.dj >= m.nv) continue;
-          const int off = st.di + st.dj * nu, lo = std::max(0, -st.di),
-                    hi = std::min(nu, nu - st.di);
-          const double limit = max_len2[e];
-          // Squared lengths in a loop over doubles (it vectorises), then the
-          // flags: one loop over both would run 64 springs to a vector.
-          for (int a0 = row + lo; a0 < row + hi; a0 += kChunk) {
-            const int count = std::min(kChunk, row + hi - a0);
-            double len2[kChunk];
-#pragma omp simd
-            for (int k = 0; k < count; ++k) {
-              const int a = a0 + k;
-              const double dx = X[a + off] - X[a], dy = Y[a + off] - Y[a], dz = Z[a + off] - Z[a];
-              len2[k] = dx * dx + dy * dy + dz * dz;
-            }
-            for (int k = 0; k < count; ++k)
-              flag[kStrainOffsets * (a0 + k - row) + e] = len2[k] > limit;
-          }
-        }
-      });
-      // The flags in grid order, eight at a time: most are zero (a serial
-      // pass over four bytes a particle).
-      const std::uint8_t* const flags = w.strain_stretched.data();
-      const std::size_t slots = w.strain_stretched.size();
-      std::size_t slot = 0;
-      for (; slot + 8 <= slots; slot += 8) {
-        std::uint64_t eight;
-        std::memcpy(&eight, flags + slot, 8);
-        if (eight == 0) continue;
-        for (std::size_t k = slot; k < slot + 8; ++k)
-          if (flags[k]) heap.push_back(w.strain_index[k]);
-      }
-      for (; slot < slots; ++slot)
-        if (flags[slot]) heap.push_back(w.strain_index[slot]);
-      std::make_heap(heap.begin(), heap.end(), std::greater<>());
-      for (const int order : heap) w.strain_queued[order] = 1;
-    }
-    if (heap.empty()) break;
-    w.strain_moved.clear();
-    w.strain_over.clear();
-    bool corrected = false;  // a pass that corrects nothing ends the passes
-    for (int l = 0;;) {
-      if (heap.empty()) {  // the last level's corrections may queue more springs
-        if (touched.empty()) break;
-        finish_level(l);
-        continue;
-      }
-      const int e = heap.front();
-      if (e >= level_end(l)) {
-        if (!touched.empty()) {
-          finish_level(l);  // may queue springs of the levels before e's
-          continue;
-        }
-        while (e >= level_end(l)) ++l;
-      }
-      std::pop_heap(heap.begin(), heap.end(), std::greater<>());
-      heap.pop_back();
-      w.strain_queued[e] = 0;
-      const auto& sp = springs[e];
-      const Vec3 d = s.x[sp.b] - s.x[sp.a];
-      const double len2 = d.squaredNorm();
-      if (len2 <= sp.max_len * sp.max_len) continue;
-      // Shares by inverse mass; a pinned, driven or held end weighs infinitely.
-      const double inv_a = fixed(sp.a) ? 0.0 : m.inv_mass[sp.a];
-      const double inv_b = fixed(sp.b) ? 0.0 : m.inv_mass[sp.b];
-      if (inv_a + inv_b == 0) continue;  // both held: nothing can move
-      corrected = true;
-      w.strain_over.push_back(e);
-      const double wa = inv_a / (inv_a + inv_b), wb = inv_b / (inv_a + inv_b);
-      const double len = std::sqrt(len2);
-      w.strain_corrections.push_back({sp.a, sp.b, wa, wb, d * ((len - sp.max_len) / len)});
-      if (wa > 0 && w.strain_count[sp.a]++ == 0) touched.push_back(sp.a);
-      if (wb > 0 && w.strain_count[sp.b]++ == 0) touched.push_back(sp.b);
-    }
-    if (!corrected) break;
+    limiter.queue_pass(pass);
+    if (!limiter.queued() || !limiter.correct_queued()) break;
   }
   // Velocities follow the corrected positions (only moved particles' change).
   const double inv_dt = 1.0 / dt;

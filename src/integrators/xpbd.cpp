@@ -17,6 +17,7 @@
 #include <array>
 #include <cmath>
 
+#include "constraints/coulomb.hpp"
 #include "detail.hpp"
 
 namespace wetcloth::detail {
@@ -302,19 +303,9 @@ void collide_with_friction(const Model& m, State& s, Workspace& w,
         const double ad = how[k] > 1.5 ? adhesion[i] : 0.0;
         const double pressing = mass[i] * pushed * load_scale;
         const double load = ad > pressing ? ad : pressing;
-        const double vn = vx[i] * ux + vy[i] * uy + vz[i] * uz;
-        const double tx = vx[i] - vn * ux, ty = vy[i] - vn * uy, tz = vz[i] - vn * uz;
-        const double speed = std::sqrt(tx * tx + ty * ty + tz * tz);
         const double dv = dv_scale * load * inv_mass[i];
-        const bool on = (how[k] > 0.5) & (load > 0) & (speed > 0);
-        const double factor = on ? (dv < speed ? dv : speed) / speed : 0.0;
-        const double sx = tx * factor, sy = ty * factor, sz = tz * factor;
-        vx[i] -= sx;
-        vy[i] -= sy;
-        vz[i] -= sz;
-        xx[i] -= h * sx;
-        xy[i] -= h * sy;
-        xz[i] -= h * sz;
+        coulomb_clamp(vx[i], vy[i], vz[i], xx[i], xy[i], xz[i], ux, uy, uz, dv,
+                      (how[k] > 0.5) & (load > 0), h);
       }
     });
   });

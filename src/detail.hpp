@@ -31,6 +31,8 @@ namespace wetcloth::detail {
 
 // A simulation's scratch, for the library's stages, its tests and benchmarks.
 inline Workspace& workspace(const Simulation& sim) { return detail_workspace(sim); }
+// Its state, to change (the public API reads it; tests set up cases in it).
+inline State& state(Simulation& sim) { return detail_state(sim); }
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
@@ -77,7 +79,7 @@ void collide(const Model& m, State& s, std::vector<std::uint8_t>* touched,
 // columns of n), with a scratch array for the triangles' normals (the step's:
 // no allocation).
 void compute_normals(const Model& m, const double* x_columns, Vec3Array& normal,
-                     std::vector<double>& quad_normals);
+                     NormalsScratch& scratch);
 // Distances to the contact surface, contact flags and the contact border.
 void update_contact(const Model& m, State& s, Workspace& w);
 

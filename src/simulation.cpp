@@ -16,6 +16,7 @@ namespace wetcloth {
 using namespace detail;
 
 Workspace& detail_workspace(const Simulation& sim) { return *sim.ws_; }
+State& detail_state(Simulation& sim) { return sim.state_; }
 
 Simulation::Simulation(const Simulation& o)
     : model_(o.model_),
@@ -23,8 +24,7 @@ Simulation::Simulation(const Simulation& o)
       ws_(std::make_unique<Workspace>(*o.ws_)),
       grab_particle_(o.grab_particle_),
       grab_target_(o.grab_target_),
-      grab_k_(o.grab_k_),
-      threads_(o.threads_) {}
+      grab_k_(o.grab_k_) {}
 Simulation& Simulation::operator=(const Simulation& o) {
   if (this != &o) *this = Simulation(o);
   return *this;
@@ -34,8 +34,18 @@ Simulation& Simulation::operator=(Simulation&&) noexcept = default;
 Simulation::~Simulation() = default;
 
 StepStats Simulation::stats() const {
-  return {ws_->handle_force, ws_->substeps, ws_->solves, ws_->cg_iterations,
-          ws_->cg_iterations_total};
+  const ThreadChoice& c = ws_->threads;
+  StepStats r;
+  r.handle_force = ws_->handle_force;
+  r.substeps = ws_->substeps;
+  r.solves = ws_->solves;
+  r.cg_iterations = ws_->cg_iterations;
+  r.cg_iterations_total = ws_->cg_iterations_total;
+  r.threads_chosen = c.automatic;
+  r.most_threads = c.most;
+  r.steps_on_one = c.steps_on_one;
+  r.steps_on_most = c.steps_on_most;
+  return r;
 }
 
 const std::vector<double>& Simulation::adhesion() const { return ws_->adhesion; }
@@ -47,10 +57,11 @@ Simulation::Simulation(const Params& p)
 }
 
 void Simulation::start_thread_choice() {
-  threads_ = ThreadChoice{};
-  threads_.most = model_.threads;
-  threads_.automatic = model_.params.integrator.threads == 0 && model_.threads > 1;
-  if (threads_.automatic) model_.threads = 1;  // the first trial
+  ThreadChoice& c = ws_->threads;
+  c = ThreadChoice{};
+  c.most = model_.threads;
+  c.automatic = model_.params.integrator.threads == 0 && model_.threads > 1;
+  if (c.automatic) model_.threads = 1;  // the first trial
 }
 
 void Simulation::reset() {
@@ -65,7 +76,9 @@ void Simulation::reset() {
   state_.air_gap.assign(n, 0.0);
   state_.pocket_pressure.assign(n, model_.params.air.p_atm);
   state_.source_distance.assign(n, 0);
+  const ThreadChoice threads = ws_->threads;
   *ws_ = Workspace{};
+  ws_->threads = threads;
   ws_->grab_particle = grab_particle_;
   ws_->grab_target = grab_target_;
   ws_->grab_k = grab_k_;
@@ -97,6 +110,26 @@ void Simulation::restore(const State& s) {
   // What each step's end leaves for the next, made from the state again.
   update_contact(model_, state_, *ws_);
   compute_normals(model_, state_.x, ws_->normal);
+}
+
+namespace {
+
+void check_count(const Vec3Array& a, int n, const char* what) {
+  if (a.size() != static_cast<std::size_t>(n))
+    throw std::invalid_argument(std::string(what) + ": " + std::to_string(a.size()) +
+                                " particles, the scene has " + std::to_string(n));
+}
+
+}  // namespace
+
+void Simulation::set_positions(const Vec3Array& x) {
+  check_count(x, model_.n, "set_positions");
+  state_.x = x;
+}
+
+void Simulation::set_velocities(const Vec3Array& v) {
+  check_count(v, model_.n, "set_velocities");
+  state_.v = v;
 }
 
 void Simulation::set_humidity(double omega) {
@@ -139,7 +172,7 @@ namespace {
 void accumulate_forces(const Model& m, const State& s, Workspace& w, bool implicit) {
   for_each_particle(m, [&](int i) { put(w.force[i], Vec3::Zero()); });
   add_spring_forces(m, s, w, m.params.integrator.type == IntegratorType::ExplicitEuler);
-  compute_normals(m, s.x.column(0), w.normal, w.quad_normals);
+  compute_normals(m, s.x.column(0), w.normal, w.normals_scratch);
   add_gravity(m, w.force);
   if (!implicit) add_viscous_damping(m, s, w.force);
   add_wind(m, s, w, w.force);
@@ -255,7 +288,7 @@ void take_step(const Model& m, State& s, Workspace& w) {
 }  // namespace
 
 void Simulation::step() {
-  ThreadChoice& c = threads_;
+  ThreadChoice& c = ws_->threads;
   if (!c.automatic) {
     take_step(model_, state_, *ws_);
     return;

@@ -455,9 +455,10 @@ void write_summary(const fs::path& out, const Params& p, const Simulation& sim, 
   // The count asked for (0: chosen as it ran), always a number; beside it how
   // the choice went, or the count used (at most one thread per 1024 particles).
   s["threads"] = p.integrator.threads;
-  if (const auto& c = sim.thread_choice(); c.automatic)
-    s["thread_choice"] = {
-        {"most", c.most}, {"steps_on_1", c.steps_on_one}, {"steps_on_most", c.steps_on_most}};
+  if (const StepStats c = sim.stats(); c.threads_chosen)
+    s["thread_choice"] = {{"most", c.most_threads},
+                          {"steps_on_1", c.steps_on_one},
+                          {"steps_on_most", c.steps_on_most}};
   else
     s["threads_used"] = sim.model().threads;
   s["simulated_seconds"] = sim.state().time;

@@ -81,9 +81,6 @@ class Vec3Array {
 struct SpringSet {
   std::vector<int> a, b;
   std::vector<double> rest;
-  // Each spring's offset in Model::stencil, which holds its constants (on a
-  // grid that is not square, a kind's springs along u and v differ).
-  std::vector<std::uint8_t> edge;
   // Each spring's stiffness (N/m) and damping (N·s/m): on the grid its
   // offset's, on a mesh cloth from the material and the local geometry.
   std::vector<double> k, damping;
@@ -150,9 +147,6 @@ struct Model {
   int threads = 1;                     // threads of the step (integrator.threads resolved)
   std::vector<std::array<int, 3>> triangles;
   std::vector<std::array<int, 2>> triangle_pairs;  // triangles sharing an edge
-  // 1 where i + j is even (its quad splits along a-cc; see triangles), else
-  // 0: a column, so that compute_normals runs over whole blocks of rows.
-  std::vector<double> chequer;
   std::vector<Handle> handles;
   int measured_handle = -1;  // the one the metrics follow: the first that is not a pin, else the
                              // first pin (-1: no handle)
@@ -236,6 +230,12 @@ struct StepStats {
   long long solves = 0;              // implicit Euler's linear solves since reset
   int cg_iterations = 0;             // of the last solve
   long long cg_iterations_total = 0;
+  // integrator.threads = 0: the step's threads are chosen as it runs, one or
+  // the most the grid takes (most_threads), whichever was faster in the last
+  // trial; the steps taken on each.
+  bool threads_chosen = false;
+  int most_threads = 1;
+  long long steps_on_one = 0, steps_on_most = 0;
 };
 
 // One row of metrics.csv (MODEL.md section 10).
@@ -274,6 +274,10 @@ class Simulation {
   // run it was copied from. Throws std::invalid_argument on a state of
   // another grid.
   void restore(const State& s);
+  // The particles moved, or their velocities set, between steps (the next
+  // step starts from them). Throws std::invalid_argument on another count.
+  void set_positions(const Vec3Array& x);
+  void set_velocities(const Vec3Array& v);
   // Live: mass, permeability and adhesion follow. Throws SceneError outside [0, 1].
   void set_humidity(double omega);
   // New parameters, live: the state is kept when the grid is the same size.
@@ -295,25 +299,6 @@ class Simulation {
 
   const Model& model() const { return model_; }
   const State& state() const { return state_; }
-  State& state() { return state_; }
-
-  // integrator.threads = 0: the step's threads are chosen as it runs. Now
-  // and then a few milliseconds of steps are timed on one thread and on all
-  // the grid takes, and the faster is kept until the next trial: another busy
-  // process makes every barrier wait for a descheduled thread, and two
-  // threads then took 3 × as long as one (51 × 51). The count never changes
-  // the result, so neither does the choice.
-  struct ThreadChoice {
-    bool automatic = false;
-    int most = 1;  // the threads the grid takes (Model::threads as built)
-    long long steps_on_one = 0, steps_on_most = 0;
-    // The trial: 0, 1 timing one thread, then `most`; 2 keeping the faster.
-    int phase = 0;
-    double seconds = 0;
-    long long substeps = 0;
-    double per_substep[2] = {};
-  };
-  const ThreadChoice& thread_choice() const { return threads_; }
 
  private:
   Model model_;
@@ -324,7 +309,7 @@ class Simulation {
   double grab_k_ = 0;
 
   friend Workspace& detail_workspace(const Simulation& sim);
-  ThreadChoice threads_;
+  friend State& detail_state(Simulation& sim);
 
   void start_thread_choice();
 };

@@ -22,13 +22,14 @@ using namespace detail;
 // loop per row of 51 ended in a scalar tail of 3 that cost as much as the
 // rest).
 void detail::compute_normals(const Model& m, const double* X, Vec3Array& normal,
-                             std::vector<double>& quad_normals) {
+                             NormalsScratch& scratch) {
   if (!m.grid) {
     compute_normals_mesh(m, X, normal);
     return;
   }
   const int nu = m.nu, nv = m.nv, n = m.n;
   const std::size_t before = std::size_t(nu) + 1, stride = before + n;
+  std::vector<double>& quad_normals = scratch.quad_normals;
   quad_normals.resize(6 * stride);
   double* t[6];
   for (int f = 0; f < 6; ++f) {
@@ -37,7 +38,13 @@ void detail::compute_normals(const Model& m, const double* X, Vec3Array& normal,
     std::fill(t[f] + (nv - 1) * nu, t[f] + n, 0.0);
   }
   const double *x = X, *y = X + n, *z = X + 2 * std::size_t(n);
-  const double* even_at = m.chequer.data();
+  if (scratch.chequer_nu != nu || scratch.chequer.size() != std::size_t(n)) {
+    scratch.chequer.resize(n);
+    scratch.chequer_nu = nu;
+    for (int j = 0; j < nv; ++j)
+      for (int i = 0; i < nu; ++i) scratch.chequer[m.index(i, j)] = (i + j) % 2 == 0 ? 1.0 : 0.0;
+  }
+  const double* even_at = scratch.chequer.data();
   for_each_row_block(m, [&](int j0, int j1, int) {
     const int q1 = std::min(j1, nv - 1);  // quad rows j0 .. q1 - 1
     if (j0 >= q1) return;
@@ -96,8 +103,8 @@ void detail::compute_normals(const Model& m, const double* X, Vec3Array& normal,
 
 void compute_normals(const Model& m, const Vec3Array& x, Vec3Array& normal) {
   if (normal.size() != x.size()) normal.assign(x.size(), Vec3::Zero());
-  std::vector<double> quad_normals;
-  detail::compute_normals(m, x.column(0), normal, quad_normals);
+  NormalsScratch scratch;
+  detail::compute_normals(m, x.column(0), normal, scratch);
 }
 
 }  // namespace wetcloth

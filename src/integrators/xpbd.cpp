@@ -348,7 +348,7 @@ void xpbd_step(const Model& m, State& s, Workspace& w) {
     // The external forces (MODEL.md section 8's first stage without the
     // springs and self-collision, which are constraints here).
     for_each_particle(m, [&](int i) { put(w.force[i], Vec3::Zero()); });
-    compute_normals(m, s.x.column(0), w.normal, w.quad_normals);
+    compute_normals(m, s.x.column(0), w.normal, w.normals_scratch);
     add_gravity(m, w.force);
     add_wind(m, s, w, w.force);
     add_air_pressure(m, s, w);

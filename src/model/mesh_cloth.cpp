@@ -46,7 +46,6 @@ void push(SpringSet& s, int a, int b, double rest, double k, double damping) {
   s.a.push_back(a);
   s.b.push_back(b);
   s.rest.push_back(rest);
-  s.edge.push_back(0);
   s.k.push_back(k);
   s.damping.push_back(damping);
 }
@@ -375,7 +374,6 @@ void build_mesh_cloth(Model& m, const Params& p) {
   m.on_border.assign(n, 0);
   m.in_wind.assign(n, 0);
   m.driven.assign(n, 0);
-  m.chequer.assign(n, 0.0);
   m.triangles = mesh.triangles;
   place_texture(m, p, mesh);
   // Faces: the file's quads, and the triangles of no quad.

@@ -109,7 +109,7 @@ int main() {
       (reps * q.size());
   std::printf("CGAL AABB tree: build %.1f ms, %.2f us a query (closest point, normal, sign)\n",
               build_cgal * 1e3, per_cgal * 1e6);
-  // As wetcloth searches (src/mesh_obstacle.cpp): bounded by the particle's
+  // As wetcloth searches (src/geometry/mesh_obstacle.cpp): bounded by the particle's
   // last answer (here its exact distance plus a step's move of 50 um), the
   // hint a point that far away on no triangle.
   t0 = std::chrono::steady_clock::now();

@@ -8,9 +8,9 @@
 #include <tuple>
 #include <utility>
 
-#include "src/detail.hpp"
-#include "src/forces/spring_edges.hpp"
-#include "src/spatial_hash.hpp"
+#include "detail.hpp"
+#include "forces/spring_edges.hpp"
+#include "geometry/spatial_hash.hpp"
 #include "wetcloth/scene.hpp"
 
 using namespace wetcloth;
@@ -255,7 +255,7 @@ void BM_implicit_solve(benchmark::State& st) {
 }
 void BM_normals(benchmark::State& st) {
   stage(st, warm(st), false, [](const Model& m, State& s, Workspace& w) {
-    detail::compute_normals(m, s.x.column(0), w.normal, w.quad_normals);
+    detail::compute_normals(m, s.x.column(0), w.normal, w.normals_scratch);
   });
 }
 

@@ -7,14 +7,14 @@
 #include <array>
 #include <limits>
 
-#include "mesh_obstacle.hpp"
+#include "geometry/mesh_obstacle.hpp"
 #include "wetcloth/simulation.hpp"
 #include "workspace.hpp"
 
 namespace wetcloth {
 
 struct TriangleMesh;
-// mesh_cloth.cpp: a cloth from cloth.mesh (Model::grid false): particles,
+// model/mesh_cloth.cpp: a cloth from cloth.mesh (Model::grid false): particles,
 // areas, springs, neighbour lists; where its vertices start (the file's
 // bounding box's centre at cloth.center, then orientation and tilt); a
 // handle's particles, placed by the texture coordinates.
@@ -31,6 +31,8 @@ namespace wetcloth::detail {
 
 // A simulation's scratch, for the library's stages, its tests and benchmarks.
 inline Workspace& workspace(const Simulation& sim) { return detail_workspace(sim); }
+// Its state, to change (the public API reads it; tests set up cases in it).
+inline State& state(Simulation& sim) { return detail_state(sim); }
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
@@ -54,7 +56,7 @@ inline SurfaceHit query_surface(const Params& p, SurfaceKind kind, const Vec3& x
   return h;
 }
 
-// surfaces.cpp: collide's projection out of the mesh obstacles alone, after
+// contact/surfaces.cpp: collide's projection out of the mesh obstacles alone, after
 // friction moved particles along a curved mesh (a chord of it dips inside).
 void collide_with_meshes(const Model& m, State& s, Workspace& w);
 
@@ -66,18 +68,18 @@ inline SurfaceHit query_code(const Model& m, int code, const Vec3& x) {
   return {h.distance, h.normal};
 }
 
-// surfaces.cpp: projects particles out of every obstacle and removes inward normal velocity.
-// touched[i] is the obstacle it was pushed out of (SurfaceKind, or kMeshCode
+// contact/surfaces.cpp: projects particles out of every obstacle and removes inward normal
+// velocity. touched[i] is the obstacle it was pushed out of (SurfaceKind, or kMeshCode
 // + k for mesh obstacle k), or None.
 // With `only`, just those particles (the others are known to be outside).
 // With a workspace, mesh obstacles' searches are bounded by its cache.
 void collide(const Model& m, State& s, std::vector<std::uint8_t>* touched,
              const std::vector<int>* only = nullptr, Workspace* w = nullptr);
-// simulation.cpp: compute_normals from positions by component (x, y, z
+// forces/normals.cpp: compute_normals from positions by component (x, y, z
 // columns of n), with a scratch array for the triangles' normals (the step's:
 // no allocation).
 void compute_normals(const Model& m, const double* x_columns, Vec3Array& normal,
-                     std::vector<double>& quad_normals);
+                     NormalsScratch& scratch);
 // Distances to the contact surface, contact flags and the contact border.
 void update_contact(const Model& m, State& s, Workspace& w);
 
@@ -203,7 +205,7 @@ double chain_stiffness(const Params& p);
 // "structural 200 N/m, shear 20 N/m, bending 20 N/m".
 std::string step_limit_springs_text(const Params& p);
 void add_spring_forces(const Model& m, const State& s, Workspace& w, bool with_damping);
-// The general kernels of a mesh cloth (mesh_cloth.cpp), where the grid has its stencil's.
+// The general kernels of a mesh cloth (model/mesh_cloth.cpp), where the grid has its stencil's.
 void add_spring_forces_mesh(const Model& m, const State& s, Workspace& w, bool damped);
 void apply_spring_damping_mesh(const Model& m, State& s, double h);
 void compute_normals_mesh(const Model& m, const double* X, Vec3Array& normal);
@@ -219,13 +221,26 @@ void add_adhesion(const Model& m, const State& s, Workspace& w);
 void add_self_collision(const Model& m, const State& s, Workspace& w, bool with_damping);
 void add_handle_forces(const Model& m, const State& s, Workspace& w);
 
-// air.cpp: the trapped air starts as the volume under the cloth at
+// air/air.cpp: the trapped air starts as the volume under the cloth at
 // atmospheric pressure; update_air advances it over dt (eqs. 2, 4, 5).
 void start_air(const Model& m, State& s, Workspace& w);
 void update_air(const Model& m, State& s, Workspace& w, double dt);
 // The air term taken implicitly, after the explicit velocity update.
 void correct_air_implicitly(const Model& m, State& s, Workspace& w, double dt);
-// implicit_euler.cpp: the new velocities by backward Euler (s.v in, s.v out),
+// integrators/explicit_euler.cpp: forward Euler (x, then v) and symplectic
+// Euler (v with the damping, then x) over dt, from the forces in w.force.
+void integrate_explicit_euler(const Model& m, State& s, Workspace& w, double dt);
+void integrate_symplectic_euler(const Model& m, State& s, Workspace& w, double dt);
+// The air term taken implicitly on the new velocities, then x += h v.
+void move_at_new_velocities(const Model& m, State& s, Workspace& w, double h);
+// integrators/step_control.cpp: backward Euler over dt / 2^k, k raised while
+// the springs change more than integrator.max_step_strain; returns the
+// substep taken, and its springs' largest change in `strain`.
+double implicit_euler_substep(const Model& m, State& s, Workspace& w, double dt, int& k,
+                              double& strain);
+// integrators/xpbd.cpp: one step of XPBD, in xpbd_substeps substeps.
+void xpbd_step(const Model& m, State& s, Workspace& w);
+// integrators/implicit_euler.cpp: the new velocities by backward Euler (s.v in, s.v out),
 // from the forces in w.force without their damping.
 void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h);
 // A particle this close to the contact surface is on it, m, and the solve
@@ -238,7 +253,7 @@ constexpr double kOnSurface = 1e-5;
 double step_strain(const Model& m, const State& s, double h);
 // The most halvings of dt the step control makes: substeps of dt / 1024.
 constexpr int kMostHalvings = 10;
-// handles.cpp: pins, driven particles, height caps; records the rig's force.
+// constraints/handles.cpp: pins, driven particles, height caps; records the rig's force.
 void apply_handle_constraints(const Model& m, State& s, Workspace& w);
 // After limit_strain: the force it took to hold the measured handle's particles
 // against the limiter's corrections joins the handle's recorded force.
@@ -246,20 +261,20 @@ void add_strain_limit_reaction(const Model& m, const State& s, Workspace& w);
 // Keeps held particles where their handle has them: a force handle's where it
 // stopped, a late pin's or move handle's on its path.
 void hold_stopped_handles(const Model& m, State& s);
-// friction.cpp: eq. 14 on particles in contact.
+// constraints/friction.cpp: eq. 14 on particles in contact.
 void apply_friction(const Model& m, State& s, const Workspace& w,
                     const std::vector<std::uint8_t>& touched, double dt);
 // The self-collision candidate pairs (a Verlet list in w.candidates), found again
 // where particles moved from their anchors.
 void refresh_collision_candidates(const Model& m, const State& s, Workspace& w);
-// xpbd.cpp: one substep's constraint projections, contact and friction.
+// integrators/xpbd.cpp: one substep's constraint projections, contact and friction.
 void xpbd_begin_substep(const Model& m, const State& s, Workspace& w);
 // One sweep over the springs; limit_only: over the strain limit alone.
 void project_springs(const Model& m, State& s, Workspace& w, double h, bool limit_only = false);
 void project_self_collision(const Model& m, State& s, Workspace& w, double h);
 void collide_with_friction(const Model& m, State& s, Workspace& w,
                            std::vector<std::uint8_t>& touched, double h);
-// strain_limit.cpp: Provot's correction in adaptive order, split by inverse
+// constraints/strain_limit.cpp: Provot's correction in adaptive order, split by inverse
 // mass (it conserves momentum); the force it takes to hold pinned, driven and
 // held particles against it in w.strain_reaction.
 void update_strain_order(const Model& m, State& s, Workspace& w);

@@ -7,7 +7,7 @@
 #include <cstdint>
 #include <vector>
 
-#include "mesh_obstacle.hpp"
+#include "geometry/mesh_obstacle.hpp"
 #include "wetcloth/simulation.hpp"
 
 namespace wetcloth {
@@ -22,12 +22,38 @@ struct CollisionPair {
   Sym block{};  // implicit Euler: its h² k_t u uᵀ
 };
 
+// compute_normals' scratch: each quad's two triangle normals, and 1 where
+// i + j is even (its quad splits along a-cc; see Model::triangles), else 0,
+// as a column, so that it runs over whole blocks of rows.
+struct NormalsScratch {
+  std::vector<double> quad_normals, chequer;
+  int chequer_nu = 0;
+};
+
+// integrator.threads = 0: the step's threads are chosen as it runs. Now and
+// then a few milliseconds of steps are timed on one thread and on all the
+// grid takes, and the faster is kept until the next trial: another busy
+// process makes every barrier wait for a descheduled thread, and two threads
+// then took 3 × as long as one (51 × 51). The count never changes the
+// result, so neither does the choice.
+struct ThreadChoice {
+  bool automatic = false;
+  int most = 1;  // the threads the grid takes (Model::threads as built)
+  long long steps_on_one = 0, steps_on_most = 0;
+  // The trial: 0, 1 timing one thread, then `most`; 2 keeping the faster.
+  int phase = 0;
+  double seconds = 0;
+  long long substeps = 0;
+  double per_substep[2] = {};
+};
+
 // Scratch arrays, reused every step: nothing is allocated per step.
 struct Workspace {
   Vec3Array force, normal, surface_normal;
   std::vector<Vec3> x_before;
-  std::vector<double> quad_normals;  // compute_normals' scratch
-  std::vector<double> distance;      // signed distance to the contact surface
+  NormalsScratch normals_scratch;
+  std::vector<double> distance;       // signed distance to the contact surface
+  std::vector<std::uint8_t> touched;  // the surface each particle was pushed out of this step
   // Per mesh obstacle, each particle's last query (bounds the next search only).
   std::vector<MeshQueryCache> mesh_cache;
   std::vector<double> adhesion;      // |adhesion force| per particle, N
@@ -93,7 +119,7 @@ struct Workspace {
   std::vector<std::uint8_t> candidate_close;  // candidate within d_t this step
   Vec3Array candidates_anchor;
   double candidates_radius = 0;
-  // Implicit Euler, in columns (see implicit_euler.cpp): in float, the
+  // Implicit Euler, in columns (see integrators/implicit_euler.cpp): in float, the
   // matrix's 8 forward stencil edges' blocks and the block-Jacobi
   // preconditioner; in double, the conjugate-gradient vectors and the
   // matrix's diagonal blocks; per-row sums; the particles whose velocity the
@@ -110,7 +136,7 @@ struct Workspace {
   // tries thrown away included).
   Vec3Array v_start;
   long long substeps = 0, solves = 0;
-  // XPBD (xpbd.cpp): positions at the start of the substep, before contact;
+  // XPBD (integrators/xpbd.cpp): positions at the start of the substep, before contact;
   // the inverse masses the constraints see; a class's corrections (x, y, z
   // columns) and where along a row each class is; the particles the measured
   // handle holds and the constraints' impulse on them over the substep.
@@ -118,6 +144,8 @@ struct Workspace {
   std::vector<double> free_inv_mass, correction, class_gate;
   std::vector<int> reaction_particles;
   Vec3 reaction_impulse = Vec3::Zero();
+  // The choice of the step's threads, kept by reset (Simulation::step).
+  ThreadChoice threads;
   // The viewer's hand (Simulation::grab), copied in from the Simulation.
   int grab_particle = -1;
   Vec3 grab_target = Vec3::Zero();

@@ -29,7 +29,7 @@ TEST(Adhesion, ParticleForcesSumToEquation13) {
     Simulation sim = flat_on_table(1.0);
     make_tent(sim, lift, 0.08);  // a contact region with an inner border too
     Workspace& w = detail::workspace(sim);
-    detail::update_contact(sim.model(), sim.state(), w);
+    detail::update_contact(sim.model(), detail::state(sim), w);
     w.force.assign(w.force.size(), Vec3::Zero());
     detail::add_adhesion(sim.model(), sim.state(), w);
     double s_now = 0;
@@ -55,7 +55,7 @@ TEST(Contact, BorderIsContactOnTheClothsBorderOrNextToLifted) {
     Simulation sim = flat_on_table(
         1.0, {"cloth.resolution=[" + std::to_string(nu) + "," + std::to_string(nv) + "]"});
     const Model& m = sim.model();
-    State& s = sim.state();
+    State& s = detail::state(sim);
     const double h_th = m.params.contact.bridge_height;
     unsigned pattern = 12345;  // a fixed pseudo-random third of the particles lifted
     for (auto&& x : s.x) {
@@ -86,9 +86,9 @@ TEST(Contact, BorderIsContactOnTheClothsBorderOrNextToLifted) {
 
 TEST(Adhesion, SwitchedOffAboveTheLiquidBridge) {
   Simulation sim = flat_on_table(1.0);
-  for (auto&& x : sim.state().x) x.z() = 1.5e-3;  // above h_th = 1 mm
+  for (auto&& x : detail::state(sim).x) x.z() = 1.5e-3;  // above h_th = 1 mm
   Workspace& w = detail::workspace(sim);
-  detail::update_contact(sim.model(), sim.state(), w);
+  detail::update_contact(sim.model(), detail::state(sim), w);
   detail::add_adhesion(sim.model(), sim.state(), w);
   for (double a : w.adhesion) EXPECT_EQ(a, 0.0);
 }

@@ -28,7 +28,7 @@ TEST(Air, SealedPocketKeepsPressureTimesVolume) {
   const double pv0 = p.air.p_atm * sim.state().air_atm_volume;
   for (int frame = 1; frame <= 10; ++frame) {
     ASSERT_TRUE(sim.advance_to(0.05 * frame));
-    const State& s = sim.state();
+    const State& s = detail::state(sim);
     if (s.air_volume > 0) {
       EXPECT_NEAR(s.inner_pressure * s.air_volume, pv0, 1e-12 * p.air.p_atm);
     }
@@ -41,7 +41,7 @@ TEST(Air, PocketHeldStillRelaxesWithTheModelsTimeConstant) {
   Simulation sim = flat_on_table(0.5);
   make_tent(sim, 0.02, 0.08);
   const Model& m = sim.model();
-  State& s = sim.state();
+  State& s = detail::state(sim);
   Workspace& w = detail::workspace(sim);
   detail::update_contact(m, s, w);
   detail::update_air(m, s, w, 0.0);
@@ -63,7 +63,7 @@ TEST(Air, GrowingTentLagsByRateTimesTimeConstant) {
   for (const double steps_per_tau : {10.0, 0.1}) {
     Simulation sim = flat_on_table(0.5);
     const Model& m = sim.model();
-    const State& s = sim.state();
+    const State& s = detail::state(sim);
     const GrowingTent t = grow_tent_steadily(sim, steps_per_tau);
     const double lag = (s.air_volume - t.volume_before_last_step) / t.dt * air_time_constant(sim);
     const double deficit = m.params.air.p_atm - s.inner_pressure;
@@ -83,7 +83,7 @@ TEST(Air, OneStepFeelsTheDeficitAtItsEnd) {
   for (const double steps_per_tau : {10.0, 0.1}) {
     Simulation sim = flat_on_table(0.5);
     const Model& m = sim.model();
-    State& s = sim.state();
+    State& s = detail::state(sim);
     Workspace& w = detail::workspace(sim);
     const GrowingTent t = grow_tent_steadily(sim, steps_per_tau);
     const double dt = t.dt;
@@ -122,7 +122,7 @@ TEST(Air, OneStepFeelsTheDeficitAtItsEnd) {
 TEST(Air, BreakthroughCapsTheDeficit) {
   Simulation sim = flat_on_table(1.0);
   make_tent(sim, 0.02, 0.08);
-  State& s = sim.state();
+  State& s = detail::state(sim);
   Workspace& w = detail::workspace(sim);
   detail::update_contact(sim.model(), s, w);
   s.air_atm_volume = 0;  // all the air gone: P_in would be 0
@@ -162,12 +162,12 @@ TEST(Air, ForcePointsTowardTheSurfaceUnderSuction) {
     make_tent(table, 0.03, 0.1);
     Simulation ball(test::coarse("drape-ball", {std::string("air.force_direction=") + direction}));
     const Params& bp = ball.model().params;
-    for (auto&& x : ball.state().x) {  // wrap the cloth 1 cm above the ball's top
+    for (auto&& x : detail::state(ball).x) {  // wrap the cloth 1 cm above the ball's top
       const Vec3 c = to_vec(bp.ball.center);
       x = c + (x - c).normalized() * (bp.ball.radius + 0.01);
     }
     for (Simulation* sim : {&table, &ball}) {
-      State& s = sim->state();
+      State& s = detail::state(*sim);
       Workspace& w = detail::workspace(*sim);
       compute_normals(sim->model(), s.x, w.normal);
       detail::update_contact(sim->model(), s, w);
@@ -201,7 +201,7 @@ TEST(Air, ClothLandingFlatTrapsNoPressure) {
     p.handles["pull"] = pull;
     Simulation sim(p);
     ASSERT_TRUE(sim.advance_to(0.35)) << model << ": " << sim.blow_up_reason();
-    const State& s = sim.state();
+    const State& s = detail::state(sim);
     ASSERT_EQ(std::count(s.contact.begin(), s.contact.end(), 1), sim.model().n) << model;
     EXPECT_NEAR(s.inner_pressure, p.air.p_atm, 1.0) << model;
     ASSERT_TRUE(sim.advance_to(0.6)) << model << ": " << sim.blow_up_reason();
@@ -246,7 +246,7 @@ TEST(Air, VentedClothFallingOntoTheBallIsOpenToTheRoom) {
   ASSERT_GT(in_pocket, 0);
   for (int frame = 1; frame <= 8; ++frame) {
     ASSERT_TRUE(sim.advance_to(0.01 * frame));
-    const State& s = sim.state();
+    const State& s = detail::state(sim);
     ASSERT_EQ(std::count(s.contact.begin(), s.contact.end(), 1), 0) << "touched at frame " << frame;
     for (int i = 0; i < sim.model().n; ++i)
       ASSERT_EQ(s.pocket_pressure[i], p.air.p_atm) << "frame " << frame << " particle " << i;
@@ -259,7 +259,7 @@ TEST(Air, VentedPatchRingedByContactOnTheBallIsSealed) {
   Simulation sim(test::coarse("drape-ball", {"cloth.humidity=0.7"}));
   const Model& m = sim.model();
   const Params& p = m.params;
-  State& s = sim.state();
+  State& s = detail::state(sim);
   Workspace& w = detail::workspace(sim);
   const Vec3 c = to_vec(p.ball.center);
   const int mid = m.index(m.nu / 2, m.nv / 2);

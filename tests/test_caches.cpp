@@ -1,4 +1,4 @@
-// Animation caches (src/caches.cpp): each read back by the rules of its format
+// Animation caches (src/io/caches.cpp): each read back by the rules of its format
 // and compared with the simulation's own positions and fields at each frame.
 #include <gtest/gtest.h>
 

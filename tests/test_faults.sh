@@ -8,19 +8,8 @@ W="$1"; TRIALS="${TRIALS:-8}"
 T=$(mktemp -d)
 cleanup() { [ -n "${RO:-}" ] && chattr -i "$RO" 2>/dev/null; chmod -R u+w "$T" 2>/dev/null; rm -rf "$T"; }
 trap cleanup EXIT
-fails=0; passes=0
-ok()  { passes=$((passes+1)); echo "ok: $1"; }
-bad() { fails=$((fails+1)); echo "FAIL: $1"; }
-
-# metrics.csv whole: a header, every row with the header's number of fields,
-# and a last line ended. Prints why not.
-rows_whole() {
-  local f="$1"
-  [ -f "$f" ] || { echo "no $f"; return 1; }
-  [ -z "$(tail -c 1 "$f")" ] || { echo "$f: last line not ended"; return 1; }
-  awk -F, 'NR == 1 { n = NF; if ($1 != "time_s") { print "no header"; exit 1 } next }
-           NF != n { print "row " NR " has " NF " fields, not " n; exit 1 }' "$f"
-}
+# ok, bad, rows_whole
+. "$(dirname "$0")/lib.sh"
 no_temporaries() {
   local left; left=$(find "$1" -name '*.tmp' 2>/dev/null)
   [ -z "$left" ] || { echo "left: $left"; return 1; }

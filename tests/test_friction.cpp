@@ -15,7 +15,7 @@ using namespace wetcloth::test;
 TEST(Friction, NeverReversesOrGrowsAndStopsASlowParticle) {
   Simulation sim = flat_on_table(1.0);
   const Model& m = sim.model();
-  State& s = sim.state();
+  State& s = detail::state(sim);
   Workspace& w = detail::workspace(sim);
   detail::update_contact(m, s, w);
   w.force.assign(w.force.size(), Vec3::Zero());
@@ -48,7 +48,7 @@ TEST(Friction, EachParticleAloneOnRowsLongerThanAChunk) {
   Simulation sim = flat_on_table(0.7, {"cloth.resolution=[70,4]"});
   Model& m = const_cast<Model&>(sim.model());
   ASSERT_GT(m.nu, detail::kChunk);
-  State& s = sim.state();
+  State& s = detail::state(sim);
   Workspace& w = detail::workspace(sim);
   detail::update_contact(m, s, w);
   w.force.assign(w.force.size(), Vec3::Zero());
@@ -113,7 +113,7 @@ TEST(Friction, DryClothStillHasFrictionFromItsWeight) {
   for (const char* normal : {"contact", "adhesion"}) {
     Simulation sim =
         flat_on_table(0.0, {std::string("friction.normal=") + normal, "cloth.resolution=[15,15]"});
-    for (auto&& v : sim.state().v) v = Vec3(0.05, 0, 0);
+    for (auto&& v : detail::state(sim).v) v = Vec3(0.05, 0, 0);
     ASSERT_TRUE(sim.advance_to(0.2));
     const double speed = sim.metrics().kinetic_energy_j;
     if (std::string(normal) == "contact") {

@@ -180,7 +180,7 @@ TEST(ImplicitEuler, StretchedSpringRelaxesTowardRest) {
   p.integrator.cg_tolerance = 1e-12;
   p.integrator.max_step_strain = 10;  // one backward-Euler step, not halved
   Simulation sim(p);
-  sim.state().x[1].x() += 0.002;  // stretch the bottom structural spring by 2 mm
+  detail::state(sim).x[1].x() += 0.002;  // stretch the bottom structural spring by 2 mm
   const double before = (sim.state().x[1] - sim.state().x[0]).norm();
   sim.step();
   const double after = (sim.state().x[1] - sim.state().x[0]).norm();
@@ -387,13 +387,13 @@ TEST(Threads, TwoThreadsGiveTheSameBitsAsOne) {
 TEST(Threads, ChosenAsItRunsGivesTheSameBitsAsOne) {
   Simulation one(load_scene("pull-straight", {"integrator.threads=1"}));
   Simulation chosen(load_scene("pull-straight", {"integrator.threads=0"}));
-  if (chosen.thread_choice().most < 2) GTEST_SKIP() << "one core: nothing to choose";
-  ASSERT_TRUE(chosen.thread_choice().automatic);
+  if (chosen.stats().most_threads < 2) GTEST_SKIP() << "one core: nothing to choose";
+  ASSERT_TRUE(chosen.stats().threads_chosen);
   const double t = 0.3;  // about a second of wall time: trials every 0.25 s
   ASSERT_TRUE(one.advance_to(t));
   ASSERT_TRUE(chosen.advance_to(t));
-  EXPECT_GT(chosen.thread_choice().steps_on_one, 0);
-  EXPECT_GT(chosen.thread_choice().steps_on_most, 0);
+  EXPECT_GT(chosen.stats().steps_on_one, 0);
+  EXPECT_GT(chosen.stats().steps_on_most, 0);
   for (int i = 0; i < one.model().n; ++i) {
     ASSERT_EQ(one.state().x[i], chosen.state().x[i]) << "particle " << i;
     ASSERT_EQ(one.state().v[i], chosen.state().v[i]) << "particle " << i;

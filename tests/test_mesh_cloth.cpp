@@ -1,4 +1,4 @@
-// A cloth from a triangle mesh (cloth.mesh, src/mesh_cloth.cpp): the grid's
+// A cloth from a triangle mesh (cloth.mesh, src/model/mesh_cloth.cpp): the grid's
 // own quads read from a file make the grid's particles, areas and springs and
 // run as it does; a mesh that is no grid (a disc of triangles) conserves
 // momentum, drops onto the table and settles, and takes air and adhesion.

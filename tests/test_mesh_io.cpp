@@ -1,10 +1,10 @@
-// Reading the OBJ meshes a scene names (src/mesh_io.cpp).
+// Reading the OBJ meshes a scene names (src/geometry/mesh_io.cpp).
 #include <gtest/gtest.h>
 
 #include <filesystem>
 #include <fstream>
 
-#include "mesh_io.hpp"
+#include "geometry/mesh_io.hpp"
 #include "wetcloth/scene.hpp"
 
 namespace wetcloth {

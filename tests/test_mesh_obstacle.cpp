@@ -12,7 +12,7 @@
 
 #include "common.hpp"
 #include "detail.hpp"
-#include "mesh_obstacle.hpp"
+#include "geometry/mesh_obstacle.hpp"
 
 using namespace wetcloth;
 namespace fs = std::filesystem;
@@ -191,7 +191,7 @@ TEST(MeshObstacle, AirPressesAlongTheMeshNormal) {
   Simulation sim(p);
   ASSERT_TRUE(sim.advance_to(0.4)) << sim.blow_up_reason();
   const Model& m = sim.model();
-  const State& s = sim.state();
+  const State& s = detail::state(sim);
   Workspace& w = detail::workspace(sim);
   EXPECT_GT(s.air_volume, 0);
   int pushed = 0;

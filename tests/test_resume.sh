@@ -11,9 +11,8 @@ set -u
 W="$1"; TRIALS="${TRIALS:-20}"
 T=$(mktemp -d)
 trap 'rm -rf "$T"' EXIT
-fails=0; passes=0
-ok()  { passes=$((passes+1)); echo "ok: $1"; }
-bad() { fails=$((fails+1)); echo "FAIL: $1"; }
+# ok, bad, rows_whole
+. "$(dirname "$0")/lib.sh"
 
 # The scene: 9 x 9 particles, 0.3 s at 100 frames/s, every cache, a checkpoint
 # every 0.1 s of simulated time (a run takes about 0.4 s here).
@@ -21,13 +20,6 @@ RUN=(run hang --grid 9 --duration 0.3 --set integrator.dt=2e-4 --set run.fps=100
      --export usd,pc2,vtk --checkpoint-every 0.1 --quiet)
 LAST=frames/frame_00030.obj
 
-rows_whole() {
-  local f="$1"
-  [ -f "$f" ] || { echo "no $f"; return 1; }
-  [ -z "$(tail -c 1 "$f")" ] || { echo "$f: last line not ended"; return 1; }
-  awk -F, 'NR == 1 { n = NF; if ($1 != "time_s") { print "no header"; exit 1 } next }
-           NF != n { print "row " NR " has " NF " fields, not " n; exit 1 }' "$f"
-}
 # The folder's outputs are the reference run's, byte for byte. Prints what differs.
 same_as_ref() {
   local d="$1" f

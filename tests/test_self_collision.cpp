@@ -8,7 +8,7 @@
 
 #include "common.hpp"
 #include "detail.hpp"
-#include "spatial_hash.hpp"
+#include "geometry/spatial_hash.hpp"
 #include "wet_setups.hpp"
 
 using namespace wetcloth;
@@ -47,7 +47,7 @@ TEST(SelfCollision, CandidatesSearchedAroundMoversAreTheWholeSearch) {
   Simulation sim(p);
   const Model& m = sim.model();
   // Crumple: a pseudo-random height field, so that layers meet as it falls.
-  for (int i = 0; i < m.n; ++i) sim.state().x[i].z() += 0.01 * std::sin(1.7 * i);
+  for (int i = 0; i < m.n; ++i) detail::state(sim).x[i].z() += 0.01 * std::sin(1.7 * i);
   const double d_t = p.self_collision.distance, step = 0.12 / 19;
   const double margin = std::min(0.5 * d_t, 1.5 * step);
   const int reach = std::max(2, static_cast<int>(std::ceil(d_t / step)));
@@ -91,7 +91,7 @@ TEST(SelfCollision, MoversMeetingEachOtherArePaired) {
   p.self_collision.enabled = true;
   Simulation sim(p);
   const Model& m = sim.model();
-  State& s = sim.state();
+  State& s = detail::state(sim);
   auto& w = detail::workspace(sim);
   detail::add_self_collision(m, s, w, true);  // the whole search
   const auto paired = [&](int i, int j) {
@@ -129,7 +129,7 @@ TEST(SelfCollision, KeepsTwoFoldedLayersApart) {
     std::vector<int> top;
     for (int j = fold; j < m.nv; ++j)
       for (int i = 0; i < m.nu; ++i) {
-        auto x = sim.state().x[m.index(i, j)];
+        auto x = detail::state(sim).x[m.index(i, j)];
         x = Vec3(x.x(), 2 * y_fold - x.y(), 1.2 * d_t);
         if (j > fold + 1) top.push_back(m.index(i, j));
       }

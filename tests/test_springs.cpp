@@ -16,7 +16,7 @@ Vec3Array forces_on_pair(double k, double kd, const Vec3& x1, const Vec3& v1) {
   p.springs.structural_damping = kd;
   p.springs.shear_k = p.springs.bending_k = 0;
   Simulation sim(p);
-  State& s = sim.state();
+  State& s = detail::state(sim);
   const Vec3 up(0, 0, 0.01);
   s.x = {Vec3::Zero(), x1, up, x1 + up};
   s.v = {Vec3::Zero(), v1, Vec3::Zero(), v1};
@@ -52,10 +52,10 @@ TEST(Springs, UndampedSpringKeepsEnergyUnderSymplecticEuler) {
   p.springs.shear_k = 0;
   p.springs.bending_k = 0;
   Simulation sim(p);
-  sim.state().x[3] += Vec3(0.05, -0.02, 0.03);  // stretch, then let go
+  detail::state(sim).x[3] += Vec3(0.05, -0.02, 0.03);  // stretch, then let go
   auto energy = [&] {
     const Model& m = sim.model();
-    const State& s = sim.state();
+    const State& s = detail::state(sim);
     double e = 0;
     for (int i = 0; i < m.n; ++i) e += 0.5 * m.mass[i] * s.v[i].squaredNorm();
     for (std::size_t k = 0; k < m.structural.size(); ++k) {
@@ -100,7 +100,7 @@ INSTANTIATE_TEST_SUITE_P(Grids, DampingSolve,
 TEST_P(DampingSolve, ConservesMomentumAndMatchesEquation1) {
   Simulation sim(test::coarse("pull-straight", GetParam()));
   const Model& m = sim.model();
-  State& s = sim.state();
+  State& s = detail::state(sim);
   Workspace& w = detail::workspace(sim);
   std::uint64_t seed = 7;
   auto rnd = [&] {

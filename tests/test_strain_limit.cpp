@@ -48,7 +48,7 @@ TEST(StrainLimit, PinnedParticlesNeverMove) {
 TEST(StrainLimit, AdaptiveOrderStartsAtTheHandle) {
   Params p = test::coarse("pull-straight");
   Simulation sim(p);
-  const State& s = sim.state();
+  const State& s = detail::state(sim);
   const Model& m = sim.model();
   const int centre = m.index(m.nu / 2, m.nv / 2);
   EXPECT_EQ(s.source_distance[centre], 0);

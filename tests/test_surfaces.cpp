@@ -23,7 +23,7 @@ TEST(Surfaces, CollisionProjectsOutAndRemovesInwardVelocity) {
   Params p = test::bare(2);
   p.table.enabled = true;
   Simulation sim(p);
-  State& s = sim.state();
+  State& s = detail::state(sim);
   s.x[0].z() = -0.01;
   s.v[0] = Vec3(0.5, 0, -2);
   detail::collide(sim.model(), s, nullptr);
@@ -44,7 +44,7 @@ TEST(Surfaces, TableAloneCollidesAsTheGeneralLoopDoes) {
   p.ball.center = {5, 5, 5};
   Simulation with_ball(p);
   ASSERT_TRUE(table_only.model().driven[0]);
-  State& a = table_only.state();
+  State& a = detail::state(table_only);
   for (int i = 0; i < table_only.model().n; ++i) {
     a.x[i].z() = 0.01 * std::sin(2.3 * i + 4);  // particle 0 below the table
     a.v[i] = Vec3(std::cos(i), std::sin(1.7 * i), std::cos(0.9 * i));

@@ -1,4 +1,4 @@
-// The large-step integrator, XPBD in substeps (src/xpbd.cpp): laws with exact
+// The large-step integrator, XPBD in substeps (src/integrators/xpbd.cpp): laws with exact
 // answers, and agreement with the small-step reference.
 #include <gtest/gtest.h>
 
@@ -75,7 +75,7 @@ TEST(Xpbd, SpringSweepConservesMomentum) {
   p.springs = Params{}.springs;
   p.strain_limit.enabled = true;
   Simulation sim(p);
-  State& s = sim.state();
+  State& s = detail::state(sim);
   for (int i = 0; i < sim.model().n; ++i)  // stretched unevenly, beyond the limit
     s.x[i] = 1.3 * s.x[i] + Vec3(0.001 * std::sin(i), 0.002 * std::cos(3.0 * i), 0.0);
   const Vec3 before = centroid(sim);

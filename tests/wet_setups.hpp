@@ -21,7 +21,7 @@ inline Simulation flat_on_table(double omega, std::vector<std::string> sets = {}
 
 // Lifts the particles within `radius` of the centre into a cone of height h.
 inline void make_tent(Simulation& sim, double h, double radius) {
-  for (auto&& x : sim.state().x) {
+  for (auto&& x : detail::state(sim).x) {
     const double r = std::hypot(x.x(), x.y());
     if (r < radius) x.z() = h * (1 - r / radius);
   }
@@ -45,7 +45,7 @@ struct GrowingTent {
 };
 inline GrowingTent grow_tent_steadily(Simulation& sim, double steps_per_tau) {
   const Model& m = sim.model();
-  State& s = sim.state();
+  State& s = detail::state(sim);
   Workspace& w = detail::workspace(sim);
   GrowingTent t{0.02, 0, 0, 0};
   make_tent(sim, t.height, 0.08);

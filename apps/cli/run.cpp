@@ -427,28 +427,24 @@ std::vector<double> kept_row_times(const fs::path& path, long long bytes, long l
   return times;
 }
 
-}  // namespace
-
-RunResult run_scene(const Params& p, const fs::path& out, bool progress,
-                    const ResumePoint* resume) {
-  RunResult r;
-  Simulation sim(p);
-  if (resume) try {
-      sim.restore(resume->state);
-    } catch (const std::invalid_argument& e) {
-      throw SceneError(resume->file.string() + ": " + e.what());
-    }
-  if (std::error_code ec; fs::create_directories(out, ec), ec)
-    throw_output_error(out, "cannot make the folder", ec.value());
-  r.started = true;
-  const OutputLock lock(out);
-  const UpAxis up = p.run.up;
-  const ExportFormats formats = parse_export_formats(p.run.exports);
+// What a run writes to, and where its outputs stand after the last whole frame.
+struct RunOutputs {
   std::optional<CacheWriter> caches;
   std::optional<MetricsFile> metrics;
-  OutputsAt at;  // where the outputs stand after the last whole frame
-  long long substeps_before = 0;
+  OutputsAt at;
+  long long substeps_before = 0;  // a resumed run's, before the checkpoint
   double wall_before = 0;
+};
+
+// A new run's outputs started, or a resumed one's taken back to where its
+// checkpoint left them.
+void open_outputs(const Params& p, const fs::path& out, const Simulation& sim,
+                  const ResumePoint* resume, RunOutputs& o, RunResult& r) {
+  const UpAxis up = p.run.up;
+  const ExportFormats formats = parse_export_formats(p.run.exports);
+  auto& caches = o.caches;
+  auto& metrics = o.metrics;
+  auto& at = o.at;
   if (!resume) {
     clear_outputs(out);
     if (p.run.meshes)
@@ -469,7 +465,7 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress,
     at.metrics_bytes = metrics->size();
     if (caches) at.cache = caches->position(false);
   } else {
-    at = record_outputs(*resume, substeps_before, wall_before);
+    at = record_outputs(*resume, o.substeps_before, o.wall_before);
     const std::vector<double> times =
         kept_row_times(out / "metrics.csv", at.metrics_bytes, at.next_frame, resume->file);
     if (formats.any()) {
@@ -487,6 +483,138 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress,
     r.time_to_5cm_s = at.time_to_5cm_s;
     r.frame_peak_deficit_pa = at.frame_peak_deficit_pa;
   }
+}
+
+// Frame f's row, mesh and cache frame; the run's first and last rows, its
+// peak deficit and time to 5 cm follow them.
+void write_frame(const Params& p, const fs::path& out, const Simulation& sim, const Metrics& m,
+                 long long f, RunOutputs& o, RunResult& r, nlohmann::json& first_json,
+                 nlohmann::json& final_json) {
+  o.metrics->append(m);
+  if (first_json.is_null()) {
+    first_json = metrics_json(m);
+    r.first = m;
+  }
+  r.final = m;
+  final_json = metrics_json(m);
+  r.frame_peak_deficit_pa = std::max(r.frame_peak_deficit_pa, p.air.p_atm - m.inner_pressure_pa);
+  if (p.run.meshes) {
+    char name[32];
+    std::snprintf(name, sizeof name, "frame_%05lld.obj", f);
+    write_file_atomic(out / "frames" / name, cloth_obj(sim.model(), sim.state(), p.run.up));
+  }
+  if (o.caches) o.caches->add_frame(sim);
+  // Time to 5 cm is a pulled handle's: a pin (measured when there are only
+  // pins) sits at its height from the start.
+  const bool pulled = sim.model().measures_a_pull();
+  if (pulled && r.time_to_5cm_s < 0 && m.handle_height_m >= 0.05) r.time_to_5cm_s = m.time_s;
+}
+
+// Where the outputs stand after whole frame f, for a checkpoint.
+void mark_whole_frame(long long f, RunOutputs& o, const RunResult& r,
+                      const nlohmann::json& first_json, const nlohmann::json& final_json) {
+  OutputsAt& at = o.at;
+  at.next_frame = f + 1;
+  at.metrics_bytes = o.metrics->size();
+  if (o.caches) at.cache = o.caches->position(false);
+  at.any_row = true;
+  at.first = first_json;
+  at.final = final_json;
+  at.time_to_5cm_s = r.time_to_5cm_s;
+  at.frame_peak_deficit_pa = r.frame_peak_deficit_pa;
+}
+
+// summary.json: how the run ended, its size and speed, the last row.
+void write_summary(const fs::path& out, const Params& p, const Simulation& sim, const RunResult& r,
+                   const nlohmann::json& final_json, long long substeps_before,
+                   const ResumePoint* resume) {
+  const bool interrupted = r.code > 128;
+  nlohmann::json s;
+  s["scene"] = p.name;
+  s["version"] = WETCLOTH_VERSION;
+  s["status"] = r.code == kOk ? "ok" : interrupted ? "interrupted" : "blew up";
+  s["interrupted"] = interrupted;
+  if (interrupted) s["signal"] = signal_name(r.code - 128);
+  if (r.code != kOk) s["message"] = r.message;
+  s["steps"] = r.steps;
+  // More than steps where implicit Euler halved some.
+  s["substeps"] = substeps_before + sim.stats().substeps;
+  s["particles"] = sim.model().n;
+  // The count asked for (0: chosen as it ran), always a number; beside it how
+  // the choice went, or the count used (at most one thread per 1024 particles).
+  s["threads"] = p.integrator.threads;
+  if (const StepStats c = sim.stats(); c.threads_chosen)
+    s["thread_choice"] = {{"most", c.most_threads},
+                          {"steps_on_1", c.steps_on_one},
+                          {"steps_on_most", c.steps_on_most}};
+  else
+    s["threads_used"] = sim.model().threads;
+  s["simulated_seconds"] = sim.state().time;
+  s["wall_seconds"] = r.wall_seconds;
+  s["realtime_factor"] = r.wall_seconds > 0 ? sim.state().time / r.wall_seconds : 0.0;
+  s["peak_pressure_deficit_pa"] = r.peak_deficit_pa;
+  s["final"] = final_json;  // the last row's (JSON has no inf: a row never has one)
+  if (resume) s["resumed_at_s"] = resume->state.time;
+  write_file_atomic(out / "summary.json", s.dump(2) + "\n");
+}
+
+// The run's end: the outputs closed, the result's totals, summary.json, and
+// on success the checkpoint removed. wrote_a_row: this run wrote a row;
+// start: when it started.
+void finish_run(const Params& p, const fs::path& out, const Simulation& sim,
+                const ResumePoint* resume, bool wrote_a_row,
+                std::chrono::steady_clock::time_point start, RunOutputs& o, RunResult& r,
+                nlohmann::json& first_json, nlohmann::json& final_json) {
+  o.metrics->close();
+  if (o.caches) o.caches->finish();
+  if (first_json.is_null()) {
+    r.first = r.final = sim.metrics();
+    first_json = final_json = metrics_json(r.first);
+  } else if (!wrote_a_row) {
+    r.final = sim.metrics();  // a resumed run that had no frame left: the state's
+  }
+  r.peak_deficit_pa = sim.state().peak_deficit;
+  r.steps = sim.state().steps;
+  r.wall_seconds = o.wall_before +
+                   std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  r.simulated_seconds = sim.state().time;
+  const bool interrupted = r.code > 128;
+  if (interrupted)
+    r.message = std::string("interrupted by ") + signal_name(r.code - 128) +
+                " at t = " + format_number(sim.state().time) + " s";
+  write_summary(out, p, sim, r, final_json, o.substeps_before, resume);
+  // Whole: nothing to resume. The checkpoint goes once cloth.usda and
+  // summary.json are written, the USD samples after it: a run killed at any
+  // moment either resumes from its checkpoint or has ended whole.
+  if (r.code == kOk) {
+    if (std::error_code ec; fs::remove(out / "checkpoint.state", ec), ec)
+      throw_output_error(out / "checkpoint.state", "cannot remove", ec.value());
+    if (o.caches) o.caches->remove_samples();
+  }
+}
+
+}  // namespace
+
+RunResult run_scene(const Params& p, const fs::path& out, bool progress,
+                    const ResumePoint* resume) {
+  RunResult r;
+  Simulation sim(p);
+  if (resume) try {
+      sim.restore(resume->state);
+    } catch (const std::invalid_argument& e) {
+      throw SceneError(resume->file.string() + ": " + e.what());
+    }
+  if (std::error_code ec; fs::create_directories(out, ec), ec)
+    throw_output_error(out, "cannot make the folder", ec.value());
+  r.started = true;
+  const OutputLock lock(out);
+  RunOutputs o;
+  open_outputs(p, out, sim, resume, o, r);
+  std::optional<CacheWriter>& caches = o.caches;
+  std::optional<MetricsFile>& metrics = o.metrics;
+  OutputsAt& at = o.at;  // where the outputs stand after the last whole frame
+  const long long substeps_before = o.substeps_before;
+  const double wall_before = o.wall_before;
   nlohmann::json first_json = at.first, final_json = at.final;
 
   const long long frames = last_frame_index(p.run.duration, p.run.fps);
@@ -494,9 +622,6 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress,
   auto wall = [&] {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   };
-  // Time to 5 cm is a pulled handle's: a pin (measured when there are only
-  // pins) sits at its height from the start.
-  const bool pulled = sim.model().measures_a_pull();
   const double dt = p.integrator.dt;
   const auto target_step = [&](long long f) {
     return static_cast<long long>(std::llround(frame_time(f, p.run.duration, p.run.fps) / dt));
@@ -545,38 +670,16 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress,
               : sim.blow_up_reason());
       break;
     }
-    metrics->append(m);
+    write_frame(p, out, sim, m, f, o, r, first_json, final_json);
     written_at_step = sim.state().steps;
-    if (first_json.is_null()) {
-      first_json = metrics_json(m);
-      r.first = m;
-    }
-    r.final = m;
-    final_json = metrics_json(m);
-    r.frame_peak_deficit_pa = std::max(r.frame_peak_deficit_pa, p.air.p_atm - m.inner_pressure_pa);
-    if (p.run.meshes) {
-      char name[32];
-      std::snprintf(name, sizeof name, "frame_%05lld.obj", f);
-      write_file_atomic(out / "frames" / name, cloth_obj(sim.model(), sim.state(), up));
-    }
-    if (caches) caches->add_frame(sim);
-    if (pulled && r.time_to_5cm_s < 0 && m.handle_height_m >= 0.05) r.time_to_5cm_s = m.time_s;
     if (progress) print_progress(sim.state().time, p.run.duration, wall_before + wall());
     if (!ok) {
       r.code = kBlowUp;
       r.message = sim.blow_up_reason();
       break;
     }
-    if (sim.state().steps == target) {  // a whole frame: a resumed run goes on after it
-      at.next_frame = f + 1;
-      at.metrics_bytes = metrics->size();
-      if (caches) at.cache = caches->position(false);
-      at.any_row = true;
-      at.first = first_json;
-      at.final = final_json;
-      at.time_to_5cm_s = r.time_to_5cm_s;
-      at.frame_peak_deficit_pa = r.frame_peak_deficit_pa;
-    }
+    // A whole frame: a resumed run goes on after it.
+    if (sim.state().steps == target) mark_whole_frame(f, o, r, first_json, final_json);
     if (sig != 0) {
       r.code = 128 + sig;
       save();
@@ -591,57 +694,7 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress,
     }
   }
   if (progress) std::fprintf(stderr, "\n");
-  metrics->close();
-  if (caches) caches->finish();
-  if (first_json.is_null()) {
-    r.first = r.final = sim.metrics();
-    first_json = final_json = metrics_json(r.first);
-  } else if (written_at_step < 0) {
-    r.final = sim.metrics();  // a resumed run that had no frame left: the state's
-  }
-  r.peak_deficit_pa = sim.state().peak_deficit;
-  r.steps = sim.state().steps;
-  r.wall_seconds = wall_before + wall();
-  r.simulated_seconds = sim.state().time;
-  const bool interrupted = r.code > 128;
-  if (interrupted)
-    r.message = std::string("interrupted by ") + signal_name(r.code - 128) +
-                " at t = " + format_number(sim.state().time) + " s";
-
-  nlohmann::json s;
-  s["scene"] = p.name;
-  s["version"] = WETCLOTH_VERSION;
-  s["status"] = r.code == kOk ? "ok" : interrupted ? "interrupted" : "blew up";
-  s["interrupted"] = interrupted;
-  if (interrupted) s["signal"] = signal_name(r.code - 128);
-  if (r.code != kOk) s["message"] = r.message;
-  s["steps"] = r.steps;
-  // More than steps where implicit Euler halved some.
-  s["substeps"] = substeps_before + sim.stats().substeps;
-  s["particles"] = sim.model().n;
-  // The count asked for (0: chosen as it ran), always a number; beside it how
-  // the choice went, or the count used (at most one thread per 1024 particles).
-  s["threads"] = p.integrator.threads;
-  if (const auto& c = sim.thread_choice(); c.automatic)
-    s["thread_choice"] = {
-        {"most", c.most}, {"steps_on_1", c.steps_on_one}, {"steps_on_most", c.steps_on_most}};
-  else
-    s["threads_used"] = sim.model().threads;
-  s["simulated_seconds"] = sim.state().time;
-  s["wall_seconds"] = r.wall_seconds;
-  s["realtime_factor"] = r.wall_seconds > 0 ? sim.state().time / r.wall_seconds : 0.0;
-  s["peak_pressure_deficit_pa"] = r.peak_deficit_pa;
-  s["final"] = final_json;  // the last row's (JSON has no inf: a row never has one)
-  if (resume) s["resumed_at_s"] = resume->state.time;
-  write_file_atomic(out / "summary.json", s.dump(2) + "\n");
-  // Whole: nothing to resume. The checkpoint goes once cloth.usda and
-  // summary.json are written, the USD samples after it: a run killed at any
-  // moment either resumes from its checkpoint or has ended whole.
-  if (r.code == kOk) {
-    if (std::error_code ec; fs::remove(checkpoint_file, ec), ec)
-      throw_output_error(checkpoint_file, "cannot remove", ec.value());
-    if (caches) caches->remove_samples();
-  }
+  finish_run(p, out, sim, resume, written_at_step >= 0, start, o, r, first_json, final_json);
   return r;
 }
 

@@ -81,9 +81,6 @@ class Vec3Array {
 struct SpringSet {
   std::vector<int> a, b;
   std::vector<double> rest;
-  // Each spring's offset in Model::stencil, which holds its constants (on a
-  // grid that is not square, a kind's springs along u and v differ).
-  std::vector<std::uint8_t> edge;
   // Each spring's stiffness (N/m) and damping (N·s/m): on the grid its
   // offset's, on a mesh cloth from the material and the local geometry.
   std::vector<double> k, damping;
@@ -107,7 +104,7 @@ struct Handle {
 enum class SurfaceKind { None, Table, Ball, Mesh };
 constexpr int kMeshCode = 3;
 constexpr int kMostObstacles = 250;  // codes up to 252 fit a byte
-// A triangle-mesh obstacle, built (src/mesh_obstacle.hpp).
+// A triangle-mesh obstacle, built (src/geometry/mesh_obstacle.hpp).
 struct MeshObstacle;
 
 // A spring of the grid's stencil, as a forward offset: particle (i, j) is tied
@@ -121,7 +118,7 @@ struct Model {
   Params params;
   // The rectangular grid (cloth.mesh unset): particle (i, j) is j nu + i, and
   // the step runs the grid's stencil kernels. A mesh cloth (cloth.mesh,
-  // mesh_cloth.cpp) has grid = false, nu = n, nv = 1 (one row: the passes in
+  // src/model/mesh_cloth.cpp) has grid = false, nu = n, nv = 1 (one row: the passes in
   // which each particle stands alone run unchanged) and runs the general
   // kernels, which follow the springs and the neighbour lists below, on one
   // thread.
@@ -153,9 +150,6 @@ struct Model {
   int threads = 1;                     // threads of the step (integrator.threads resolved)
   std::vector<std::array<int, 3>> triangles;
   std::vector<std::array<int, 2>> triangle_pairs;  // triangles sharing an edge
-  // 1 where i + j is even (its quad splits along a-cc; see triangles), else
-  // 0: a column, so that compute_normals runs over whole blocks of rows.
-  std::vector<double> chequer;
   std::vector<Handle> handles;
   int measured_handle = -1;  // the one the metrics follow: the first that is not a pin, else the
                              // first pin (-1: no handle)
@@ -198,7 +192,7 @@ Vec3 cloth_start_position(const Params& p, int i, int j);
 // Humidity drives mass (section 1), permeability (eq. 5) and adhesion (eq. 13).
 void set_humidity(Model& m, double omega);
 
-// How a pocket's deficit answers a change of V_sum over a step of Δt (air.cpp):
+// How a pocket's deficit answers a change of V_sum over a step of Δt (src/air/air.cpp):
 // dΔP/dV_sum = gas + spring (1 - e^(-Δt/τ)) τ/Δt, with 1/τ the seep rate.
 struct PocketAir {
   double gas = 0, spring = 0, seep_rate = 0;  // Pa/m³, Pa/m³, 1/s
@@ -246,6 +240,12 @@ struct StepStats {
   long long solves = 0;              // implicit Euler's linear solves since reset
   int cg_iterations = 0;             // of the last solve
   long long cg_iterations_total = 0;
+  // integrator.threads = 0: the step's threads are chosen as it runs, one or
+  // the most the grid takes (most_threads), whichever was faster in the last
+  // trial; the steps taken on each.
+  bool threads_chosen = false;
+  int most_threads = 1;
+  long long steps_on_one = 0, steps_on_most = 0;
 };
 
 // One row of metrics.csv (MODEL.md section 10).
@@ -284,6 +284,10 @@ class Simulation {
   // run it was copied from. Throws std::invalid_argument on a state of
   // another grid.
   void restore(const State& s);
+  // The particles moved, or their velocities set, between steps (the next
+  // step starts from them). Throws std::invalid_argument on another count.
+  void set_positions(const Vec3Array& x);
+  void set_velocities(const Vec3Array& v);
   // Live: mass, permeability and adhesion follow. Throws SceneError outside [0, 1].
   void set_humidity(double omega);
   // New parameters, live: the state is kept when the grid is the same size.
@@ -305,25 +309,6 @@ class Simulation {
 
   const Model& model() const { return model_; }
   const State& state() const { return state_; }
-  State& state() { return state_; }
-
-  // integrator.threads = 0: the step's threads are chosen as it runs. Now
-  // and then a few milliseconds of steps are timed on one thread and on all
-  // the grid takes, and the faster is kept until the next trial: another busy
-  // process makes every barrier wait for a descheduled thread, and two
-  // threads then took 3 × as long as one (51 × 51). The count never changes
-  // the result, so neither does the choice.
-  struct ThreadChoice {
-    bool automatic = false;
-    int most = 1;  // the threads the grid takes (Model::threads as built)
-    long long steps_on_one = 0, steps_on_most = 0;
-    // The trial: 0, 1 timing one thread, then `most`; 2 keeping the faster.
-    int phase = 0;
-    double seconds = 0;
-    long long substeps = 0;
-    double per_substep[2] = {};
-  };
-  const ThreadChoice& thread_choice() const { return threads_; }
 
  private:
   Model model_;
@@ -332,18 +317,11 @@ class Simulation {
   int grab_particle_ = -1;
   Vec3 grab_target_ = Vec3::Zero();
   double grab_k_ = 0;
-  std::vector<std::uint8_t> touched_;  // obstacle each particle was pushed out of this step
 
   friend Workspace& detail_workspace(const Simulation& sim);
-  ThreadChoice threads_;
+  friend State& detail_state(Simulation& sim);
 
-  void take_step();
-  void xpbd_step();
   void start_thread_choice();
-  void accumulate_forces(bool implicit);
-  double implicit_substep(double dt, int& halvings, double& strain);
-  void move_at_new_velocities(double h);
-  void finish_step(double h);
 };
 
 // Particle normals, area-weighted over the adjacent triangles.

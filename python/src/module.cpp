@@ -287,10 +287,14 @@ class PySimulation {
       throw SceneError(std::string(what) + ": expected shape (" + std::to_string(n) +
                        ", 3), got (" + shape + ")");
     }
-    Vec3Array& a = velocities ? sim_.state().v : sim_.state().x;
+    Vec3Array a(static_cast<std::size_t>(n));
     const auto r = arr.unchecked<2>();
     for (py::ssize_t i = 0; i < n; ++i)
       for (int k = 0; k < 3; ++k) a.column(k)[i] = r(i, k);
+    if (velocities)
+      sim_.set_velocities(a);
+    else
+      sim_.set_positions(a);
   }
 
   Simulation sim_;

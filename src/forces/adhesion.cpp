@@ -1,7 +1,7 @@
 // Liquid-bridge adhesion (MODEL.md section 4, eqs. 6-13, after Lou et al. 2015).
 #include <cmath>
 
-#include "../detail.hpp"
+#include "detail.hpp"
 
 namespace wetcloth::detail {
 

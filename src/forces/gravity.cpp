@@ -1,5 +1,5 @@
 // Gravity, m_i g, with the humidity-dependent mass of MODEL.md section 1.
-#include "../detail.hpp"
+#include "detail.hpp"
 
 namespace wetcloth::detail {
 

@@ -4,8 +4,8 @@
 #include <cmath>
 #include <cstdlib>
 
-#include "../detail.hpp"
-#include "../spatial_hash.hpp"
+#include "detail.hpp"
+#include "geometry/spatial_hash.hpp"
 
 namespace wetcloth::detail {
 
@@ -43,6 +43,127 @@ double farthest(const Model& m, const AnchorGap& gap) {
   return most;
 }
 
+// Grid neighbours never collide: within `reach` grid steps; a mesh cloth's
+// particles, within its own reach along the springs (Model::ring).
+struct NearInGrid {
+  int nu, reach;
+  bool grid;
+  const int* ring;
+  const int* ring_start;
+  bool operator()(int i, int j) const {
+    if (!grid) return std::binary_search(ring + ring_start[i], ring + ring_start[i + 1], j);
+    return std::abs(i % nu - j % nu) <= reach && std::abs(i / nu - j / nu) <= reach;
+  }
+};
+
+// Forgets which particles were anchored again since the hash was built.
+void clear_stale(Workspace& w) {
+  for (const int i : w.hash_stale) w.hash_stale_flag[i] = 0;
+  w.hash_stale.clear();
+}
+
+// Every particle anchored where it is and the whole cloth searched, by
+// blocks of rows on the step's threads.
+void search_whole_cloth(const Model& m, const State& s, Workspace& w, double radius,
+                        const NearInGrid& near_in_grid) {
+  auto& anchor = w.candidates_anchor;
+  w.candidates_radius = radius;
+  anchor = s.x;
+  build_hash(anchor, 2 * radius, w, m.threads);
+  clear_stale(w);
+  w.thread_candidates.resize(m.threads);
+  for (auto& list : w.thread_candidates) list.clear();  // the runtime may give fewer threads
+  for_each_row_block(m, [&](int j0, int j1, int t) {
+    auto& list = w.thread_candidates[t];
+    for_each_close_pair(
+        anchor, radius, w, near_in_grid,
+        [&](int i, int j, const Vec3&, double) {
+          list.push_back({i, j});
+        },
+        j0 * m.nu, j1 * m.nu);
+  });
+  w.candidates.clear();
+  for (const auto& list : w.thread_candidates)
+    w.candidates.insert(w.candidates.end(), list.begin(), list.end());
+  std::sort(w.candidates.begin(), w.candidates.end());
+}
+
+// The hash is not built again for a few movers (a pulled handle moves a few
+// particles every other step, and a build costs a pass over the cloth): a
+// mover finds through it the particles it holds where they are, and the
+// stale ones (anchored again since) and the other movers one by one. Once
+// those are many, it is built again. The pairs are the same either way,
+// found by the same sums. take(i, j, len2) is given each pair within radius.
+template <class Take>
+void find_mover_pairs(const Model& m, Workspace& w, double radius, Take&& take) {
+  const auto& anchor = w.candidates_anchor;
+  const auto& movers = w.candidate_movers;
+  const auto& moved = w.candidate_moved;
+  auto& stale = w.hash_stale;
+  auto& is_stale = w.hash_stale_flag;
+  constexpr std::size_t kMostStale = 256;
+  if (stale.size() + movers.size() > kMostStale) {
+    build_hash(anchor, 2 * radius, w, m.threads);
+    clear_stale(w);
+    for (int i : movers)
+      for_each_near(anchor, radius, w, anchor[i], i, -1, [&](int j, const Vec3&, double len2) {
+        if (!(moved[j] && j < i)) take(i, j, len2);  // j < i: found from j
+      });
+    return;
+  }
+  const double r2 = radius * radius;
+  const auto check = [&](int i, int j) {
+    const Vec3 y = anchor[i];  // as for_each_near has it
+    const Vec3 d = y - anchor[j];
+    const double len2 = d.squaredNorm();
+    if (len2 < r2) take(i, j, len2);
+  };
+  for (int i : movers) {
+    for_each_near(anchor, radius, w, anchor[i], i, -1, [&](int j, const Vec3&, double len2) {
+      if (!moved[j] && !is_stale[j]) take(i, j, len2);
+    });
+    for (const int j : stale)
+      if (!moved[j]) check(i, j);
+    for (const int j : movers)
+      if (j > i) check(i, j);
+  }
+  stale.reserve(kMostStale);  // never more: no allocation once warm
+  for (const int i : movers)
+    if (!is_stale[i]) {
+      is_stale[i] = 1;
+      stale.push_back(i);
+    }
+}
+
+// The movers' pairs, dropped and searched again from their new anchors.
+// Their flags are set here and cleared at the end: no pass over the cloth.
+void search_movers_again(const Model& m, const State& s, Workspace& w, double radius,
+                         const NearInGrid& near_in_grid) {
+  auto& anchor = w.candidates_anchor;
+  const auto& movers = w.candidate_movers;
+  auto& moved = w.candidate_moved;
+  auto& list = w.candidates;
+  moved.resize(m.n, 0);
+  for (int i : movers) {
+    moved[i] = 1;
+    anchor[i] = s.x[i];
+  }
+  // The rest stays sorted; the new pairs are sorted alone and merged in:
+  // a flat cloth at 401 x 401 lists a million pairs, too many to sort again.
+  std::erase_if(list, [&](const auto& c) { return moved[c[0]] || moved[c[1]]; });
+  const auto kept = static_cast<std::ptrdiff_t>(list.size());
+  find_mover_pairs(m, w, radius, [&](int i, int j, double len2) {
+    if (len2 == 0 || near_in_grid(i, j)) return;
+    list.push_back({std::min(i, j), std::max(i, j)});
+  });
+  for (int i : movers) moved[i] = 0;
+  std::sort(list.begin() + kept, list.end());
+  w.candidates_merged.resize(list.size());  // a scratch list: no allocation once warm
+  std::merge(list.begin(), list.begin() + kept, list.begin() + kept, list.end(),
+             w.candidates_merged.begin());
+  list.swap(w.candidates_merged);
+}
+
 }  // namespace
 
 void refresh_collision_candidates(const Model& m, const State& s, Workspace& w) {
@@ -65,119 +186,24 @@ void refresh_collision_candidates(const Model& m, const State& s, Workspace& w) 
   // Grid neighbours never collide: within two grid steps (MODEL.md), or more
   // on a grid fine enough that d_t spans more steps, else a flat cloth would
   // repel itself.
-  const int nu = m.nu;
   const int reach = std::max(2, static_cast<int>(std::ceil(dt_dist / step)));
-  // A mesh cloth: within its own reach along the springs (Model::ring).
-  const bool grid = m.grid;
-  const int* const ring = m.ring.data();
-  const int* const ring_start = m.ring_start.data();
-  auto near_in_grid = [nu, reach, grid, ring, ring_start](int i, int j) {
-    if (!grid) return std::binary_search(ring + ring_start[i], ring + ring_start[i + 1], j);
-    return std::abs(i % nu - j % nu) <= reach && std::abs(i / nu - j / nu) <= reach;
-  };
-  auto& anchor = w.candidates_anchor;
+  const NearInGrid near_in_grid{m.nu, reach, m.grid, m.ring.data(), m.ring_start.data()};
+  const auto& anchor = w.candidates_anchor;
   auto& movers = w.candidate_movers;
   movers.clear();
   bool search_all = w.candidates_radius != radius || anchor.size() != s.x.size();
   const double far2 = 0.25 * margin * margin;
   const AnchorGap gap(s.x, anchor);
-  const auto far = [&](int i) { return gap(i) > far2; };
   if (!search_all && farthest(m, gap) > far2) {
     for (int i = 0; i < m.n; ++i)
-      if (far(i)) movers.push_back(i);
+      if (gap(i) > far2) movers.push_back(i);
     search_all = 4 * movers.size() > std::size_t(m.n);
   }
-  auto& stale = w.hash_stale;
-  auto& is_stale = w.hash_stale_flag;
-  is_stale.resize(m.n, 0);
-  const auto clear_stale = [&] {
-    for (const int i : stale) is_stale[i] = 0;
-    stale.clear();
-  };
-  if (search_all) {
-    // The search, by blocks of rows on the step's threads.
-    w.candidates_radius = radius;
-    anchor = s.x;
-    build_hash(anchor, 2 * radius, w, m.threads);
-    clear_stale();
-    w.thread_candidates.resize(m.threads);
-    for (auto& list : w.thread_candidates) list.clear();  // the runtime may give fewer threads
-    for_each_row_block(m, [&](int j0, int j1, int t) {
-      auto& list = w.thread_candidates[t];
-      for_each_close_pair(
-          anchor, radius, w, near_in_grid,
-          [&](int i, int j, const Vec3&, double) {
-            list.push_back({i, j});
-          },
-          j0 * nu, j1 * nu);
-    });
-    w.candidates.clear();
-    for (const auto& list : w.thread_candidates)
-      w.candidates.insert(w.candidates.end(), list.begin(), list.end());
-    std::sort(w.candidates.begin(), w.candidates.end());
-  } else if (!movers.empty()) {
-    // The movers' pairs, dropped and searched again from their new anchors.
-    // Their flags are set here and cleared at the end: no pass over the cloth.
-    auto& moved = w.candidate_moved;
-    auto& list = w.candidates;
-    moved.resize(m.n, 0);
-    for (int i : movers) {
-      moved[i] = 1;
-      anchor[i] = s.x[i];
-    }
-    // The rest stays sorted; the new pairs are sorted alone and merged in:
-    // a flat cloth at 401 x 401 lists a million pairs, too many to sort again.
-    std::erase_if(list, [&](const auto& c) { return moved[c[0]] || moved[c[1]]; });
-    const auto kept = static_cast<std::ptrdiff_t>(list.size());
-    const auto take = [&](int i, int j, double len2) {
-      if (len2 == 0 || near_in_grid(i, j)) return;
-      list.push_back({std::min(i, j), std::max(i, j)});
-    };
-    // The hash is not built again for a few movers (a pulled handle moves a
-    // few particles every other step, and a build costs a pass over the
-    // cloth): a mover finds through it the particles it holds where they
-    // are, and the stale ones (anchored again since) and the other movers
-    // one by one. Once those are many, it is built again. The pairs are the
-    // same either way, found by the same sums.
-    constexpr std::size_t kMostStale = 256;
-    if (stale.size() + movers.size() > kMostStale) {
-      build_hash(anchor, 2 * radius, w, m.threads);
-      clear_stale();
-      for (int i : movers)
-        for_each_near(anchor, radius, w, anchor[i], i, -1, [&](int j, const Vec3&, double len2) {
-          if (!(moved[j] && j < i)) take(i, j, len2);  // j < i: found from j
-        });
-    } else {
-      const double r2 = radius * radius;
-      const auto check = [&](int i, int j) {
-        const Vec3 y = anchor[i];  // as for_each_near has it
-        const Vec3 d = y - anchor[j];
-        const double len2 = d.squaredNorm();
-        if (len2 < r2) take(i, j, len2);
-      };
-      for (int i : movers) {
-        for_each_near(anchor, radius, w, anchor[i], i, -1, [&](int j, const Vec3&, double len2) {
-          if (!moved[j] && !is_stale[j]) take(i, j, len2);
-        });
-        for (const int j : stale)
-          if (!moved[j]) check(i, j);
-        for (const int j : movers)
-          if (j > i) check(i, j);
-      }
-      stale.reserve(kMostStale);  // never more: no allocation once warm
-      for (const int i : movers)
-        if (!is_stale[i]) {
-          is_stale[i] = 1;
-          stale.push_back(i);
-        }
-    }
-    for (int i : movers) moved[i] = 0;
-    std::sort(list.begin() + kept, list.end());
-    w.candidates_merged.resize(list.size());  // a scratch list: no allocation once warm
-    std::merge(list.begin(), list.begin() + kept, list.begin() + kept, list.end(),
-               w.candidates_merged.begin());
-    list.swap(w.candidates_merged);
-  }
+  w.hash_stale_flag.resize(m.n, 0);
+  if (search_all)
+    search_whole_cloth(m, s, w, radius, near_in_grid);
+  else if (!movers.empty())
+    search_movers_again(m, s, w, radius, near_in_grid);
 }
 
 void add_self_collision(const Model& m, const State& s, Workspace& w, bool with_damping) {

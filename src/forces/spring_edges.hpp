@@ -7,7 +7,7 @@
 #include <cmath>
 #include <utility>
 
-#include "../detail.hpp"
+#include "detail.hpp"
 
 namespace wetcloth::detail {
 

@@ -13,7 +13,7 @@
 //
 // The damping, in the symplectic step, is taken implicitly on its own
 // (apply_spring_damping, below).
-#include "spring_edges.hpp"
+#include "forces/spring_edges.hpp"
 
 namespace wetcloth::detail {
 
@@ -149,12 +149,8 @@ struct ChainScratch {
   Real* lambda;
 };
 
-// One offset (di, dj), dj > 0, of grid g: solves its chains for λ (in
-// t.lambda) and, with take_impulses, adds each particle's impulse (the first
-// offset into a j sets it). Every loop runs over whole rows (a spring slot
-// off the grid computes zeros), so that it vectorises.
-void damp_offset(const DampingGrid& g, int di, int dj, Real c, const ChainScratch& t,
-                 bool take_impulses, bool first_offset) {
+// Forward elimination of offset (di, dj)'s chains on grid g, into t.
+void eliminate_chains(const DampingGrid& g, int di, int dj, Real c, const ChainScratch& t) {
   const int nu = g.nu, nv = g.nv, n = nu * nv, off = di + dj * nu, springs_end = (nv - dj) * nu;
   const int lo = std::max(0, -di), hi = std::min(nu, nu - di);
   // Forward elimination, row by row: a spring's predecessor starts dj rows up
@@ -198,6 +194,13 @@ void damp_offset(const DampingGrid& g, int di, int dj, Real c, const ChainScratc
   // Rows where no spring starts, and the padding after them.
   for (Real* z : {t.ux, t.uy, t.uz, t.coupling, t.lambda})
     std::fill(z + springs_end, z + n + kWhole, Real(0));
+}
+
+// Back substitution of offset (di, dj)'s chains, from eliminate_chains' t,
+// with take_impulses adding each particle's impulse (first_offset: setting).
+void substitute_chains(const DampingGrid& g, int di, int dj, const ChainScratch& t,
+                       bool take_impulses, bool first_offset) {
+  const int nu = g.nu, nv = g.nv, off = di + dj * nu;
   // Back substitution, λ = (rhs - coupling to the next spring · its λ) / diag,
   // from the last row up; once row j's λ is known, row j + dj's particles
   // take +λ u of the spring each starts and −λ u of the one each ends.
@@ -248,6 +251,16 @@ void damp_offset(const DampingGrid& g, int di, int dj, Real c, const ChainScratc
     for (int r = 0; r < std::min(dj, nv); ++r) take_row(r, std::false_type{});
 }
 
+// One offset (di, dj), dj > 0, of grid g: solves its chains for λ (in
+// t.lambda) and, with take_impulses, adds each particle's impulse (the first
+// offset into a j sets it). Every loop runs over whole rows (a spring slot
+// off the grid computes zeros), so that it vectorises.
+void damp_offset(const DampingGrid& g, int di, int dj, Real c, const ChainScratch& t,
+                 bool take_impulses, bool first_offset) {
+  eliminate_chains(g, di, dj, c, t);
+  substitute_chains(g, di, dj, t, take_impulses, first_offset);
+}
+
 // Eigen's packet types carry alignment attributes that a template argument
 // drops; Eigen silences the same warning inside itself.
 #pragma GCC diagnostic push
@@ -286,63 +299,71 @@ void transpose(const Model& m, const Real* __restrict in, Real* __restrict out, 
 
 }  // namespace
 
-void apply_spring_damping(const Model& m, State& s, Workspace& w, double h) {
-  if (!m.grid) {
-    apply_spring_damping_mesh(m, s, h);
-    return;
+namespace {
+
+// The offsets in two fixed groups (structural and shear; bending), each
+// adding its offsets in stencil order into its own impulses: the groups may
+// run on two threads, and the sums are the same for any number of threads.
+// Each group has one horizontal offset, solved on the transposed grid; its
+// λ u come back to the grid and its impulses are taken there, at the end.
+constexpr int kGroups = 2;
+
+// apply_spring_damping's columns in w.damping_columns, in float: the grid
+// (x y z, v, 1/m) and its transpose; each thread's chain scratch; per group
+// the horizontal offset's λ u (x y z) on the grid. Each has kPad zeros before
+// and after it, for the slots two springs beyond the grid's ends and those
+// the last row's last vector runs into (damp_offset). In double, in
+// w.damping_impulses: each group's impulses from its offsets along the
+// columns of the grid.
+struct DampingColumns {
+  static constexpr int kPad = kWhole, kGrid = 7, kScratch = 7, kBack = 3;
+  int n, threads;
+  std::size_t stride;
+  Workspace& w;
+  DampingColumns(const Model& m, Workspace& ws)
+      : n(m.n), threads(std::min(m.threads, kGroups)), stride(std::size_t(m.n) + 2 * kPad), w(ws) {
+    w.damping_columns.resize((2 * kGrid + kScratch * threads + kBack * kGroups) * stride);
+    w.damping_impulses.resize(3 * kGroups * std::size_t(n));
   }
-  int damped = 0;
-  for (const StencilEdge& st : m.stencil) damped += st.damping > 0;
-  if (damped == 0) return;
-  const int n = m.n, nu = m.nu, nv = m.nv;
-  // The offsets in two fixed groups (structural and shear; bending), each
-  // adding its offsets in stencil order into its own impulses: the groups may
-  // run on two threads, and the sums are the same for any number of threads.
-  // Each group has one horizontal offset, solved on the transposed grid; its
-  // λ u come back to the grid and its impulses are taken there, at the end.
-  constexpr int kGroups = 2;
-  std::array<int, kGroups> horizontal{};  // each group's horizontal offset, di
-  for (int group = 0; group < kGroups; ++group)
-    for (int e = group * kEdges / kGroups; e < (group + 1) * kEdges / kGroups; ++e)
-      if (m.stencil[e].dj == 0) horizontal[group] = m.stencil[e].di;
-  // Float columns: the grid (x y z, v, 1/m) and its transpose; each thread's
-  // chain scratch; per group the horizontal offset's λ u (x y z) on the
-  // grid. Each has kPad zeros before and after it, for the slots two
-  // springs beyond the grid's ends and those the last row's last vector runs
-  // into (damp_offset). Double columns: each group's impulses from its
-  // offsets along the columns of the grid.
-  constexpr int kPad = kWhole, kGrid = 7, kScratch = 7, kBack = 3;
-  const int threads = std::min(m.threads, kGroups);
-  const std::size_t stride = std::size_t(n) + 2 * kPad;
-  w.damping_columns.resize((2 * kGrid + kScratch * threads + kBack * kGroups) * stride);
-  w.damping_impulses.resize(3 * kGroups * std::size_t(n));
-  const auto col = [&](int k) { return w.damping_columns.data() + k * stride + kPad; };
-  const auto back = [&](int group, int k) {  // λ u_k
+  Real* col(int k) const { return w.damping_columns.data() + k * stride + kPad; }
+  Real* back(int group, int k) const {  // λ u_k
     return col(2 * kGrid + kScratch * threads + kBack * group + k);
-  };
-  const auto impulse = [&](int k) { return w.damping_impulses.data() + k * std::size_t(n); };
+  }
+  double* impulse(int k) const { return w.damping_impulses.data() + k * std::size_t(n); }
+};
+
+// The grid's positions, velocities and inverse masses in float, and their transposes.
+void load_damping_columns(const Model& m, const State& s, const DampingColumns& d) {
   for_each_particle_block(m, [&](int first, int end) {
     for (int k = 0; k < 3; ++k) {
       const double* __restrict x = s.x.column(k);
       const double* __restrict v = s.v.column(k);
-      Real* __restrict to_x = col(k);
-      Real* __restrict to_v = col(3 + k);
+      Real* __restrict to_x = d.col(k);
+      Real* __restrict to_v = d.col(3 + k);
       for (int a = first; a < end; ++a) {
         to_x[a] = Real(x[a]);
         to_v[a] = Real(v[a]);
       }
     }
     const double* __restrict inv_mass = m.inv_mass.data();
-    Real* __restrict to_w = col(6);
+    Real* __restrict to_w = d.col(6);
     for (int a = first; a < end; ++a) to_w[a] = Real(inv_mass[a]);
   });
-  for (int k = 0; k < kGrid; ++k)  // transposed: particle (i, j) at i nv + j
-    transpose(m, col(k), col(kGrid + k), nv, nu);
-  bool first[kGroups] = {true, true};     // per group: nothing in its impulses yet
-  bool solved[kGroups] = {false, false};  // per group: its horizontal λ solved
-#pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1)
+  for (int k = 0; k < DampingColumns::kGrid; ++k)  // transposed: particle (i, j) at i nv + j
+    transpose(m, d.col(k), d.col(DampingColumns::kGrid + k), m.nv, m.nu);
+}
+
+// Each group's offsets solved (damp_offset), on up to two threads: per group,
+// first whether nothing is in its impulses yet, solved whether its horizontal
+// λ u are.
+void solve_damping_groups(const Model& m, double h, int damped, const DampingColumns& d,
+                          bool (&first)[kGroups], bool (&solved)[kGroups]) {
+  const int n = m.n, nu = m.nu, nv = m.nv;
+  const std::size_t stride = d.stride;
+  constexpr int kGrid = DampingColumns::kGrid, kScratch = DampingColumns::kScratch;
+#pragma omp parallel for schedule(static) num_threads(d.threads) if (d.threads > 1)
   for (int group = 0; group < kGroups; ++group) {
-    Real* t = col(2 * kGrid + kScratch * omp_get_thread_num());
+    Real* t = d.col(2 * kGrid + kScratch * omp_get_thread_num());
     const ChainScratch scratch{t,
                                t + stride,
                                t + 2 * stride,
@@ -356,8 +377,8 @@ void apply_spring_damping(const Model& m, State& s, Workspace& w, double h) {
       const Real c = Real(damped * h * st.damping);
       // A horizontal offset's chains are vertical on the transposed grid.
       const bool transposed = st.dj == 0;
-      const Real* g = col(transposed ? kGrid : 0);
-      double* j = impulse(3 * group);
+      const Real* g = d.col(transposed ? kGrid : 0);
+      double* j = d.impulse(3 * group);
       const DampingGrid grid{transposed ? nv : nu,
                              transposed ? nu : nv,
                              g,
@@ -378,7 +399,7 @@ void apply_spring_damping(const Model& m, State& s, Workspace& w, double h) {
           Real* __restrict lu = u[k];
           const Real* __restrict lambda = scratch.lambda;
           for (int a = 0; a < n; ++a) lu[a] = lambda[a] * lu[a];
-          transpose(m, lu, back(group, k), nu, nv);
+          transpose(m, lu, d.back(group, k), nu, nv);
         }
         solved[group] = true;
       } else {
@@ -388,10 +409,32 @@ void apply_spring_damping(const Model& m, State& s, Workspace& w, double h) {
   }
   for (int group = 0; group < kGroups; ++group) {
     if (first[group])
-      for (int k = 0; k < 3; ++k) std::fill_n(impulse(3 * group + k), n, 0.0);
+      for (int k = 0; k < 3; ++k) std::fill_n(d.impulse(3 * group + k), n, 0.0);
     for (int k = 0; k < 3; ++k)  // and the zeros before the first row (see below)
-      std::fill(back(group, k) - kPad, back(group, k) + (solved[group] ? 0 : n), Real(0));
+      std::fill(d.back(group, k) - DampingColumns::kPad, d.back(group, k) + (solved[group] ? 0 : n),
+                Real(0));
   }
+}
+
+}  // namespace
+
+void apply_spring_damping(const Model& m, State& s, Workspace& w, double h) {
+  if (!m.grid) {
+    apply_spring_damping_mesh(m, s, h);
+    return;
+  }
+  int damped = 0;
+  for (const StencilEdge& st : m.stencil) damped += st.damping > 0;
+  if (damped == 0) return;
+  std::array<int, kGroups> horizontal{};  // each group's horizontal offset, di
+  for (int group = 0; group < kGroups; ++group)
+    for (int e = group * kEdges / kGroups; e < (group + 1) * kEdges / kGroups; ++e)
+      if (m.stencil[e].dj == 0) horizontal[group] = m.stencil[e].di;
+  const DampingColumns d(m, w);
+  load_damping_columns(m, s, d);
+  bool first[kGroups] = {true, true};     // per group: nothing in its impulses yet
+  bool solved[kGroups] = {false, false};  // per group: its horizontal λ solved
+  solve_damping_groups(m, h, damped, d, first, solved);
   // v += the mean change, by component in the groups' order: per group its
   // offsets along the columns, then its horizontal one, whose spring starting
   // at a particle gives it +λ u and the one ending there −λ u. (Before the
@@ -402,10 +445,10 @@ void apply_spring_damping(const Model& m, State& s, Workspace& w, double h) {
   const int di0 = horizontal[0], di1 = horizontal[1];
   for_each_particle_block(m, [&](int first, int end) {
     for (int k = 0; k < 3; ++k) {
-      const double* __restrict jv0 = impulse(k);
-      const double* __restrict jv1 = impulse(3 + k);
-      const Real* __restrict lu0 = back(0, k);
-      const Real* __restrict lu1 = back(1, k);
+      const double* __restrict jv0 = d.impulse(k);
+      const double* __restrict jv1 = d.impulse(3 + k);
+      const Real* __restrict lu0 = d.back(0, k);
+      const Real* __restrict lu1 = d.back(1, k);
       const double* __restrict inv_mass = m.inv_mass.data();
       double* __restrict out = s.v.column(k);
 #pragma GCC ivdep

@@ -1,6 +1,6 @@
 // Viscous damping -c v_i (blog seed), with c per unit cloth area so that a finer
 // grid damps the same cloth the same way.
-#include "../detail.hpp"
+#include "detail.hpp"
 
 namespace wetcloth::detail {
 

@@ -1,6 +1,6 @@
 // Wind (blog seed, made physical): F_i = k_w A_i ((u_wind - v_i)·n_i) n_i.
 // With no wind it is the cloth's drag against still air, normal to the cloth.
-#include "../detail.hpp"
+#include "detail.hpp"
 
 namespace wetcloth::detail {
 

@@ -2,7 +2,8 @@
 #include <algorithm>
 #include <cmath>
 
-#include "../detail.hpp"
+#include "constraints/coulomb.hpp"
+#include "detail.hpp"
 
 namespace wetcloth::detail {
 
@@ -56,19 +57,9 @@ void apply_friction(const Model& m, State& s, const Workspace& w,
         const int i = i0 + k;
         const double pressing = -((fx[i] * nx[i] + fy[i] * ny[i] + fz[i] * nz[i]) + adhesion[i]);
         const double load = adhesion[i] + (with_load && pressing > 0 ? pressing : 0.0);
-        const double vn = vx[i] * nx[i] + vy[i] * ny[i] + vz[i] * nz[i];
-        const double tx = vx[i] - vn * nx[i], ty = vy[i] - vn * ny[i], tz = vz[i] - vn * nz[i];
-        const double speed = std::sqrt(tx * tx + ty * ty + tz * tz);
         const double dv = mu * load * dt * inv_mass[i];
-        const bool on = (gate[k] != 0) & (load > 0) & (speed != 0);
-        const double factor = on ? std::min(dv, speed) / speed : 0.0;
-        const double sx = tx * factor, sy = ty * factor, sz = tz * factor;
-        vx[i] -= sx;
-        vy[i] -= sy;
-        vz[i] -= sz;
-        xx[i] -= dt * sx;
-        xy[i] -= dt * sy;
-        xz[i] -= dt * sz;
+        coulomb_clamp(vx[i], vy[i], vz[i], xx[i], xy[i], xz[i], nx[i], ny[i], nz[i], dv,
+                      (gate[k] != 0) & (load > 0), dt);
       }
     });
   });

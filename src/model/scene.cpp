@@ -3,14 +3,17 @@
 #include "wetcloth/scene.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <sstream>
+#include <string_view>
 
 #include "wetcloth/caches.hpp"
 #define TOML_HEADER_ONLY 1
@@ -18,9 +21,10 @@
 
 #include <tuple>
 #include <type_traits>
+#include <utility>
 
 #include "detail.hpp"
-#include "mesh_obstacle.hpp"
+#include "geometry/mesh_obstacle.hpp"
 
 namespace wetcloth {
 
@@ -56,16 +60,22 @@ std::vector<std::string> choices_of(std::vector<std::string> given) {
     return given;
 }
 
-template <class F>
-ParamDef field(std::string key, std::string unit, double lo, double hi, std::string meaning, F acc,
-               std::vector<std::string> choices = {}) {
-  using T = std::remove_cvref_t<decltype(acc(std::declval<Params&>()))>;
+// A definition's name, unit, range and meaning.
+ParamDef describe(std::string key, std::string unit, double lo, double hi, std::string meaning) {
   ParamDef d;
   d.key = std::move(key);
   d.unit = std::move(unit);
   d.meaning = std::move(meaning);
   d.min = lo;
   d.max = hi;
+  return d;
+}
+
+template <class F>
+ParamDef field(std::string key, std::string unit, double lo, double hi, std::string meaning, F acc,
+               std::vector<std::string> choices = {}) {
+  using T = std::remove_cvref_t<decltype(acc(std::declval<Params&>()))>;
+  ParamDef d = describe(std::move(key), std::move(unit), lo, hi, std::move(meaning));
   d.choices = choices_of<T>(std::move(choices));
   Params defaults;
   d.default_value = to_value(acc(defaults));
@@ -76,60 +86,41 @@ ParamDef field(std::string key, std::string unit, double lo, double hi, std::str
   return d;
 }
 
-template <class F>
-ParamDef handle_field(std::string key, std::string unit, double lo, double hi, std::string meaning,
-                      F acc, std::vector<std::string> choices = {}) {
-  using T = std::remove_cvref_t<decltype(acc(std::declval<HandleParams&>()))>;
-  ParamDef d;
-  d.key = "handle.*." + key;
-  d.unit = std::move(unit);
-  d.meaning = std::move(meaning);
-  d.min = lo;
-  d.max = hi;
+// A key of the tables a scene names, [handle.NAME] (Params::handles) or
+// [obstacle.NAME] (Params::obstacles): `KIND.*.KEY`; get and set take the name.
+template <auto Tables, class F>
+ParamDef named_field(const std::string& kind, std::string key, std::string unit, double lo,
+                     double hi, std::string meaning, F acc, std::vector<std::string> choices = {}) {
+  using Table =
+      typename std::remove_cvref_t<decltype(std::declval<Params&>().*Tables)>::mapped_type;
+  using T = std::remove_cvref_t<decltype(acc(std::declval<Table&>()))>;
+  ParamDef d = describe(kind + ".*." + key, std::move(unit), lo, hi, std::move(meaning));
   d.choices = choices_of<T>(std::move(choices));
-  HandleParams defaults;
+  Table defaults;
   d.default_value = to_value(acc(defaults));
-  d.get = [acc](const Params& p, const std::string& h) {
-    return to_value(acc(const_cast<HandleParams&>(p.handles.at(h))));
+  d.get = [acc](const Params& p, const std::string& name) {
+    return to_value(acc(const_cast<Table&>((p.*Tables).at(name))));
   };
-  d.set = [acc](Params& p, const std::string& h, const ParamValue& v) {
-    acc(p.handles[h]) = from_value<T>(v);
+  d.set = [acc](Params& p, const std::string& name, const ParamValue& v) {
+    acc((p.*Tables)[name]) = from_value<T>(v);
   };
   return d;
 }
 
-// A key of [obstacle.NAME]: `obstacle.*.KEY` (get and set take the name).
-template <class F>
-ParamDef obstacle_field(std::string key, std::string unit, double lo, double hi,
-                        std::string meaning, F acc) {
-  using T = std::remove_cvref_t<decltype(acc(std::declval<ObstacleParams&>()))>;
-  ParamDef d;
-  d.key = "obstacle.*." + key;
-  d.unit = std::move(unit);
-  d.meaning = std::move(meaning);
-  d.min = lo;
-  d.max = hi;
-  ObstacleParams defaults;
-  d.default_value = to_value(acc(defaults));
-  d.get = [acc](const Params& p, const std::string& o) {
-    return to_value(acc(const_cast<ObstacleParams&>(p.obstacles.at(o))));
-  };
-  d.set = [acc](Params& p, const std::string& o, const ParamValue& v) {
-    acc(p.obstacles[o]) = from_value<T>(v);
-  };
-  return d;
+template <class... A>
+ParamDef handle_field(A&&... a) {
+  return named_field<&Params::handles>("handle", std::forward<A>(a)...);
+}
+template <class... A>
+ParamDef obstacle_field(A&&... a) {
+  return named_field<&Params::obstacles>("obstacle", std::forward<A>(a)...);
 }
 
 // A number that may be left unset (std::optional<double>): get gives NaN then.
 template <class F>
 ParamDef optional_field(std::string key, std::string unit, double lo, double hi,
                         std::string meaning, F acc) {
-  ParamDef d;
-  d.key = std::move(key);
-  d.unit = std::move(unit);
-  d.meaning = std::move(meaning);
-  d.min = lo;
-  d.max = hi;
+  ParamDef d = describe(std::move(key), std::move(unit), lo, hi, std::move(meaning));
   d.optional = true;
   d.default_value = std::numeric_limits<double>::quiet_NaN();
   d.get = [acc](const Params& p, const std::string&) {
@@ -149,9 +140,11 @@ ParamDef optional_field(std::string key, std::string unit, double lo, double hi,
 #define O(path) \
   [](ObstacleParams & o) -> auto& { return o.path; }
 
-std::vector<ParamDef> make_defs() {
-  // Positions: at 1e14 m a double's step is 0.02 m, and metrics.csv got inf.
-  const double kFar = 1e4;
+// Positions: at 1e14 m a double's step is 0.02 m, and metrics.csv got inf.
+constexpr double kFar = 1e4;
+
+// The definitions of the scene's name, the cloth, its material and springs.
+std::vector<ParamDef> cloth_defs() {
   return {
       field("name", "", 1, 0, "scene name (default output folder out/NAME)", P(name)),
       field("description", "", 1, 0, "one line about the scene", P(description)),
@@ -223,6 +216,12 @@ std::vector<ParamDef> make_defs() {
       optional_field("springs.bending_damping", "N·s/m", 0, 1e3,
                      "every bending spring's damping; unset, from material.bending_damping",
                      P(springs.bending_damping)),
+  };
+}
+
+// The definitions of the forces, strain limiting and the surfaces.
+std::vector<ParamDef> force_defs() {
+  return {
       field("forces.gravity", "m/s²", -1e3, 1e3, "gravitational acceleration", P(forces.gravity)),
       field("forces.viscous_damping", "N·s/m³", 0, 1e4, "viscous damping −c A_i v_i, per unit area",
             P(forces.viscous_damping)),
@@ -260,6 +259,12 @@ std::vector<ParamDef> make_defs() {
       field("friction.normal", "", 1, 0,
             "normal force for friction: contact (adhesion + load) or adhesion (the paper's)",
             P(friction.normal)),
+  };
+}
+
+// The definitions of the air, self-collision, the integrator and the run.
+std::vector<ParamDef> solver_defs() {
+  return {
       field("air.model", "", 1, 0, "trapped air: exchange (paper), sealed (Yamada), vented, off",
             P(air.model)),
       field("air.p_atm", "Pa", 1, 1e7, "atmospheric pressure", P(air.p_atm)),
@@ -327,6 +332,12 @@ std::vector<ParamDef> make_defs() {
             "simulated time between checkpoints (checkpoint.state, for `wetcloth run --resume`; "
             "0: none, but a run stopped by a signal writes one)",
             P(run.checkpoint_every)),
+  };
+}
+
+// The definitions of the keys of [handle.NAME] and [obstacle.NAME].
+std::vector<ParamDef> named_defs() {
+  return {
       handle_field("type", "", 1, 0, "force: constant force; move: driven at a velocity; pin: held",
                    H(type)),
       handle_field("at", "1", 0, 1,
@@ -371,6 +382,13 @@ std::vector<ParamDef> make_defs() {
   };
 }
 
+std::vector<ParamDef> make_defs() {
+  std::vector<ParamDef> defs;
+  for (auto part : {cloth_defs, force_defs, solver_defs, named_defs})
+    for (ParamDef& d : part()) defs.push_back(std::move(d));
+  return defs;
+}
+
 #undef P
 #undef H
 #undef O
@@ -393,41 +411,108 @@ constexpr int kMaxNesting = 32;
 // reaches toml++. In a basic string it becomes its \uXXXX escape (the same
 // value), in a comment '?'; in a literal string it is refused. Returns the
 // text to parse (the same lines).
-std::string guard_toml_text(const std::string& text, const std::string& source) {
-  const auto at = [&](long line) {
-    return source.rfind("--set", 0) == 0 ? source : source + ":" + std::to_string(line);
-  };
-  if (text.size() > kMaxSceneBytes)
-    throw SceneError(source + ": " + std::to_string(text.size()) + " bytes, more than a scene's " +
-                     std::to_string(kMaxSceneBytes) + ": not a scene file");
-  const auto* s = reinterpret_cast<const unsigned char*>(text.data());
-  const std::size_t n = text.size();
-  long line = 1;
+// guard_toml_text's passes over one text.
+class TomlGuard {
+ public:
+  TomlGuard(const std::string& text, const std::string& source)
+      : text_(text),
+        source_(source),
+        s_(reinterpret_cast<const unsigned char*>(text.data())),
+        n_(text.size()) {}
+
   // Valid UTF-8: no overlong forms, no surrogates, nothing past U+10FFFF.
-  for (std::size_t i = 0; i < n;) {
-    const unsigned char c = s[i];
-    if (c == '\n') ++line;
-    if (c < 0x80) {
-      ++i;
-      continue;
+  void check_utf8() const {
+    long line = 1;
+    for (std::size_t i = 0; i < n_;) {
+      const unsigned char c = s_[i];
+      if (c == '\n') ++line;
+      if (c < 0x80) {
+        ++i;
+        continue;
+      }
+      int len = 0;
+      unsigned cp = 0, min = 0;
+      if ((c & 0xE0) == 0xC0)
+        len = 2, cp = c & 0x1F, min = 0x80;
+      else if ((c & 0xF0) == 0xE0)
+        len = 3, cp = c & 0x0F, min = 0x800;
+      else if ((c & 0xF8) == 0xF0)
+        len = 4, cp = c & 0x07, min = 0x10000;
+      bool ok = len > 0 && i + static_cast<std::size_t>(len) <= n_;
+      for (int k = 1; ok && k < len; ++k) {
+        ok = (s_[i + k] & 0xC0) == 0x80;
+        cp = (cp << 6) | (s_[i + k] & 0x3F);
+      }
+      if (!ok || cp < min || cp > 0x10FFFF || (cp >= 0xD800 && cp <= 0xDFFF))
+        throw SceneError(at(line) + ": not valid UTF-8 (byte " + std::to_string(i + 1) + ")");
+      i += static_cast<std::size_t>(len);
     }
-    int len = 0;
-    unsigned cp = 0, min = 0;
-    if ((c & 0xE0) == 0xC0)
-      len = 2, cp = c & 0x1F, min = 0x80;
-    else if ((c & 0xF0) == 0xE0)
-      len = 3, cp = c & 0x0F, min = 0x800;
-    else if ((c & 0xF8) == 0xF0)
-      len = 4, cp = c & 0x07, min = 0x10000;
-    bool ok = len > 0 && i + static_cast<std::size_t>(len) <= n;
-    for (int k = 1; ok && k < len; ++k) {
-      ok = (s[i + k] & 0xC0) == 0x80;
-      cp = (cp << 6) | (s[i + k] & 0x3F);
-    }
-    if (!ok || cp < min || cp > 0x10FFFF || (cp >= 0xD800 && cp <= 0xDFFF))
-      throw SceneError(at(line) + ": not valid UTF-8 (byte " + std::to_string(i + 1) + ")");
-    i += static_cast<std::size_t>(len);
   }
+
+  // The nesting, the dotted keys, and the characters toml++ must not see.
+  void scan() {
+    for (std::size_t i = 0; i < n_;) {
+      const unsigned char c = s_[i];
+      if (c == '\n') {
+        ++line_, ++i;
+        other();
+      } else if (c == '#') {
+        while (i < n_ && s_[i] != '\n') i += inside(i, '#');
+        other();
+      } else if (c == '"' || c == '\'') {
+        i = skip_string(i);
+        part();
+      } else if (c >= 0x80) {
+        throw SceneError(at(line_) +
+                         ": a non-ASCII character outside a string or comment (keys "
+                         "are ASCII: letters, digits, _ and -)");
+      } else if (c == '[' || c == '{') {
+        if (++depth_ > kMaxNesting)
+          throw SceneError(at(line_) + ": tables or arrays nested more than " +
+                           std::to_string(kMaxNesting) + " deep: not a scene file");
+        ++i;
+        other();
+      } else if (c == ']' || c == '}') {
+        depth_ = std::max(0, depth_ - 1);
+        ++i;
+        other();
+      } else if (c == '.') {
+        if (after_part_)
+          after_part_ = false, after_dot_ = true;
+        else
+          other();
+        ++i;
+      } else if (c == ' ' || c == '\t') {
+        ++i;
+      } else if (bare(c)) {
+        while (i < n_ && bare(s_[i])) ++i;
+        part();
+      } else {
+        ++i;
+        other();
+      }
+    }
+  }
+
+  // The text with each hidden character as its \uXXXX escape (in a basic
+  // string) or '?' (in a comment).
+  std::string safe_text() const {
+    if (hidden_.empty()) return text_;
+    std::string safe;
+    safe.reserve(text_.size() + 4 * hidden_.size());
+    std::size_t from = 0;
+    for (const Hidden& h : hidden_) {
+      safe.append(text_, from, h.at - from);
+      char u[16];
+      std::snprintf(u, sizeof u, "\\u%04X", h.cp);
+      safe += h.in == '"' ? u : "?";
+      from = h.at + static_cast<std::size_t>(h.len);
+    }
+    safe.append(text_, from, std::string::npos);
+    return safe;
+  }
+
+ private:
   // Where toml++ must not see a character: (offset, length, code point, '"'
   // basic string, '\'' literal string, '#' comment).
   struct Hidden {
@@ -436,113 +521,84 @@ std::string guard_toml_text(const std::string& text, const std::string& source) 
     unsigned cp;
     char in;
   };
-  std::vector<Hidden> hidden;
+  const std::string& text_;
+  const std::string& source_;
+  const unsigned char* s_;
+  std::size_t n_;
+  std::vector<Hidden> hidden_;
+  long line_ = 1;
+  int depth_ = 0;  // open [ and {
+  int parts_ = 0;  // parts of the dotted key (or number) being read
+  bool after_part_ = false, after_dot_ = false;
+
+  std::string at(long line) const {
+    return source_.rfind("--set", 0) == 0 ? source_ : source_ + ":" + std::to_string(line);
+  }
+  static bool bare(unsigned char c) { return std::isalnum(c) || c == '_' || c == '-' || c == '+'; }
+
   // At a byte inside a string or comment: its length, noting a character
   // toml++ must not see.
-  const auto inside = [&](std::size_t i, char in) -> std::size_t {
-    if (s[i] < 0x80) return 1;
-    const int len = s[i] >= 0xF0 ? 4 : s[i] >= 0xE0 ? 3 : 2;  // valid: checked above
-    unsigned cp = s[i] & (len == 4 ? 0x07 : len == 3 ? 0x0F : 0x1F);
-    for (int k = 1; k < len; ++k) cp = (cp << 6) | (s[i + k] & 0x3F);
+  std::size_t inside(std::size_t i, char in) {
+    if (s_[i] < 0x80) return 1;
+    const int len = s_[i] >= 0xF0 ? 4 : s_[i] >= 0xE0 ? 3 : 2;  // valid: checked before
+    unsigned cp = s_[i] & (len == 4 ? 0x07 : len == 3 ? 0x0F : 0x1F);
+    for (int k = 1; k < len; ++k) cp = (cp << 6) | (s_[i + k] & 0x3F);
     if ((cp >= 0xA1 && cp <= 0x499) || (cp >= 0xFB66 && cp <= 0xFEFE)) {
       if (in == '\'') {
         char u[16];
         std::snprintf(u, sizeof u, "U+%04X", cp);
-        throw SceneError(at(line) + ": " + u +
+        throw SceneError(at(line_) + ": " + u +
                          " in a literal string ('...'): the TOML library mishandles it; write "
                          "the string in double quotes");
       }
-      hidden.push_back({i, len, cp, in});
+      hidden_.push_back({i, len, cp, in});
     }
     return static_cast<std::size_t>(len);
-  };
-  line = 1;
-  int depth = 0;  // open [ and {
-  int parts = 0;  // parts of the dotted key (or number) being read
-  bool after_part = false, after_dot = false;
-  const auto part = [&] {
-    parts = after_dot ? parts + 1 : 1;
-    after_part = true;
-    after_dot = false;
-    if (parts > kMaxNesting)
-      throw SceneError(at(line) + ": a dotted key of more than " + std::to_string(kMaxNesting) +
-                       " parts: not a scene key");
-  };
-  const auto other = [&] { parts = 0, after_part = after_dot = false; };
-  const auto bare = [](unsigned char c) {
-    return std::isalnum(c) || c == '_' || c == '-' || c == '+';
-  };
-  for (std::size_t i = 0; i < n;) {
-    const unsigned char c = s[i];
-    if (c == '\n') {
-      ++line, ++i;
-      other();
-    } else if (c == '#') {
-      while (i < n && s[i] != '\n') i += inside(i, '#');
-      other();
-    } else if (c == '"' || c == '\'') {
-      const bool multi = i + 2 < n && s[i + 1] == c && s[i + 2] == c;
-      i += multi ? 3 : 1;
-      for (;;) {
-        if (i >= n) break;                  // unterminated: toml++ says so
-        if (s[i] == '\n' && !multi) break;  // toml++ says so
-        if (s[i] == '\n') ++line;
-        if (c == '"' && s[i] == '\\') {  // the escaped character is the string's
-          if (++i >= n) break;
-          if (s[i] == '\n') ++line;
-          i += inside(i, '"');
-          continue;
-        }
-        if (s[i] == c && (!multi || (i + 2 < n && s[i + 1] == c && s[i + 2] == c))) {
-          i += multi ? 3 : 1;
-          break;
-        }
-        i += inside(i, c == '"' ? '"' : '\'');
+  }
+
+  // A string that opens at i (its quote, once or three times): where it ends.
+  std::size_t skip_string(std::size_t i) {
+    const unsigned char c = s_[i];
+    const bool multi = i + 2 < n_ && s_[i + 1] == c && s_[i + 2] == c;
+    i += multi ? 3 : 1;
+    for (;;) {
+      if (i >= n_) break;                  // unterminated: toml++ says so
+      if (s_[i] == '\n' && !multi) break;  // toml++ says so
+      if (s_[i] == '\n') ++line_;
+      if (c == '"' && s_[i] == '\\') {  // the escaped character is the string's
+        if (++i >= n_) break;
+        if (s_[i] == '\n') ++line_;
+        i += inside(i, '"');
+        continue;
       }
-      part();
-    } else if (c >= 0x80) {
-      throw SceneError(at(line) +
-                       ": a non-ASCII character outside a string or comment (keys "
-                       "are ASCII: letters, digits, _ and -)");
-    } else if (c == '[' || c == '{') {
-      if (++depth > kMaxNesting)
-        throw SceneError(at(line) + ": tables or arrays nested more than " +
-                         std::to_string(kMaxNesting) + " deep: not a scene file");
-      ++i;
-      other();
-    } else if (c == ']' || c == '}') {
-      depth = std::max(0, depth - 1);
-      ++i;
-      other();
-    } else if (c == '.') {
-      if (after_part)
-        after_part = false, after_dot = true;
-      else
-        other();
-      ++i;
-    } else if (c == ' ' || c == '\t') {
-      ++i;
-    } else if (bare(c)) {
-      while (i < n && bare(s[i])) ++i;
-      part();
-    } else {
-      ++i;
-      other();
+      if (s_[i] == c && (!multi || (i + 2 < n_ && s_[i + 1] == c && s_[i + 2] == c))) {
+        i += multi ? 3 : 1;
+        break;
+      }
+      i += inside(i, c == '"' ? '"' : '\'');
     }
+    return i;
   }
-  if (hidden.empty()) return text;
-  std::string safe;
-  safe.reserve(text.size() + 4 * hidden.size());
-  std::size_t from = 0;
-  for (const Hidden& h : hidden) {
-    safe.append(text, from, h.at - from);
-    char u[16];
-    std::snprintf(u, sizeof u, "\\u%04X", h.cp);
-    safe += h.in == '"' ? u : "?";
-    from = h.at + static_cast<std::size_t>(h.len);
+
+  void part() {
+    parts_ = after_dot_ ? parts_ + 1 : 1;
+    after_part_ = true;
+    after_dot_ = false;
+    if (parts_ > kMaxNesting)
+      throw SceneError(at(line_) + ": a dotted key of more than " + std::to_string(kMaxNesting) +
+                       " parts: not a scene key");
   }
-  safe.append(text, from, std::string::npos);
-  return safe;
+  void other() { parts_ = 0, after_part_ = after_dot_ = false; }
+};
+
+std::string guard_toml_text(const std::string& text, const std::string& source) {
+  if (text.size() > kMaxSceneBytes)
+    throw SceneError(source + ": " + std::to_string(text.size()) + " bytes, more than a scene's " +
+                     std::to_string(kMaxSceneBytes) + ": not a scene file");
+  TomlGuard guard(text, source);
+  guard.check_utf8();
+  guard.scan();
+  return guard.safe_text();
 }
 
 // The source name of Params made in code (validate).
@@ -627,6 +683,26 @@ ParamValue convert(const toml::node& n, const ParamDef& d, const std::string& ke
       d.default_value);
 }
 
+// The tables a scene names: [handle.NAME] and [obstacle.NAME].
+constexpr std::array<std::string_view, 2> kNamedKinds = {"handle", "obstacle"};
+
+// The kind of a key `KIND.*.LEAF` ("" for any other key).
+std::string named_kind(const std::string& key) {
+  for (const std::string_view kind : kNamedKinds)
+    if (key.rfind(std::string(kind) + ".*.", 0) == 0) return std::string(kind);
+  return "";
+}
+
+// The names of a scene's tables of one kind, in order.
+std::vector<std::string> table_names(const Params& p, const std::string& kind) {
+  std::vector<std::string> names;
+  if (kind == "handle")
+    for (const auto& [name, unused] : p.handles) names.push_back(name);
+  else
+    for (const auto& [name, unused] : p.obstacles) names.push_back(name);
+  return names;
+}
+
 const ParamDef* find_def(const std::string& key) {
   for (const auto& d : param_defs())
     if (d.key == key) return &d;
@@ -660,7 +736,7 @@ std::string unknown_key(const std::string& key) {
   std::string best;
   std::size_t best_distance = std::max<std::size_t>(2, leaf.size() / 4) + 1;
   for (const ParamDef& d : param_defs()) {
-    const bool named_key = d.key.rfind("handle.*.", 0) == 0 || d.key.rfind("obstacle.*.", 0) == 0;
+    const bool named_key = !named_kind(d.key).empty();
     if (named_key != in_handle || (in_handle && d.key.rfind(kind + "*.", 0) != 0)) continue;
     const std::string candidate = named_key ? d.key.substr(kind.size() + 2) : d.key;
     if (const std::size_t dist = distance(leaf, candidate); dist < best_distance)
@@ -695,21 +771,18 @@ void apply_table(const toml::table& t, const std::string& prefix, Params& p, boo
                "a " + kind + "'s name is letters, digits, _ and - (it is part of keys such as " +
                    kind + ".NAME." + (kind == "handle" ? "force" : "mesh") + ")");
         const bool is_handle = kind == "handle";
-        const bool known = is_handle ? p.handles.count(std::string(nm)) > 0
-                                     : p.obstacles.count(std::string(nm)) > 0;
-        if (!new_handles && !known) {
+        const std::vector<std::string> known = table_names(p, kind);
+        if (!new_handles && std::find(known.begin(), known.end(), nm) == known.end()) {
           std::string names;
-          if (is_handle)
-            for (const auto& [n, unused] : p.handles) names += (names.empty() ? "" : ", ") + n;
-          else
-            for (const auto& [n, unused] : p.obstacles) names += (names.empty() ? "" : ", ") + n;
+          for (const auto& n : known) names += (names.empty() ? "" : ", ") + n;
           fail(h, hkey,
                "the scene has no such " + kind + " (" +
                    (names.empty() ? "it has none" : "its " + kind + "s: " + names) + "); add " +
                    (is_handle ? "a handle" : "an obstacle") + " in a scene file");
         }
+        // A table with every key at its default, where it is new.
         if (is_handle)
-          p.handles[std::string(nm)];  // a handle with every key at its default
+          p.handles[std::string(nm)];
         else
           p.obstacles[std::string(nm)];
         for (const auto& [hk, hv] : *ht) {
@@ -772,24 +845,11 @@ toml::table parse_override(const std::string& text) {
 // key it reports where the scene sets it, and the overrides that may have set
 // what it says: those of the key's section (cloth, handle, ...) and those of
 // any key the message names.
-void check_consistency(const Params& p, const std::string& source,
-                       const std::vector<std::string>& overrides, const toml::table& scene) {
-  auto bad = [&](const std::string& key, const std::string& msg) {
-    const std::string section = key.substr(0, key.find('.'));
-    std::string sets;
-    for (const auto& o : overrides) {
-      std::string set_key = o.substr(0, o.find('='));  // `key = value` may have spaces
-      set_key.erase(set_key.find_last_not_of(" \t") + 1);
-      set_key.erase(0, set_key.find_first_not_of(" \t"));
-      const bool named = !set_key.empty() && msg.find(set_key) != std::string::npos;
-      if (o.substr(0, o.find('.')) == section || named)
-        sets += (sets.empty() ? " with --set '" : "', '") + o;
-    }
-    std::string line;
-    if (const toml::node* n = scene.at_path(key).node(); n && source != kInCode)
-      line = ":" + std::to_string(n->source().begin.line);
-    throw SceneError(source + line + (sets.empty() ? "" : sets + "'") + ": " + key + ": " + msg);
-  };
+// How check_consistency complains: key and message (throws SceneError).
+using Complain = std::function<void(const std::string& key, const std::string& msg)>;
+
+// The contact surface and the obstacles agree.
+void check_surfaces(const Params& p, const Complain& bad) {
   if (p.contact.surface == SurfaceChoice::Ball && !p.ball.enabled)
     bad("contact.surface", "is 'ball' but ball.enabled is false");
   if (p.contact.surface == SurfaceChoice::Table && !p.table.enabled)
@@ -814,16 +874,11 @@ void check_consistency(const Params& p, const std::string& source,
     bad("obstacle." + contact_obstacles + ".contact",
         "is true but contact.surface is '" + to_string(p.contact.surface) +
             "' (set contact.surface = \"obstacle\" to make it the contact surface)");
-  try {
-    parse_export_formats(p.run.exports);
-  } catch (const std::invalid_argument& e) {
-    bad("run.export", e.what());
-  }
-  for (int i = 0; i < 2; ++i)
-    if (p.wind.region_min[i] > p.wind.region_max[i])
-      bad("wind.region_min", "must not exceed wind.region_max");
-  // A cloth that starts inside the table or the ball would be flung out of it
-  // at the first step (a tilted or lowered cloth makes that easy to do).
+}
+
+// A cloth that starts inside the table or the ball would be flung out of it
+// at the first step (a tilted or lowered cloth makes that easy to do).
+void check_cloth_start(const Params& p, const Complain& bad) {
   for (const auto& [kind, name, on] : {std::tuple{SurfaceKind::Table, "table", p.table.enabled},
                                        std::tuple{SurfaceKind::Ball, "ball", p.ball.enabled}}) {
     if (!on) continue;
@@ -843,19 +898,22 @@ void check_consistency(const Params& p, const std::string& source,
                               " (cloth.center, cloth.tilt, " + keys + ")");
     }
   }
-  // A run that would take no step, or write frames between steps. Params
-  // made in code (validate) may step to any time they like.
-  if (source != kInCode) {
-    if (p.run.duration > 0 && p.integrator.dt > p.run.duration * (1 + 1e-9))
-      bad("integrator.dt", "= " + shortest(p.integrator.dt) +
-                               " s is longer than run.duration = " + shortest(p.run.duration) +
-                               " s: the run would take no step (lower integrator.dt)");
-    if (p.run.fps * p.integrator.dt > 1 + 1e-9)
-      bad("run.fps", "= " + shortest(p.run.fps) + " frames/s is above the step rate, 1 / " +
-                         "integrator.dt = " + shortest(1 / p.integrator.dt) +
-                         " steps/s: frames would repeat steps (lower run.fps, or integrator.dt)");
-  }
-  // A key that does nothing for a handle's type is a mistake, not a default.
+}
+
+// A run that would take no step, or write frames between steps.
+void check_run_timing(const Params& p, const Complain& bad) {
+  if (p.run.duration > 0 && p.integrator.dt > p.run.duration * (1 + 1e-9))
+    bad("integrator.dt", "= " + shortest(p.integrator.dt) +
+                             " s is longer than run.duration = " + shortest(p.run.duration) +
+                             " s: the run would take no step (lower integrator.dt)");
+  if (p.run.fps * p.integrator.dt > 1 + 1e-9)
+    bad("run.fps", "= " + shortest(p.run.fps) + " frames/s is above the step rate, 1 / " +
+                       "integrator.dt = " + shortest(1 / p.integrator.dt) +
+                       " steps/s: frames would repeat steps (lower run.fps, or integrator.dt)");
+}
+
+// A key that does nothing for a handle's type is a mistake, not a default.
+void check_handles(const Params& p, const Complain& bad) {
   const auto nonzero = [](const Vec3d& v) { return v[0] != 0 || v[1] != 0 || v[2] != 0; };
   for (const auto& [name, h] : p.handles) {
     const std::string key = "handle." + name + ".";
@@ -872,6 +930,39 @@ void check_consistency(const Params& p, const std::string& source,
     if (h.type != HandleType::Move && nonzero(h.velocity))
       bad(key + "velocity", "applies to move handles only" + is);
   }
+}
+
+void check_consistency(const Params& p, const std::string& source,
+                       const std::vector<std::string>& overrides, const toml::table& scene) {
+  const Complain bad = [&](const std::string& key, const std::string& msg) {
+    const std::string section = key.substr(0, key.find('.'));
+    std::string sets;
+    for (const auto& o : overrides) {
+      std::string set_key = o.substr(0, o.find('='));  // `key = value` may have spaces
+      set_key.erase(set_key.find_last_not_of(" \t") + 1);
+      set_key.erase(0, set_key.find_first_not_of(" \t"));
+      const bool named = !set_key.empty() && msg.find(set_key) != std::string::npos;
+      if (o.substr(0, o.find('.')) == section || named)
+        sets += (sets.empty() ? " with --set '" : "', '") + o;
+    }
+    std::string line;
+    if (const toml::node* n = scene.at_path(key).node(); n && source != kInCode)
+      line = ":" + std::to_string(n->source().begin.line);
+    throw SceneError(source + line + (sets.empty() ? "" : sets + "'") + ": " + key + ": " + msg);
+  };
+  check_surfaces(p, bad);
+  try {
+    parse_export_formats(p.run.exports);
+  } catch (const std::invalid_argument& e) {
+    bad("run.export", e.what());
+  }
+  for (int i = 0; i < 2; ++i)
+    if (p.wind.region_min[i] > p.wind.region_max[i])
+      bad("wind.region_min", "must not exceed wind.region_max");
+  check_cloth_start(p, bad);
+  // Params made in code (validate) may step to any time they like.
+  if (source != kInCode) check_run_timing(p, bad);
+  check_handles(p, bad);
 }
 
 std::string read_file(const std::string& path) {
@@ -1037,7 +1128,7 @@ std::string to_toml(const Params& p) {
   std::ostringstream o;
   std::string section;
   for (const auto& d : param_defs()) {
-    if (d.key.rfind("handle.", 0) == 0 || d.key.rfind("obstacle.", 0) == 0) continue;
+    if (!named_kind(d.key).empty()) continue;
     const auto dot = d.key.rfind('.');
     const std::string sec = dot == std::string::npos ? "" : d.key.substr(0, dot);
     const std::string leaf = dot == std::string::npos ? d.key : d.key.substr(dot + 1);
@@ -1052,20 +1143,14 @@ std::string to_toml(const Params& p) {
     else
       o << leaf << " = " << format_value(v) << "\n";
   }
-  for (const auto& [name, h] : p.handles) {
-    o << "\n[handle." << name << "]\n";
-    for (const auto& d : param_defs()) {
-      if (d.key.rfind("handle.*.", 0) != 0) continue;
-      o << d.key.substr(9) << " = " << format_value(d.get(p, name)) << "\n";
+  for (const std::string_view kind : kNamedKinds)
+    for (const auto& name : table_names(p, std::string(kind))) {
+      o << "\n[" << kind << "." << name << "]\n";
+      for (const auto& d : param_defs()) {
+        if (named_kind(d.key) != kind) continue;
+        o << d.key.substr(kind.size() + 3) << " = " << format_value(d.get(p, name)) << "\n";
+      }
     }
-  }
-  for (const auto& [name, unused] : p.obstacles) {
-    o << "\n[obstacle." << name << "]\n";
-    for (const auto& d : param_defs()) {
-      if (d.key.rfind("obstacle.*.", 0) != 0) continue;
-      o << d.key.substr(11) << " = " << format_value(d.get(p, name)) << "\n";
-    }
-  }
   return o.str();
 }
 
@@ -1214,15 +1299,13 @@ void check_value(const ParamDef& d, const ParamValue& value, const std::string& 
 void validate(const Params& p) {
   for (const ParamDef& d : param_defs()) {
     // [handle.NAME] and [obstacle.NAME] keys, for each such table.
-    if (d.key.rfind("handle.*.", 0) == 0) {
-      for (const auto& [name, h] : p.handles)
-        check_value(d, d.get(p, name), "handle." + name + d.key.substr(8));
-    } else if (d.key.rfind("obstacle.*.", 0) == 0) {
-      for (const auto& [name, o] : p.obstacles)
-        check_value(d, d.get(p, name), "obstacle." + name + d.key.substr(10));
-    } else {
+    const std::string kind = named_kind(d.key);
+    if (kind.empty()) {
       check_value(d, d.get(p, ""), d.key);
+      continue;
     }
+    for (const auto& name : table_names(p, kind))
+      check_value(d, d.get(p, name), kind + "." + name + d.key.substr(kind.size() + 2));
   }
   check_consistency(p, kInCode, {}, toml::table{});
 }

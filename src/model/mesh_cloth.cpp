@@ -15,7 +15,7 @@
 #include <tuple>
 
 #include "detail.hpp"
-#include "mesh_io.hpp"
+#include "geometry/mesh_io.hpp"
 #include "wetcloth/scene.hpp"
 
 namespace wetcloth {
@@ -46,7 +46,6 @@ void push(SpringSet& s, int a, int b, double rest, double k, double damping) {
   s.a.push_back(a);
   s.b.push_back(b);
   s.rest.push_back(rest);
-  s.edge.push_back(0);
   s.k.push_back(k);
   s.damping.push_back(damping);
 }
@@ -89,23 +88,43 @@ std::vector<Vec3> mesh_cloth_positions(const Params& p, const TriangleMesh& mesh
   return x;
 }
 
-void build_mesh_cloth(Model& m, const Params& p) {
-  const TriangleMesh mesh = load_scene_mesh(p, "cloth.mesh", p.cloth.mesh);
-  const int n = static_cast<int>(mesh.position.size());
-  m.grid = false;
-  m.n = m.nu = n;
-  m.nv = 1;
-  m.threads = 1;
-  m.rest_position = mesh_cloth_positions(p, mesh);
-  const auto& x = m.rest_position;
-  m.area.assign(n, 0.0);
-  m.on_border.assign(n, 0);
-  m.in_wind.assign(n, 0);
-  m.driven.assign(n, 0);
-  m.chequer.assign(n, 0.0);
-  m.triangles = mesh.triangles;
+namespace {
 
-  // Texture coordinates: the file's, else the xy bounding box of its vertices.
+// A cloth mesh being built: its faces, rest positions and areas.
+struct ClothMesh {
+  const TriangleMesh& mesh;
+  const std::vector<Vec3>& x;
+  std::vector<int> quad;  // each triangle's quad, or -1 (quad_of_triangle)
+  double quad_area(int q) const {
+    const auto& d = mesh.quads[q];
+    return 0.5 * (x[d[2]] - x[d[0]]).cross(x[d[3]] - x[d[1]]).norm();
+  }
+  double triangle_area(int t) const {
+    const auto& d = mesh.triangles[t];
+    return 0.5 * (x[d[1]] - x[d[0]]).cross(x[d[2]] - x[d[0]]).norm();
+  }
+};
+
+// The polygon edges (the quads' sides, the lone triangles' edges), each
+// with the faces beside it: its share of their area (a quad's half, a
+// triangle's two thirds: an isotropic stretch then stores the grid's
+// energy) and, for a triangle, the corner across it.
+struct Edge {
+  double share = 0;
+  int faces = 0;
+  int triangles = 0;
+  std::array<int, 2> across{-1, -1};
+  std::array<double, 2> across_area{0, 0};
+};
+struct Edges {
+  std::map<std::pair<int, int>, Edge> by_ends;
+  std::vector<std::pair<int, int>> order;  // as first met: the springs' order
+};
+
+// Texture coordinates: the file's, else the xy bounding box of its
+// vertices; and which particles the wind region holds.
+void place_texture(Model& m, const Params& p, const TriangleMesh& mesh) {
+  const int n = m.n;
   m.uv.resize(n);
   if (!mesh.uv.empty()) {
     m.uv = mesh.uv;
@@ -125,43 +144,29 @@ void build_mesh_cloth(Model& m, const Params& p) {
     m.in_wind[k] = m.uv[k][0] >= w.region_min[0] && m.uv[k][0] <= w.region_max[0] &&
                    m.uv[k][1] >= w.region_min[1] && m.uv[k][1] <= w.region_max[1];
   }
+}
 
-  // Faces: the file's quads, and the triangles of no quad. Areas: a quarter
-  // of each quad's and a third of each lone triangle's to each corner (on a
-  // grid of quads, the grid's Voronoi areas: l², l²/2 on the border, l²/4 at
-  // a corner).
-  const std::vector<int> quad = quad_of_triangle(mesh);
-  const auto quad_area = [&](int q) {
-    const auto& d = mesh.quads[q];
-    return 0.5 * (x[d[2]] - x[d[0]]).cross(x[d[3]] - x[d[1]]).norm();
-  };
-  const auto triangle_area = [&](int t) {
-    const auto& d = mesh.triangles[t];
-    return 0.5 * (x[d[1]] - x[d[0]]).cross(x[d[2]] - x[d[0]]).norm();
-  };
+// Areas: a quarter of each quad's and a third of each lone triangle's to
+// each corner (on a grid of quads, the grid's Voronoi areas: l², l²/2 on
+// the border, l²/4 at a corner).
+void add_areas(Model& m, const ClothMesh& c) {
+  const TriangleMesh& mesh = c.mesh;
+  const auto& quad = c.quad;
   for (std::size_t q = 0; q < mesh.quads.size(); ++q)
-    for (const int k : mesh.quads[q]) m.area[k] += quad_area(static_cast<int>(q)) / 4;
+    for (const int k : mesh.quads[q]) m.area[k] += c.quad_area(static_cast<int>(q)) / 4;
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
     if (quad[t] < 0)
-      for (const int k : mesh.triangles[t]) m.area[k] += triangle_area(static_cast<int>(t)) / 3;
+      for (const int k : mesh.triangles[t]) m.area[k] += c.triangle_area(static_cast<int>(t)) / 3;
+}
 
-  // The polygon edges (the quads' sides, the lone triangles' edges), each
-  // with the faces beside it: its share of their area (a quad's half, a
-  // triangle's two thirds: an isotropic stretch then stores the grid's
-  // energy) and, for a triangle, the corner across it.
-  struct Edge {
-    double share = 0;
-    int faces = 0;
-    int triangles = 0;
-    std::array<int, 2> across{-1, -1};
-    std::array<double, 2> across_area{0, 0};
-  };
-  std::map<std::pair<int, int>, Edge> edges;
-  std::vector<std::pair<int, int>> edge_order;  // as first met: the springs' order
+Edges polygon_edges(const ClothMesh& c) {
+  const TriangleMesh& mesh = c.mesh;
+  const auto& quad = c.quad;
+  Edges edges;
   const auto meet = [&](int a, int b, double share, int across, double area) {
     const std::pair key{std::min(a, b), std::max(a, b)};
-    auto [it, fresh] = edges.try_emplace(key);
-    if (fresh) edge_order.push_back(key);
+    auto [it, fresh] = edges.by_ends.try_emplace(key);
+    if (fresh) edges.order.push_back(key);
     Edge& e = it->second;
     e.share += share;
     ++e.faces;
@@ -177,27 +182,35 @@ void build_mesh_cloth(Model& m, const Params& p) {
       if (quad_met[q]) continue;
       quad_met[q] = 1;
       const auto& d = mesh.quads[q];
-      const double a = quad_area(q);
-      for (int c = 0; c < 4; ++c) meet(d[c], d[(c + 1) % 4], a / 2, -1, 0);
+      const double a = c.quad_area(q);
+      for (int k = 0; k < 4; ++k) meet(d[k], d[(k + 1) % 4], a / 2, -1, 0);
       continue;
     }
     const auto& d = mesh.triangles[t];
-    const double a = triangle_area(static_cast<int>(t));
-    for (int c = 0; c < 3; ++c) meet(d[c], d[(c + 1) % 3], 2 * a / 3, d[(c + 2) % 3], a);
+    const double a = c.triangle_area(static_cast<int>(t));
+    for (int k = 0; k < 3; ++k) meet(d[k], d[(k + 1) % 3], 2 * a / 3, d[(k + 2) % 3], a);
   }
+  return edges;
+}
 
-  // Constants (MODEL.md section 1, "a mesh cloth"): the material, or the
-  // [springs] a scene sets directly.
+// A spring constant of [springs] where a scene sets it, else the material's.
+double constant(const std::optional<double>& set, double from_material) {
+  return set.value_or(from_material);
+}
+
+// Structural and shear springs (MODEL.md section 1, "a mesh cloth"); the
+// cloth's edges and the strain limiter's springs as pairs.
+void add_stretch_springs(Model& m, const Params& p, const ClothMesh& c, Edges& edges,
+                         std::vector<std::array<int, 2>>& edge_pairs,
+                         std::vector<std::array<int, 2>>& strain_pairs) {
+  const TriangleMesh& mesh = c.mesh;
+  const auto& x = c.x;
   const auto& mat = p.material;
   const auto& sp = p.springs;
-  const auto constant = [](const std::optional<double>& set, double from_material) {
-    return set.value_or(from_material);
-  };
   // Structural: k = k_s A_e / l², A_e = the edge's shares, doubled on the
   // border (as if the cloth went on past it): on a grid, k_s dv / du.
-  std::vector<std::array<int, 2>> edge_pairs, strain_pairs;
-  for (const auto& key : edge_order) {
-    const Edge& e = edges[key];
+  for (const auto& key : edges.order) {
+    const Edge& e = edges.by_ends[key];
     const double rest = (x[key.second] - x[key.first]).norm();
     const double a = 2 * e.share / e.faces, scale = a / (rest * rest);
     push(m.structural, key.first, key.second, rest,
@@ -212,7 +225,7 @@ void build_mesh_cloth(Model& m, const Params& p) {
     const auto& d = mesh.quads[q];
     for (const auto& [a, b] : {std::pair{d[0], d[2]}, std::pair{d[1], d[3]}}) {
       const double rest = (x[b] - x[a]).norm();
-      const double scale = 2 * quad_area(static_cast<int>(q)) / (rest * rest);
+      const double scale = 2 * c.quad_area(static_cast<int>(q)) / (rest * rest);
       push(m.shear, a, b, rest, constant(sp.shear_k, mat.shear_stiffness * scale),
            constant(sp.shear_damping, mat.shear_damping * scale));
     }
@@ -221,10 +234,18 @@ void build_mesh_cloth(Model& m, const Params& p) {
     strain_pairs.push_back({m.structural.a[e], m.structural.b[e]});
   for (std::size_t e = 0; e < m.shear.size(); ++e)
     strain_pairs.push_back({m.shear.a[e], m.shear.b[e]});
+}
 
-  // Bending: k = B ā / h⁴ (h half the spring's rest length, ā the mean area
-  // of the faces it bends across), 4 B ā / h⁴ along a quad diagonal: on a
-  // grid, the grid's B dv / du³ and 4 B du dv / (du² + dv²)².
+// Bending: k = B ā / h⁴ (h half the spring's rest length, ā the mean area
+// of the faces it bends across), 4 B ā / h⁴ along a quad diagonal: on a
+// grid, the grid's B dv / du³ and 4 B du dv / (du² + dv²)².
+void add_bending_springs(Model& m, const Params& p, const ClothMesh& c, Edges& edges,
+                         const std::vector<std::array<int, 2>>& edge_pairs) {
+  const TriangleMesh& mesh = c.mesh;
+  const auto& x = c.x;
+  const int n = m.n;
+  const auto& mat = p.material;
+  const auto& sp = p.springs;
   const auto bend = [&](int a, int b, double mean_area, double factor) {
     const double rest = (x[b] - x[a]).norm(), h = rest / 2;
     const double scale = factor * mean_area / (h * h * h * h);
@@ -232,8 +253,8 @@ void build_mesh_cloth(Model& m, const Params& p) {
          constant(sp.bending_damping, mat.bending_damping * scale));
   };
   // Across each edge between two triangles: their corners across it.
-  for (const auto& key : edge_order) {
-    const Edge& e = edges[key];
+  for (const auto& key : edges.order) {
+    const Edge& e = edges.by_ends[key];
     if (e.faces == 2 && e.triangles == 2 && e.across[0] != e.across[1])
       bend(e.across[0], e.across[1], 0.5 * (e.across_area[0] + e.across_area[1]), 1.0);
   }
@@ -255,7 +276,7 @@ void build_mesh_cloth(Model& m, const Params& p) {
     const bool rim = m.on_border[v] && around.size() == 2 && valence == 3;
     if (!inner && !rim) continue;
     double mean = 0;
-    for (const int q : around) mean += quad_area(q) / around.size();
+    for (const int q : around) mean += c.quad_area(q) / around.size();
     const auto corner = [&](int q) {
       const auto& d = mesh.quads[q];
       return static_cast<int>(std::find(d.begin(), d.end(), v) - d.begin());
@@ -286,9 +307,15 @@ void build_mesh_cloth(Model& m, const Params& p) {
           if (!share) bend(qi[(ci + 2) % 4], qj[(cj + 2) % 4], mean, 4.0);
         }
   }
+}
 
-  // Neighbour lists: the edges (contact border, air pockets, handles' patch),
-  // the structural and shear springs (strain limiting's order and queue).
+// Neighbour lists: the edges (contact border, air pockets, handles' patch),
+// the structural and shear springs (strain limiting's order and queue), and
+// self-collision's exclusion.
+void build_neighbour_lists(Model& m, const Params& p,
+                           const std::vector<std::array<int, 2>>& edge_pairs,
+                           const std::vector<std::array<int, 2>>& strain_pairs) {
+  const int n = m.n;
   lists(n, edge_pairs, m.edge_start, m.edge_neighbour);
   {
     std::vector<std::vector<int>> by(n);
@@ -307,14 +334,6 @@ void build_mesh_cloth(Model& m, const Params& p) {
   double total = 0;
   for (const double l : m.structural.rest) total += l;
   m.spacing = m.structural.size() ? total / m.structural.size() : 0.0;
-  // As a grid's particles along its longer side (xpbd_substeps).
-  double longest = 0;
-  for (int c = 0; c < 3; ++c) {
-    double lo = detail::kInf, hi = -detail::kInf;
-    for (const auto& q : mesh.position) lo = std::min(lo, q[c]), hi = std::max(hi, q[c]);
-    longest = std::max(longest, p.cloth.mesh_scale * (hi - lo));
-  }
-  m.along = m.spacing > 0 ? static_cast<int>(std::lround(longest / m.spacing)) + 1 : 0;
   std::vector<int> strain_list_start, strain_list;
   lists(n, strain_pairs, strain_list_start, strain_list);
   const int reach = std::max(
@@ -339,6 +358,40 @@ void build_mesh_cloth(Model& m, const Params& p) {
     m.ring.insert(m.ring.end(), seen.begin(), seen.end());
     m.ring_start[k + 1] = static_cast<int>(m.ring.size());
   }
+}
+
+}  // namespace
+
+void build_mesh_cloth(Model& m, const Params& p) {
+  const TriangleMesh mesh = load_scene_mesh(p, "cloth.mesh", p.cloth.mesh);
+  const int n = static_cast<int>(mesh.position.size());
+  m.grid = false;
+  m.n = m.nu = n;
+  m.nv = 1;
+  m.threads = 1;
+  m.rest_position = mesh_cloth_positions(p, mesh);
+  m.area.assign(n, 0.0);
+  m.on_border.assign(n, 0);
+  m.in_wind.assign(n, 0);
+  m.driven.assign(n, 0);
+  m.triangles = mesh.triangles;
+  place_texture(m, p, mesh);
+  // Faces: the file's quads, and the triangles of no quad.
+  const ClothMesh c{mesh, m.rest_position, quad_of_triangle(mesh)};
+  add_areas(m, c);
+  Edges edges = polygon_edges(c);
+  std::vector<std::array<int, 2>> edge_pairs, strain_pairs;
+  add_stretch_springs(m, p, c, edges, edge_pairs, strain_pairs);
+  add_bending_springs(m, p, c, edges, edge_pairs);
+  build_neighbour_lists(m, p, edge_pairs, strain_pairs);
+  // As a grid's particles along its longer side (xpbd_substeps).
+  double longest = 0;
+  for (int axis = 0; axis < 3; ++axis) {
+    double lo = detail::kInf, hi = -detail::kInf;
+    for (const auto& q : mesh.position) lo = std::min(lo, q[axis]), hi = std::max(hi, q[axis]);
+    longest = std::max(longest, p.cloth.mesh_scale * (hi - lo));
+  }
+  m.along = m.spacing > 0 ? static_cast<int>(std::lround(longest / m.spacing)) + 1 : 0;
 }
 
 ClothMeshSize cloth_mesh_size(const Params& p) {

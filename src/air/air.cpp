@@ -2,7 +2,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "../detail.hpp"
+#include "detail.hpp"
 
 namespace wetcloth::detail {
 

@@ -1,6 +1,6 @@
 // Obstacles made of triangle meshes: read, transformed, checked, and queried
 // for the signed distance through a CGAL AABB tree (MODEL.md section 3).
-#include "mesh_obstacle.hpp"
+#include "geometry/mesh_obstacle.hpp"
 
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
@@ -14,7 +14,7 @@
 #include <numbers>
 
 #include "detail.hpp"
-#include "mesh_io.hpp"
+#include "geometry/mesh_io.hpp"
 #include "wetcloth/scene.hpp"
 
 namespace wetcloth {
@@ -116,6 +116,93 @@ MeshObstacle::Hit MeshObstacle::query_within(const Vec3& x, double bound) const 
   return h;
 }
 
+namespace {
+
+// Whether the mesh is closed (no edge on one triangle only), its faces turned
+// outward if it is; throws where its faces disagree on their orientation or
+// its thickness does not suit it.
+void check_orientation(MeshObstacle& o, const ObstacleParams& op, const std::string& name,
+                       const std::string& key, const std::string& source) {
+  // Edges: each triangle's, with the triangles on them and their direction.
+  std::map<std::pair<int, int>, std::vector<std::pair<int, bool>>> edges;  // (t, from low)
+  for (std::size_t t = 0; t < o.triangles.size(); ++t)
+    for (int e = 0; e < 3; ++e) {
+      const int a = o.triangles[t][e], b = o.triangles[t][(e + 1) % 3];
+      edges[{std::min(a, b), std::max(a, b)}].push_back({static_cast<int>(t), a < b});
+    }
+  std::size_t open_edges = 0;
+  for (const auto& [ends, on] : edges) {
+    if (on.size() == 1) ++open_edges;
+    if (on.size() == 2 && on[0].second == on[1].second)
+      fail(key, source + ": triangles " + std::to_string(on[0].first + 1) + " and " +
+                    std::to_string(on[1].first + 1) +
+                    " face opposite ways across their shared edge (vertices " +
+                    std::to_string(ends.first + 1) + " and " + std::to_string(ends.second + 1) +
+                    "): orient the mesh's faces consistently");
+  }
+  o.closed = open_edges == 0;
+  const std::string thickness_key = "obstacle." + name + ".thickness";
+  if (!o.closed && op.thickness <= 0)
+    fail(thickness_key, source + " is open (" + std::to_string(open_edges) +
+                            " edges on one triangle only): it has no inside, so give it a "
+                            "thickness > 0 (a shell about the surface), or close the mesh");
+  if (o.closed && op.thickness > 0)
+    fail(thickness_key, source +
+                            " is closed: its inside is the obstacle, and a thickness would do "
+                            "nothing (set it to 0)");
+  o.half_thickness = op.thickness / 2;
+  if (o.closed) {  // outward: a positive volume, or every triangle turned
+    double volume = 0;
+    for (const auto& t : o.triangles)
+      volume += o.points[t[0]].dot(o.points[t[1]].cross(o.points[t[2]])) / 6;
+    if (volume < 0)
+      for (auto& t : o.triangles) std::swap(t[1], t[2]);
+  }
+}
+
+// The face normals, the angle-weighted vertex normals; throws on a triangle
+// with no area.
+void add_normals(const MeshObstacle& o, MeshObstacle::Geometry& g, const std::string& name,
+                 const std::string& key, const std::string& source) {
+  const std::size_t nt = o.triangles.size();
+  g.face_normal.resize(nt);
+  g.vertex_normal.assign(o.points.size(), Vec3::Zero());
+  for (std::size_t t = 0; t < nt; ++t) {
+    const auto& tr = o.triangles[t];
+    const Vec3 &a = o.points[tr[0]], &b = o.points[tr[1]], &c = o.points[tr[2]];
+    const Vec3 n = (b - a).cross(c - a);
+    if (!(n.norm() > 0))
+      fail(key, source + ": triangle " + std::to_string(t + 1) +
+                    " has no area once transformed (obstacle." + name + ".scale)");
+    g.face_normal[t] = n.normalized();
+    for (int e = 0; e < 3; ++e) {  // angle-weighted vertex normals
+      const Vec3 u = (o.points[tr[(e + 1) % 3]] - o.points[tr[e]]).normalized();
+      const Vec3 v = (o.points[tr[(e + 2) % 3]] - o.points[tr[e]]).normalized();
+      g.vertex_normal[tr[e]] += std::acos(std::clamp(u.dot(v), -1.0, 1.0)) * g.face_normal[t];
+    }
+  }
+  for (auto& n : g.vertex_normal) n.normalize();
+}
+
+// Each triangle's edges, and each edge's normal: the mean of its faces'.
+void add_edge_normals(const MeshObstacle& o, MeshObstacle::Geometry& g) {
+  const std::size_t nt = o.triangles.size();
+  std::map<std::pair<int, int>, int> edge_index;
+  g.face_edges.resize(nt);
+  for (std::size_t t = 0; t < nt; ++t)
+    for (int e = 0; e < 3; ++e) {
+      const int a = o.triangles[t][e], b = o.triangles[t][(e + 1) % 3];
+      const auto [it, fresh] = edge_index.emplace(std::pair{std::min(a, b), std::max(a, b)},
+                                                  static_cast<int>(g.edge_normal.size()));
+      if (fresh) g.edge_normal.push_back(Vec3::Zero());
+      g.edge_normal[it->second] += g.face_normal[t];
+      g.face_edges[t][e] = it->second;
+    }
+  for (auto& n : g.edge_normal) n.normalize();
+}
+
+}  // namespace
+
 std::shared_ptr<const MeshObstacle> build_mesh_obstacle(const Params& p, const std::string& name) {
   const ObstacleParams& op = p.obstacles.at(name);
   const std::string key = "obstacle." + name + ".mesh";
@@ -134,72 +221,10 @@ std::shared_ptr<const MeshObstacle> build_mesh_obstacle(const Params& p, const s
   const Vec3 S = to_vec(op.scale), T = to_vec(op.translate);
   for (const auto& q : mesh.position) o->points.push_back(R * Vec3(to_vec(q).cwiseProduct(S)) + T);
   o->triangles = mesh.triangles;
-  // Edges: each triangle's, with the triangles on them and their direction.
-  std::map<std::pair<int, int>, std::vector<std::pair<int, bool>>> edges;  // (t, from low)
-  for (std::size_t t = 0; t < o->triangles.size(); ++t)
-    for (int e = 0; e < 3; ++e) {
-      const int a = o->triangles[t][e], b = o->triangles[t][(e + 1) % 3];
-      edges[{std::min(a, b), std::max(a, b)}].push_back({static_cast<int>(t), a < b});
-    }
-  std::size_t open_edges = 0;
-  for (const auto& [ends, on] : edges) {
-    if (on.size() == 1) ++open_edges;
-    if (on.size() == 2 && on[0].second == on[1].second)
-      fail(key, mesh.source + ": triangles " + std::to_string(on[0].first + 1) + " and " +
-                    std::to_string(on[1].first + 1) +
-                    " face opposite ways across their shared edge (vertices " +
-                    std::to_string(ends.first + 1) + " and " + std::to_string(ends.second + 1) +
-                    "): orient the mesh's faces consistently");
-  }
-  o->closed = open_edges == 0;
-  const std::string thickness_key = "obstacle." + name + ".thickness";
-  if (!o->closed && op.thickness <= 0)
-    fail(thickness_key, mesh.source + " is open (" + std::to_string(open_edges) +
-                            " edges on one triangle only): it has no inside, so give it a "
-                            "thickness > 0 (a shell about the surface), or close the mesh");
-  if (o->closed && op.thickness > 0)
-    fail(thickness_key, mesh.source +
-                            " is closed: its inside is the obstacle, and a thickness would do "
-                            "nothing (set it to 0)");
-  o->half_thickness = op.thickness / 2;
-  if (o->closed) {  // outward: a positive volume, or every triangle turned
-    double volume = 0;
-    for (const auto& t : o->triangles)
-      volume += o->points[t[0]].dot(o->points[t[1]].cross(o->points[t[2]])) / 6;
-    if (volume < 0)
-      for (auto& t : o->triangles) std::swap(t[1], t[2]);
-  }
+  check_orientation(*o, op, name, key, mesh.source);
   auto g = std::make_shared<MeshObstacle::Geometry>();
-  const std::size_t nt = o->triangles.size();
-  g->face_normal.resize(nt);
-  g->vertex_normal.assign(o->points.size(), Vec3::Zero());
-  for (std::size_t t = 0; t < nt; ++t) {
-    const auto& tr = o->triangles[t];
-    const Vec3 &a = o->points[tr[0]], &b = o->points[tr[1]], &c = o->points[tr[2]];
-    const Vec3 n = (b - a).cross(c - a);
-    if (!(n.norm() > 0))
-      fail(key, mesh.source + ": triangle " + std::to_string(t + 1) +
-                    " has no area once transformed (obstacle." + name + ".scale)");
-    g->face_normal[t] = n.normalized();
-    for (int e = 0; e < 3; ++e) {  // angle-weighted vertex normals
-      const Vec3 u = (o->points[tr[(e + 1) % 3]] - o->points[tr[e]]).normalized();
-      const Vec3 v = (o->points[tr[(e + 2) % 3]] - o->points[tr[e]]).normalized();
-      g->vertex_normal[tr[e]] += std::acos(std::clamp(u.dot(v), -1.0, 1.0)) * g->face_normal[t];
-    }
-  }
-  for (auto& n : g->vertex_normal) n.normalize();
-  std::map<std::pair<int, int>, int> edge_index;
-  g->face_edges.resize(nt);
-  for (std::size_t t = 0; t < nt; ++t)
-    for (int e = 0; e < 3; ++e) {
-      const int a = o->triangles[t][e], b = o->triangles[t][(e + 1) % 3];
-      const auto [it, fresh] = edge_index.emplace(std::pair{std::min(a, b), std::max(a, b)},
-                                                  static_cast<int>(g->edge_normal.size()));
-      if (fresh) g->edge_normal.push_back(Vec3::Zero());
-      g->edge_normal[it->second] += g->face_normal[t];
-      g->face_edges[t][e] = it->second;
-    }
-  for (auto& n : g->edge_normal) n.normalize();
+  add_normals(*o, *g, name, key, mesh.source);
+  add_edge_normals(*o, *g);
   o->lo = o->hi = o->points.front();
   for (const Vec3& x : o->points) o->lo = o->lo.cwiseMin(x), o->hi = o->hi.cwiseMax(x);
   for (const auto& t : o->triangles) {

@@ -1,4 +1,4 @@
-#include "mesh_io.hpp"
+#include "geometry/mesh_io.hpp"
 
 #include <tiny_obj_loader.h>
 

@@ -17,6 +17,7 @@
 #include <array>
 #include <cmath>
 
+#include "constraints/coulomb.hpp"
 #include "detail.hpp"
 
 namespace wetcloth::detail {
@@ -302,19 +303,9 @@ void collide_with_friction(const Model& m, State& s, Workspace& w,
         const double ad = how[k] > 1.5 ? adhesion[i] : 0.0;
         const double pressing = mass[i] * pushed * load_scale;
         const double load = ad > pressing ? ad : pressing;
-        const double vn = vx[i] * ux + vy[i] * uy + vz[i] * uz;
-        const double tx = vx[i] - vn * ux, ty = vy[i] - vn * uy, tz = vz[i] - vn * uz;
-        const double speed = std::sqrt(tx * tx + ty * ty + tz * tz);
         const double dv = dv_scale * load * inv_mass[i];
-        const bool on = (how[k] > 0.5) & (load > 0) & (speed > 0);
-        const double factor = on ? (dv < speed ? dv : speed) / speed : 0.0;
-        const double sx = tx * factor, sy = ty * factor, sz = tz * factor;
-        vx[i] -= sx;
-        vy[i] -= sy;
-        vz[i] -= sz;
-        xx[i] -= h * sx;
-        xy[i] -= h * sy;
-        xz[i] -= h * sz;
+        coulomb_clamp(vx[i], vy[i], vz[i], xx[i], xy[i], xz[i], ux, uy, uz, dv,
+                      (how[k] > 0.5) & (load > 0), h);
       }
     });
   });
@@ -323,4 +314,91 @@ void collide_with_friction(const Model& m, State& s, Workspace& w,
   if (!m.obstacles.empty()) collide_with_meshes(m, s, w);
 }
 
+namespace {
+
+// v += h F / m, the viscous drag on each particle's own velocity implicit.
+void add_external_velocity(const Model& m, State& s, const Workspace& w, double h) {
+  const double c = m.params.forces.viscous_damping;
+  for_each_particle_block(m, [&](int first, int end) {
+    for (int q = 0; q < 3; ++q) {
+      const double* __restrict f = w.force.column(q);
+      double* __restrict v = s.v.column(q);
+#pragma GCC ivdep
+      for (int i = first; i < end; ++i) {
+        const double hm = h * m.inv_mass[i];
+        v[i] += hm / (1 + hm * c * m.area[i]) * f[i];
+      }
+    }
+  });
+}
+
+}  // namespace
+
+// XPBD in substeps: per substep the external forces move the particles, the
+// constraints are projected once, then contact and friction; the air and the
+// contact state follow every substep (the air is stiff: a tent's pressure
+// answers its volume within a millisecond). The rig's force is the mean over
+// the substeps.
+void xpbd_step(const Model& m, State& s, Workspace& w) {
+  const double dt = m.params.integrator.dt;
+  const int substeps = xpbd_substeps(m);
+  const double h = dt / substeps, inv_h2 = 1.0 / (h * h);
+  Vec3 rig = Vec3::Zero();
+  for (int k = 0; k < substeps; ++k) {
+    // The external forces (MODEL.md section 8's first stage without the
+    // springs and self-collision, which are constraints here).
+    for_each_particle(m, [&](int i) { put(w.force[i], Vec3::Zero()); });
+    compute_normals(m, s.x.column(0), w.normal, w.normals_scratch);
+    add_gravity(m, w.force);
+    add_wind(m, s, w, w.force);
+    add_air_pressure(m, s, w);
+    add_adhesion(m, s, w);
+    add_handle_forces(m, s, w);
+    add_external_velocity(m, s, w, h);
+    w.x_prev = s.x;
+    move_at_new_velocities(m, s, w, h);  // the air term implicit, then x += h v
+    s.time = (static_cast<double>(s.steps) + static_cast<double>(k + 1) / substeps) * dt;
+    apply_handle_constraints(m, s, w);
+    xpbd_begin_substep(m, s, w);
+    project_springs(m, s, w, h);
+    // The strain limit's further passes (MODEL.md section 2's 1-3): one sweep
+    // carries a stretch only a grid step or two from a pulled patch.
+    if (m.params.strain_limit.enabled)
+      for (long long pass = 1; pass < m.params.strain_limit.passes; ++pass)
+        project_springs(m, s, w, h, true);
+    project_self_collision(m, s, w, h);
+    collide_with_friction(m, s, w, w.touched, h);
+    // The paper's damping -k_f v of colliding particles, implicit.
+    const double k_f = m.params.self_collision.damping;
+    for (const int q : w.colliding_particles) s.v[q] *= 1.0 / (1.0 + h * k_f * m.inv_mass[q]);
+    hold_stopped_handles(m, s);
+    // The rig holds its patch against the external forces (apply_handle_constraints)
+    // and the constraints' pull: J / h² on each particle it holds.
+    w.handle_force -= inv_h2 * w.reaction_impulse;
+    rig += w.handle_force;
+    update_contact(m, s, w);
+    update_air(m, s, w, h);
+    ++w.substeps;
+  }
+  w.handle_force = rig / substeps;
+  s.time = static_cast<double>(s.steps + 1) * dt;
+}
+
 }  // namespace wetcloth::detail
+
+namespace wetcloth {
+
+int xpbd_substeps(const Params& p) {
+  if (p.integrator.substeps > 0) return static_cast<int>(p.integrator.substeps);
+  // (A mesh cloth: as the default grid's.)
+  const long long longer =
+      p.cloth.mesh.empty() ? std::max(p.cloth.resolution[0], p.cloth.resolution[1]) : 51;
+  return static_cast<int>(10 + std::max(0LL, (longer - 101 + 9) / 10));
+}
+
+int xpbd_substeps(const Model& m) {
+  if (m.grid || m.params.integrator.substeps > 0) return xpbd_substeps(m.params);
+  return static_cast<int>(10 + std::max(0, (m.along - 101 + 9) / 10));
+}
+
+}  // namespace wetcloth

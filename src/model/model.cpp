@@ -8,7 +8,7 @@
 #include <unordered_map>
 
 #include "detail.hpp"
-#include "mesh_io.hpp"
+#include "geometry/mesh_io.hpp"
 
 namespace wetcloth {
 
@@ -126,7 +126,6 @@ void add_spring(SpringSet& s, const Model& m, int edge, int i0, int j0) {
   s.a.push_back(a);
   s.b.push_back(b);
   s.rest.push_back((m.rest_position[b] - m.rest_position[a]).norm());
-  s.edge.push_back(static_cast<std::uint8_t>(edge));
   s.k.push_back(m.stencil[edge].k);
   s.damping.push_back(m.stencil[edge].damping);
 }
@@ -272,10 +271,8 @@ void build_grid(Model& m, const Params& p) {
   const int wanted = p.integrator.threads > 0 ? static_cast<int>(p.integrator.threads)
                                               : std::max(1, omp_get_num_procs());
   m.threads = std::clamp(m.n / kParticlesPerThread, 1, wanted);
-  m.chequer.resize(m.n);
   for (int j = 0; j < m.nv; ++j) {
     for (int i = 0; i < m.nu; ++i) {
-      m.chequer[m.index(i, j)] = (i + j) % 2 == 0 ? 1.0 : 0.0;
       // Stencil offsets 0-7 (above), each from (i0, j0) to (i0 + di, j0 + dj).
       add_spring(m.structural, m, 0, i, j);
       add_spring(m.structural, m, 1, i, j);
@@ -290,7 +287,7 @@ void build_grid(Model& m, const Params& p) {
                   d = m.index(i, j + 1);
         // Diagonals alternate like a chequerboard, so that on an odd grid the
         // mesh (and the normals) keep the cloth's mirror symmetries.
-        // compute_normals (simulation.cpp) follows this pattern quad by quad.
+        // compute_normals (forces/normals.cpp) follows this pattern quad by quad.
         if ((i + j) % 2 == 0) {
           m.triangles.push_back({a, b, cc});
           m.triangles.push_back({a, cc, d});

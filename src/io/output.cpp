@@ -14,7 +14,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "mesh_obstacle.hpp"
+#include "geometry/mesh_obstacle.hpp"
 
 namespace wetcloth {
 

@@ -1,0 +1,110 @@
+// Particle normals, area-weighted over the adjacent triangles: the direction
+// the wind (eq. 3's neighbour) and the trapped air push along.
+#include <algorithm>
+#include <cmath>
+
+#include "detail.hpp"
+
+namespace wetcloth {
+
+using namespace detail;
+
+// Area-weighted particle normals on the chequerboard triangulation of
+// model.cpp. First each quad's two triangle normals, into six columns (x y z
+// of each triangle), quad (i, j) at slot j nu + i of its corner (i, j): slot
+// nu - 1 of a row, where no quad starts, holds zeros, and so do the slots
+// of row nv - 1 and the nu + 1 before the column. Then each particle sums
+// the triangles of its four quads, slots a - nu - 1, a - nu, a - 1 and a, in
+// the order of Model::triangles: quads (i-1, j-1), (i, j-1), (i-1, j),
+// (i, j), each first triangle then second. A particle with i + j even is in
+// all eight; an odd one in four, so it adds zero for the others (exact).
+// Both passes are loops over each thread's block of rows that vectorise (a
+// loop per row of 51 ended in a scalar tail of 3 that cost as much as the
+// rest).
+void detail::compute_normals(const Model& m, const double* X, Vec3Array& normal,
+                             NormalsScratch& scratch) {
+  if (!m.grid) {
+    compute_normals_mesh(m, X, normal);
+    return;
+  }
+  const int nu = m.nu, nv = m.nv, n = m.n;
+  const std::size_t before = std::size_t(nu) + 1, stride = before + n;
+  std::vector<double>& quad_normals = scratch.quad_normals;
+  quad_normals.resize(6 * stride);
+  double* t[6];
+  for (int f = 0; f < 6; ++f) {
+    t[f] = quad_normals.data() + f * stride + before;
+    std::fill(t[f] - before, t[f], 0.0);
+    std::fill(t[f] + (nv - 1) * nu, t[f] + n, 0.0);
+  }
+  const double *x = X, *y = X + n, *z = X + 2 * std::size_t(n);
+  if (scratch.chequer_nu != nu || scratch.chequer.size() != std::size_t(n)) {
+    scratch.chequer.resize(n);
+    scratch.chequer_nu = nu;
+    for (int j = 0; j < nv; ++j)
+      for (int i = 0; i < nu; ++i) scratch.chequer[m.index(i, j)] = (i + j) % 2 == 0 ? 1.0 : 0.0;
+  }
+  const double* even_at = scratch.chequer.data();
+  for_each_row_block(m, [&](int j0, int j1, int) {
+    const int q1 = std::min(j1, nv - 1);  // quad rows j0 .. q1 - 1
+    if (j0 >= q1) return;
+      // Up to the last row's slot nu - 1, whose corners run past the grid.
+#pragma GCC ivdep
+    for (int a = j0 * nu; a < q1 * nu - 1; ++a) {
+      // Corners a, b = a + 1, cc = a + nu + 1, d = a + nu. Even quads split
+      // along a-cc: {a, b, cc}, {a, cc, d}; odd ones along b-d: {a, b, d},
+      // {b, cc, d}. Eigen's cross, in scalars.
+      const bool even = even_at[a] != 0;
+      const int b = a + 1, cc = a + nu + 1, d = a + nu;
+      const double ux = x[b] - x[a], uy = y[b] - y[a], uz = z[b] - z[a];
+      const double vx = (even ? x[cc] : x[d]) - x[a], vy = (even ? y[cc] : y[d]) - y[a],
+                   vz = (even ? z[cc] : z[d]) - z[a];
+      t[0][a] = uy * vz - uz * vy;
+      t[1][a] = uz * vx - ux * vz;
+      t[2][a] = ux * vy - uy * vx;
+      const int o = even ? a : b;
+      const double px = x[cc] - x[o], py = y[cc] - y[o], pz = z[cc] - z[o];
+      const double qx = x[d] - x[o], qy = y[d] - y[o], qz = z[d] - z[o];
+      t[3][a] = py * qz - pz * qy;
+      t[4][a] = pz * qx - px * qz;
+      t[5][a] = px * qy - py * qx;
+    }
+    for (int q = j0; q < q1; ++q)
+      for (int f = 0; f < 6; ++f) t[f][q * nu + nu - 1] = 0.0;
+  });
+  for_each_particle_block(m, [&](int first, int end) {
+    double* __restrict out_x = normal.column(0);
+    double* __restrict out_y = normal.column(1);
+    double* __restrict out_z = normal.column(2);
+#pragma GCC ivdep
+    for (int a = first; a < end; ++a) {
+      const bool even = even_at[a] != 0;
+      double sum[3];
+      for (int k = 0; k < 3; ++k) {
+        const double *t0 = t[k], *t1 = t[3 + k];
+        double s = 0;
+        s += even ? t0[a - nu - 1] : 0.0;
+        s += t1[a - nu - 1];
+        s += even ? t0[a - nu] : 0.0;
+        s += t1[a - nu];
+        s += t0[a - 1];
+        s += even ? t1[a - 1] : 0.0;
+        s += t0[a];
+        s += even ? t1[a] : 0.0;
+        sum[k] = s;
+      }
+      const double len = std::sqrt(sum[0] * sum[0] + sum[1] * sum[1] + sum[2] * sum[2]);
+      out_x[a] = len > 0 ? sum[0] / len : 0.0;
+      out_y[a] = len > 0 ? sum[1] / len : 0.0;
+      out_z[a] = len > 0 ? sum[2] / len : 1.0;
+    }
+  });
+}
+
+void compute_normals(const Model& m, const Vec3Array& x, Vec3Array& normal) {
+  if (normal.size() != x.size()) normal.assign(x.size(), Vec3::Zero());
+  NormalsScratch scratch;
+  detail::compute_normals(m, x.column(0), normal, scratch);
+}
+
+}  // namespace wetcloth

@@ -40,7 +40,8 @@ rows_whole() {
   fi
   awk -F, -v cut=$cut 'NR == 1 { n = NF; if ($1 != "time_s") { print "no header"; exit 1 } next }
            after { print after; exit 1 }
-           NF != n { why = "row " NR " has " NF " fields, not " n; if (cut && NF < n) after = why; else { print why; exit 1 } }' "$f"
+           NF != n { why = "row " NR " has " NF " fields, not " n; if (cut && NF < n) after = why; else { print why; exit 1 } }
+           END { if (NR == 0) { print "empty"; exit 1 } }' "$f"
 }
 # Waits until FILE is not empty or the run PID has ended: at most a minute (a
 # loaded machine can take seconds to start a run).

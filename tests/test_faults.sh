@@ -53,7 +53,7 @@ fi
 # --- two runs into one folder: the second refuses (exit 2), the first goes on.
 out="$T/twice"
 "$W" run hang --duration 30 --out "$out" --quiet >/dev/null 2>&1 & first=$!
-for _ in $(seq 200); do [ -s "$out/metrics.csv" ] && break; sleep 0.05; done
+wait_for "$out/metrics.csv" $first
 "$W" run hang --duration 0.05 --out "$out" --quiet 2>"$T/err" >/dev/null; code=$?
 kill -0 $first 2>/dev/null; alive=$?
 kill -TERM $first 2>/dev/null; wait $first; first_code=$?
@@ -69,11 +69,12 @@ for sig in INT TERM KILL; do
   for trial in $(seq "$TRIALS"); do
     out="$T/sig_${sig}_$trial"
     "$W" run hang --duration 100 --set run.fps=240 --out "$out" --quiet >/dev/null 2>"$T/err" & pid=$!
-    for _ in $(seq 200); do [ -s "$out/metrics.csv" ] && break; sleep 0.02; done
+    wait_for "$out/metrics.csv" $pid
     sleep "0.$((RANDOM % 30))"
     kill -"$sig" $pid; wait $pid 2>/dev/null; code=$?
     want=$((128 + $(kill -l "$sig")))
-    why=$(rows_whole "$out/metrics.csv")
+    killed=; [ "$sig" = KILL ] && killed=killed
+    why=$(rows_whole "$out/metrics.csv" $killed)
     if [ $code -ne $want ]; then bad "SIG$sig #$trial: exit $code, want $want: $(cat "$T/err")"; continue; fi
     if [ -n "$why" ]; then bad "SIG$sig #$trial: $why"; continue; fi
     if [ "$sig" != KILL ]; then
@@ -91,7 +92,7 @@ done
 # --- a second SIGINT: out at once, no temporary file.
 out="$T/twice_int"
 "$W" run hang --duration 100 --set run.fps=240 --out "$out" --quiet >/dev/null 2>"$T/err" & pid=$!
-for _ in $(seq 200); do [ -s "$out/metrics.csv" ] && break; sleep 0.02; done
+wait_for "$out/metrics.csv" $pid
 kill -INT $pid; kill -INT $pid; wait $pid; code=$?
 [ $code -eq 130 ] && no_temporaries "$out" >/dev/null && [ -z "$(rows_whole "$out/metrics.csv")" ] &&
   ok "two SIGINTs: exit 130, rows whole, no temporary file" ||
@@ -101,7 +102,7 @@ kill -INT $pid; kill -INT $pid; wait $pid; code=$?
 out="$T/sweep"
 "$W" sweep hang --humidity 0.1 0.5 0.9 --jobs 1 --duration 100 --no-plots --quiet --out "$out" \
   >/dev/null 2>"$T/err" & pid=$!
-for _ in $(seq 200); do [ -s "$out/omega_0.10/metrics.csv" ] && break; sleep 0.05; done
+wait_for "$out/omega_0.10/metrics.csv" $pid
 kill -INT $pid; wait $pid; code=$?
 [ $code -eq 130 ] && grep -q '^omega_0.10,.*,interrupted,' "$out/sweep.csv" && [ ! -e "$out/omega_0.50" ] &&
   [ -z "$(rows_whole "$out/omega_0.10/metrics.csv")" ] && grep -q '"interrupted": true' "$out/omega_0.10/summary.json" &&

@@ -44,13 +44,18 @@ for sig in INT TERM KILL; do
     "$W" "${RUN[@]}" --out "$out" >/dev/null 2>"$T/err" & pid=$!
     # SIGKILL resumes from a periodic checkpoint: wait for the first.
     ready="$out/metrics.csv"; [ "$sig" = KILL ] && ready="$out/checkpoint.state"
-    for _ in $(seq 400); do [ -s "$ready" ] && break; sleep 0.01; done
+    wait_for "$ready" $pid
     window=25; [ "$sig" = KILL ] && window=15  # hundredths of a second
     sleep "$(printf '0.%02d' $((RANDOM % window)))"
     kill -"$sig" $pid 2>/dev/null; wait $pid; code=$?
     if [ $code -eq 0 ]; then echo "note: $sig #$trial: the run ended before the signal"; continue; fi
     if [ $code -ne $want ]; then bad "SIG$sig #$trial: exit $code, want $want: $(cat "$T/err")"; continue; fi
-    if why=$(rows_whole "$out/metrics.csv"); [ -n "$why" ]; then bad "SIG$sig #$trial: $why"; continue; fi
+    killed=; [ "$sig" = KILL ] && killed=killed
+    if why=$(rows_whole "$out/metrics.csv" $killed); [ -n "$why" ]; then bad "SIG$sig #$trial: $why"; continue; fi
+    # Killed outright, the rows are the reference run's bytes (the cut row: the start of its next).
+    if [ "$sig" = KILL ] && ! cmp -s -n "$(stat -c %s "$out/metrics.csv")" "$out/metrics.csv" "$T/ref/metrics.csv"; then
+      bad "SIG$sig #$trial: metrics.csv is not the start of the reference run's"; continue
+    fi
     rows=$(($(wc -l <"$out/metrics.csv") - 1))
     # Killed after the run ended whole (summary.json "ok", the checkpoint gone),
     # while it removed its USD samples: --resume finishes that and does nothing else.
@@ -68,7 +73,7 @@ done
 # Stopped twice, resumed twice (with other threads: they never change the bits).
 out="$T/twice"
 "$W" "${RUN[@]}" --out "$out" >/dev/null 2>&1 & pid=$!
-for _ in $(seq 400); do [ -s "$out/checkpoint.state" ] && break; sleep 0.01; done
+wait_for "$out/checkpoint.state" $pid
 kill -KILL $pid; wait $pid 2>/dev/null
 "$W" run --resume "$out" --threads 2 --quiet >/dev/null 2>&1 & pid=$!
 sleep 0.1; kill -INT $pid; wait $pid; code=$?
@@ -82,8 +87,9 @@ sleep 0.1; kill -INT $pid; wait $pid; code=$?
 for trial in 1 2 3 4 5; do
   out="$T/twice-int-$trial"
   "$W" "${RUN[@]}" --out "$out" >/dev/null 2>"$T/err" & pid=$!
-  for _ in $(seq 400); do [ -s "$out/metrics.csv" ] && break; sleep 0.01; done
+  wait_for "$out/metrics.csv" $pid
   kill -INT $pid; sleep "$(printf '0.%02d' $((RANDOM % 10)))"; kill -INT $pid 2>/dev/null; wait $pid; code=$?
+  if [ $code -eq 0 ]; then echo "note: two SIGINTs #$trial: the run ended before the signals"; continue; fi
   left=$(find "$out" -name '*.tmp')
   [ $code -eq 130 ] && [ -z "$left" ] && [ -z "$(rows_whole "$out/metrics.csv")" ] &&
     ok "two SIGINTs #$trial: exit 130, no temporary file" ||
@@ -94,11 +100,11 @@ done
 # A stopped run to take checkpoints from, and another scene's.
 "$W" run hang --grid 9 --duration 30 --set integrator.dt=2e-4 --threads 1 --quiet --out "$T/stopped" \
   >/dev/null 2>&1 & pid=$!
-for _ in $(seq 400); do [ -s "$T/stopped/metrics.csv" ] && break; sleep 0.01; done
+wait_for "$T/stopped/metrics.csv" $pid
 kill -INT $pid; wait $pid
 "$W" run drop-table --grid 9 --duration 30 --set integrator.dt=2e-4 --threads 1 --quiet --out "$T/other" \
   >/dev/null 2>&1 & pid=$!
-for _ in $(seq 400); do [ -s "$T/other/metrics.csv" ] && break; sleep 0.01; done
+wait_for "$T/other/metrics.csv" $pid
 kill -INT $pid; wait $pid
 good="$T/stopped/checkpoint.state"
 cp "$good" "$T/good.state"

@@ -59,7 +59,9 @@ bool write_fault_injected();
 // metrics.csv grown a row at a time, so that a run's I/O is linear in its
 // frames: the header is written whole (write_file_atomic), then each row is
 // appended with one write; a write that fails part way is cut back, so that
-// the file always ends with a whole row.
+// the file ends with a whole row. Only SIGKILL, which cannot be caught, can
+// leave the start of a row at the end (Linux ends a write at a page boundary
+// when it comes): `run --resume` cuts the file back to its checkpoint's bytes.
 class MetricsFile {
  public:
   explicit MetricsFile(const std::filesystem::path& path);

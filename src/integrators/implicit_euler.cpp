@@ -301,17 +301,16 @@ void add_forces_at_new_velocities(const Model& m, const State& s, Workspace& w, 
       if (fixed(m, s, a)) w.force[a] -= times(c.block, v.at(a) - v.at(b)) / h;
 }
 
-}  // namespace
+// body(first, end) over each thread's block of particles.
+template <class Body>
+void for_each_block(const Model& m, Body&& body) {
+  for_each_row_block(m, [&](int j0, int j1, int) { body(j0 * m.nu, j1 * m.nu); });
+}
 
-void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h) {
-  const double h2 = h * h, c = m.params.forces.viscous_damping;
-  const double kf = m.params.self_collision.damping;
-  // Each forward stencil edge's block h k_d u uᵀ + h² K_e, row by row, from
-  // the substep's positions.
-  // The solver's arrays are sized at the first implicit step: the explicit
-  // integrators need none of them. Every one is written before it is read.
-  w.float_columns.resize(padded_size(m, kFloatColumns));  // the padding stays zero
-  w.cg_columns.resize(padded_size(m, kSolverColumns));
+// Each spring's block h k_d u uᵀ + h² K_e from the substep's positions: a mesh
+// cloth's in the springs' order, a grid's per forward stencil edge, row by row.
+void assemble_spring_blocks(const Model& m, const State& s, Workspace& w, double h) {
+  const double h2 = h * h;
   const double* const X = s.x.column(0);  // x, y, z by component
   const int n = m.n, nu = m.nu;
   if (!m.grid) {  // a mesh cloth: each spring's block, in the springs' order
@@ -359,9 +358,15 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
         }
       }
     });
-  // Diagonal blocks: mass, viscous and collision damping, and every edge at
-  // the particle, in the product's order and over the same blocks of rows (an
-  // edge off the grid adds its zero block).
+}
+
+// Diagonal blocks: mass, viscous and collision damping, and every edge at
+// the particle, in the product's order and over the same blocks of rows (an
+// edge off the grid adds its zero block).
+void assemble_diagonal_blocks(const Model& m, Workspace& w, double h) {
+  const double h2 = h * h, c = m.params.forces.viscous_damping;
+  const double kf = m.params.self_collision.damping;
+  const int nu = m.nu;
   for_each_row_block(m, [&](int j0, int j1, int) {
     const int a0 = j0 * nu, a1 = j1 * nu;
     double* __restrict d0 = diagonal_field(m, w, 0);
@@ -412,32 +417,18 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
     for (const int a : {p.i, p.j})
       for (int k = 0; k < 6; ++k) diagonal_field(m, w, k)[a] += p.block[k];
   }
+}
 
-  // Right-hand side M v + h f, the block-Jacobi preconditioner, and the start:
-  // the velocities the last substep's acceleration would give. A pull or a
-  // fall changes little from one substep to the next, so this starts CG
-  // nearer the answer than v does (a quarter fewer iterations on the pulls).
-  // A particle on the contact surface that the step's forces press into it
-  // is held on it: its new velocity keeps no normal part (Baraff & Witkin's
-  // constraint, their section 5.3: the start, r, z and A p are filtered).
-  // Free, the solve would carry it into the surface for the whole substep,
-  // and drag its lifted neighbours down with it through the springs, before
-  // collide stopped it: the peel front lagged, and the step control halved
-  // substeps for a motion the surface takes away. On the surface means where
-  // collide put it (within kOnSurface), not anywhere within the liquid
-  // bridge's h_th: held there, a cloth falling onto the ball stopped wherever
-  // it entered that band, up to 1 mm off, and covered half the area.
-  const Columns x = columns(m, w, kX), r = columns(m, w, kR), z = columns(m, w, kZ),
-                p = columns(m, w, kP), q = columns(m, w, kQ);
+// The preconditioner: each diagonal block's inverse by its cofactors (the
+// formula of Eigen's 3 × 3 inverse), in a loop over columns that
+// vectorises; the identity for the fixed particles, listed here.
+void invert_diagonal_blocks(const Model& m, const State& s, Workspace& w) {
+  const int n = m.n, nu = m.nu;
   float* P[6];
   for (int k = 0; k < 6; ++k) P[k] = preconditioner_field(m, w, k);
-  const bool guess = !s.acceleration.empty();
   w.fixed_particles.clear();
   for (int a = 0; a < n; ++a)
     if (fixed(m, s, a)) w.fixed_particles.push_back(a);
-  // The preconditioner: each diagonal block's inverse by its cofactors (the
-  // formula of Eigen's 3 × 3 inverse), in a loop over columns that
-  // vectorises; the identity for the fixed particles.
   parallel_for(m, m.nv, [&](int j) {
     const int row = j * nu;
     const double *d0 = diagonal_field(m, w, 0) + row, *d1 = diagonal_field(m, w, 1) + row,
@@ -460,6 +451,25 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
   });
   for (const int a : w.fixed_particles)
     for (int k = 0; k < 6; ++k) P[k][a] = k < 3 ? 1.0f : 0.0f;
+}
+
+// The right-hand side b = M v + h f, the start x, and its residual b - A x.
+// The start: the velocities the last substep's acceleration would give. A pull or a
+// fall changes little from one substep to the next, so this starts CG
+// nearer the answer than v does (a quarter fewer iterations on the pulls).
+// A particle on the contact surface that the step's forces press into it
+// is held on it: its new velocity keeps no normal part (Baraff & Witkin's
+// constraint, their section 5.3: the start, r, z and A p are filtered).
+// Free, the solve would carry it into the surface for the whole substep,
+// and drag its lifted neighbours down with it through the springs, before
+// collide stopped it: the peel front lagged, and the step control halved
+// substeps for a motion the surface takes away. On the surface means where
+// collide put it (within kOnSurface), not anywhere within the liquid
+// bridge's h_th: held there, a cloth falling onto the ball stopped wherever
+// it entered that band, up to 1 mm off, and covered half the area.
+void set_up_solve(const Model& m, const State& s, Workspace& w, double h) {
+  const Columns x = columns(m, w, kX), r = columns(m, w, kR), q = columns(m, w, kQ);
+  const bool guess = !s.acceleration.empty();
   for_each_particle(m, [&](int a) {
     const Vec3& v = s.v[a];
     Vec3 b = v, start = v;  // fixed: b = x, no change
@@ -478,25 +488,28 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
   });
   filter(m, w, kX);
   multiply(m, s, w, kX, kQ);
-  const auto each_block = [&](auto&& body) {  // body(first, end) of each thread's particles
-    for_each_row_block(m, [&](int j0, int j1, int) { body(j0 * nu, j1 * nu); });
-  };
-  each_block([&](int a0, int a1) {
+  for_each_block(m, [&](int a0, int a1) {
     for (int k = 0; k < 3; ++k)
 #pragma GCC ivdep
       for (int a = a0; a < a1; ++a) r.c[k][a] -= q.c[k][a];
   });
   filter(m, w, kR);
-  // Converged when no particle's velocity is off by more than the tolerance,
-  // taken as M⁻¹ r: the velocity error of a motion the springs do not resist
-  // (the cloth sliding or falling as a whole), and more than that of one they
-  // do. The preconditioned residual z = P r (P: the inverse diagonal blocks)
-  // is smaller by up to 1 + h² k / m (about 13 at 1/240 s): a hanging cloth
-  // or one on an incline stopped at the first iteration, and did not move.
-  // (A norm over the whole cloth would let the adhesion and weight of
-  // thousands of particles drown out the few the hand pulls.)
+}
+
+// Converged when no particle's velocity is off by more than the tolerance,
+// taken as M⁻¹ r: the velocity error of a motion the springs do not resist
+// (the cloth sliding or falling as a whole), and more than that of one they
+// do. The preconditioned residual z = P r (P: the inverse diagonal blocks)
+// is smaller by up to 1 + h² k / m (about 13 at 1/240 s): a hanging cloth
+// or one on an incline stopped at the first iteration, and did not move.
+// (A norm over the whole cloth would let the adhesion and weight of
+// thousands of particles drown out the few the hand pulls.)
+// Returns the iterations taken.
+int conjugate_gradients(const Model& m, const State& s, Workspace& w) {
+  const Columns x = columns(m, w, kX), r = columns(m, w, kR), z = columns(m, w, kZ),
+                p = columns(m, w, kP), q = columns(m, w, kQ);
   auto [rz, worst] = precondition(m, w);
-  each_block([&](int a0, int a1) {
+  for_each_block(m, [&](int a0, int a1) {
     for (int k = 0; k < 3; ++k) std::copy(z.c[k] + a0, z.c[k] + a1, p.c[k] + a0);
   });
   int it = 0;
@@ -507,7 +520,7 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
     const double pq = dot(m, w, kP, kQ);
     if (pq <= 0) break;
     const double alpha = rz / pq;
-    each_block([&](int a0, int a1) {
+    for_each_block(m, [&](int a0, int a1) {
       for (int k = 0; k < 3; ++k)
 #pragma GCC ivdep
         for (int a = a0; a < a1; ++a) {
@@ -519,15 +532,32 @@ void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h)
     const double beta = rz_next / rz;
     rz = rz_next;
     worst = worst_next;
-    each_block([&](int a0, int a1) {
+    for_each_block(m, [&](int a0, int a1) {
       for (int k = 0; k < 3; ++k)
 #pragma GCC ivdep
         for (int a = a0; a < a1; ++a) p.c[k][a] = z.c[k][a] + beta * p.c[k][a];
     });
   }
+  return it;
+}
+
+}  // namespace
+
+void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h) {
+  // The solver's arrays are sized at the first implicit step: the explicit
+  // integrators need none of them. Every one is written before it is read.
+  w.float_columns.resize(padded_size(m, kFloatColumns));  // the padding stays zero
+  w.cg_columns.resize(padded_size(m, kSolverColumns));
+  assemble_spring_blocks(m, s, w, h);
+  assemble_diagonal_blocks(m, w, h);
+  invert_diagonal_blocks(m, s, w);
+  set_up_solve(m, s, w, h);
+  const int it = conjugate_gradients(m, s, w);
   w.cg_iterations = it;
   w.cg_iterations_total += it;
   add_forces_at_new_velocities(m, s, w, h);
+  const Columns x = columns(m, w, kX);
+  const int nu = m.nu;
   parallel_for(m, m.nv, [&](int j) {
     for (int k = 0; k < 3; ++k) std::copy_n(x.c[k] + j * nu, nu, s.v.column(k) + j * nu);
   });

@@ -176,7 +176,8 @@ void BM_spring_edges(benchmark::State& st) {
   for (auto _ : st) {
     for (int j = 0; j < m.nv; ++j)
       for (int e = 0; e < 8; ++e)
-        if (j + m.stencil[e].dj < m.nv) spring_edge_row<Real, true>(m, c, m.stencil[e], j, out[e]);
+        if (j + m.topology->stencil[e].dj < m.nv)
+          spring_edge_row<Real, true>(m, c, m.topology->stencil[e], j, out[e]);
     benchmark::ClobberMemory();
   }
   report(st, sim);

@@ -8,6 +8,7 @@
 #include <limits>
 
 #include "geometry/mesh_obstacle.hpp"
+#include "model/topology.hpp"
 #include "wetcloth/simulation.hpp"
 #include "workspace.hpp"
 
@@ -15,10 +16,10 @@ namespace wetcloth {
 
 struct TriangleMesh;
 // model/mesh_cloth.cpp: a cloth from cloth.mesh (Model::grid false): particles,
-// areas, springs, neighbour lists; where its vertices start (the file's
+// areas, springs, neighbour lists (into t); where its vertices start (the file's
 // bounding box's centre at cloth.center, then orientation and tilt); a
 // handle's particles, placed by the texture coordinates.
-void build_mesh_cloth(Model& m, const Params& p);
+void build_mesh_cloth(Model& m, Topology& t, const Params& p);
 std::vector<Vec3> mesh_cloth_positions(const Params& p, const TriangleMesh& mesh);
 std::vector<int> mesh_handle_particles(const Model& m, const HandleParams& h);
 // A scene's cloth.mesh read and placed: throws SceneError naming the scene

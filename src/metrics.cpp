@@ -43,7 +43,7 @@ double wrinkle_angle(const Model& m, const State& s) {
   };
   double sum = 0;
   long count = 0;
-  for (const auto& [a, b] : m.triangle_pairs) {
+  for (const auto& [a, b] : m.topology->triangle_pairs) {
     if (!lifted(a) || !lifted(b)) continue;
     sum += std::acos(std::clamp(tn[a].dot(tn[b]), -1.0, 1.0));
     ++count;
@@ -71,7 +71,7 @@ double front_pull(const Model& m, const State& s, const Vec3Array& surface_norma
     for (int k = 0; k < m.n; ++k) {
       if (!s.contact[k]) continue;
       const int i = k % m.nu, j = k / m.nu;
-      for (const StencilEdge& e : m.stencil)
+      for (const StencilEdge& e : m.topology->stencil)
         for (const int sign : {1, -1}) {
           const int o = grid_neighbour(m, i, j, sign * e.di, sign * e.dj);
           if (o < 0 || s.contact[o]) continue;

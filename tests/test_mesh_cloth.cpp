@@ -180,7 +180,7 @@ TEST(MeshCloth, StepDefaultsComeFromTheMesh) {
   const Model mesh = build_model(with_mesh(p, "long", grid_obj(p)));
   EXPECT_EQ(xpbd_substeps(p), 13);
   EXPECT_EQ(xpbd_substeps(grid), 13);
-  EXPECT_EQ(mesh.along, 131);
+  EXPECT_EQ(mesh.topology->along, 131);
   EXPECT_EQ(xpbd_substeps(mesh), 13);
   EXPECT_NEAR(explicit_step_limit(mesh), explicit_step_limit(p), 1e-9 * explicit_step_limit(p));
   EXPECT_EQ(explicit_step_limit(grid), explicit_step_limit(p));
@@ -317,8 +317,8 @@ TEST(MeshCloth, ANonGridMeshTakesAirAndAdhesion) {
     // share theirs.
     const Model& m = sim.model();
     for (int k = 0; k < m.n; ++k)
-      for (int e = m.edge_start[k]; e < m.edge_start[k + 1]; ++e) {
-        const int o = m.edge_neighbour[e];
+      for (int e = m.topology->edge_start[k]; e < m.topology->edge_start[k + 1]; ++e) {
+        const int o = m.topology->edge_neighbour[e];
         if (!sim.state().contact[k] && !sim.state().contact[o] && sim.state().pocket[k] >= 0 &&
             sim.state().pocket[o] >= 0) {
           EXPECT_EQ(sim.state().pocket[k], sim.state().pocket[o]);

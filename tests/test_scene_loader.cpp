@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "model/topology.hpp"
 #include "wetcloth/scene.hpp"
 #include "wetcloth/simulation.hpp"
 
@@ -30,7 +31,7 @@ TEST(SceneLoader, ReadsValuesAndKeepsDefaults) {
 // so that a 0.3 m cloth of 51 x 51 gets exactly 200/20/20 N/m; a spring
 // constant set directly is that constant at every grid.
 TEST(SceneLoader, SpringsFollowTheMaterialAndTheSpacing) {
-  const auto stencil = [](const Params& p) { return build_model(p).stencil; };
+  const auto stencil = [](const Params& p) { return build_model(p).topology->stencil; };
   for (const auto& e : stencil(load_scene("pull-straight"))) {
     const bool structural = std::abs(e.di) + std::abs(e.dj) == 1;
     const bool shear = std::abs(e.di) == 1 && std::abs(e.dj) == 1;

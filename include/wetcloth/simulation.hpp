@@ -107,12 +107,9 @@ constexpr int kMostObstacles = 250;  // codes up to 252 fit a byte
 // A triangle-mesh obstacle, built (src/geometry/mesh_obstacle.hpp).
 struct MeshObstacle;
 
-// A spring of the grid's stencil, as a forward offset: particle (i, j) is tied
-// to (i + di, j + dj). Eight offsets and their mirror images are all the springs.
-struct StencilEdge {
-  int di = 0, dj = 0;
-  double k = 0, damping = 0, rest = 0;
-};
+// What the step's kernels derive from the cloth (the grid's stencil, a mesh
+// cloth's neighbour lists): private to the library (src/model/topology.hpp).
+struct Topology;
 
 struct Model {
   Params params;
@@ -127,29 +124,17 @@ struct Model {
   // Texture coordinates per particle: (i, j) / (nu - 1, nv - 1) on the grid,
   // the file's on a mesh (handles and the wind region are placed by them).
   std::vector<std::array<double, 2>> uv;
-  // The cloth's edges (its structural springs) per particle, as lists:
-  // particle k's neighbours are edge_neighbour[edge_start[k] .. edge_start[k + 1]).
-  std::vector<int> edge_start, edge_neighbour;
-  // A mesh cloth: each particle's structural and shear springs (their index
-  // in structural, then shear + structural.size()), as lists.
-  std::vector<int> strain_start, strain_spring;
-  // A mesh cloth: the particles that never collide with k (within
-  // self-collision's reach along the springs), sorted, as lists.
-  std::vector<int> ring_start, ring;
   double spacing = 0;  // the grid's smaller step; a mesh's shortest mean edge, m
-  // A mesh cloth: its particles along its longer side, as a grid's (the
-  // file's bounding box's longest side over the mean edge, plus one).
-  int along = 0;
   std::vector<Vec3> rest_position;
   std::vector<double> area, mass, inv_mass;
   std::vector<std::uint8_t> on_border;  // on the cloth's border
   std::vector<std::uint8_t> driven;     // pinned or moved from t = 0: dynamics never moves it
   std::vector<std::uint8_t> in_wind;    // inside the wind region
   SpringSet structural, shear, bending;
-  std::array<StencilEdge, 8> stencil;  // the same springs, by offset (forces/springs.cpp)
-  int threads = 1;                     // threads of the step (integrator.threads resolved)
+  int threads =
+      1;  // threads of the step (integrator.threads resolved; the bits do not depend on it)
   std::vector<std::array<int, 3>> triangles;
-  std::vector<std::array<int, 2>> triangle_pairs;  // triangles sharing an edge
+  std::shared_ptr<const Topology> topology;
   std::vector<Handle> handles;
   int measured_handle = -1;  // the one the metrics follow: the first that is not a pin, else the
                              // first pin (-1: no handle)
@@ -181,7 +166,7 @@ Model build_model(const Params& p);
 // in a step's sweeps).
 int xpbd_substeps(const Params& p);
 // The same for a built model, a mesh cloth's particles along its longer side
-// counted as Model::along (xpbd_substeps(Params) takes a mesh cloth's as the
+// counted as its topology's along (xpbd_substeps(Params) takes a mesh cloth's as the
 // default grid's, 51).
 int xpbd_substeps(const Model& m);
 // explicit_step_limit for a built model: on a mesh cloth, from its stiffest

@@ -120,8 +120,8 @@ void update_vented(const Model& m, State& s, Workspace& w, double dt) {
         a_sum += m.area[k];
       }
       if (!m.grid) {  // a mesh cloth: along its edges
-        for (int e = m.edge_start[k]; e < m.edge_start[k + 1]; ++e) {
-          const int kk = m.edge_neighbour[e];
+        for (int e = m.topology->edge_start[k]; e < m.topology->edge_start[k + 1]; ++e) {
+          const int kk = m.topology->edge_neighbour[e];
           if (s.pocket[kk] == kNone && !s.contact[kk]) mark(kk, id);
         }
         continue;

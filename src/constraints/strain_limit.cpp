@@ -13,7 +13,7 @@ namespace wetcloth::detail {
 
 namespace {
 
-// Structural and shear springs are the first four offsets of Model::stencil.
+// Structural and shear springs are the first four offsets of Topology::stencil.
 constexpr int kStrainOffsets = 4;
 
 // A mesh cloth's structural or shear spring e (structural first), its end
@@ -37,8 +37,8 @@ void distances_from(const Model& m, const std::vector<int>& sources, State& s, W
   if (!m.grid) {  // a mesh cloth: along the structural and shear springs
     for (std::size_t q = 0; q < w.queue.size(); ++q) {
       const int k = w.queue[q];
-      for (int e = m.strain_start[k]; e < m.strain_start[k + 1]; ++e) {
-        const int kk = other_end(m, m.strain_spring[e], k);
+      for (int e = m.topology->strain_start[k]; e < m.topology->strain_start[k + 1]; ++e) {
+        const int kk = other_end(m, m.topology->strain_spring[e], k);
         if (s.source_distance[kk] >= 0) continue;
         s.source_distance[kk] = s.source_distance[k] + 1;
         w.queue.push_back(kk);
@@ -81,8 +81,9 @@ void order_springs(const Model& m, const State& s, Workspace& w) {
         lower = b;
       }
       int e = 0;
-      while (m.stencil[e].di != di || m.stencil[e].dj != dj) ++e;
-      w.strain_springs.push_back({a, b, stretch * m.stencil[e].rest, kStrainOffsets * lower + e});
+      while (m.topology->stencil[e].di != di || m.topology->stencil[e].dj != dj) ++e;
+      w.strain_springs.push_back(
+          {a, b, stretch * m.topology->stencil[e].rest, kStrainOffsets * lower + e});
     }
   auto level = [&](const Workspace::StrainSpring& e) {
     return std::min(s.source_distance[e.a], s.source_distance[e.b]);
@@ -161,7 +162,7 @@ class StrainLimiter {
         touched_(w.strain_touched),
         inv_dt2_(1.0 / (dt * dt)) {
     for (int e = 0; e < kStrainOffsets; ++e) {
-      const double l = (1.0 + m.params.strain_limit.tau) * m.stencil[e].rest;
+      const double l = (1.0 + m.params.strain_limit.tau) * m.topology->stencil[e].rest;
       max_len2_[e] = l * l;
     }
   }
@@ -234,15 +235,16 @@ class StrainLimiter {
   void queue_springs_of(int k, int l) {
     const Model& m = m_;
     if (!m.grid) {
-      for (int e = m.strain_start[k]; e < m.strain_start[k + 1]; ++e)
-        if (const int order = w_.strain_index[m.strain_spring[e]]; order >= level_end(l))
+      for (int e = m.topology->strain_start[k]; e < m.topology->strain_start[k + 1]; ++e)
+        if (const int order = w_.strain_index[m.topology->strain_spring[e]]; order >= level_end(l))
           queue(order);
       return;
     }
     const int i = k % m.nu, j = k / m.nu;
     for (int e = 0; e < kStrainOffsets; ++e)
       for (const int sign : {1, -1}) {
-        const int b = grid_neighbour(m, i, j, sign * m.stencil[e].di, sign * m.stencil[e].dj);
+        const int b = grid_neighbour(m, i, j, sign * m.topology->stencil[e].di,
+                                     sign * m.topology->stencil[e].dj);
         if (b < 0) continue;
         const int order = w_.strain_index[kStrainOffsets * (sign > 0 ? k : b) + e];
         if (order >= level_end(l)) queue(order);
@@ -276,7 +278,7 @@ class StrainLimiter {
       std::uint8_t* flag = w.strain_stretched.data() + kStrainOffsets * std::size_t(row);
       std::fill(flag, flag + kStrainOffsets * nu, 0);
       for (int e = 0; e < kStrainOffsets; ++e) {
-        const StencilEdge& st = m.stencil[e];
+        const StencilEdge& st = m.topology->stencil[e];
         if (j + st.dj >= m.nv) continue;
         const int off = st.di + st.dj * nu, lo = std::max(0, -st.di), hi = std::min(nu, nu - st.di);
         const double limit = max_len2[e];

@@ -44,7 +44,7 @@ double farthest(const Model& m, const AnchorGap& gap) {
 }
 
 // Grid neighbours never collide: within `reach` grid steps; a mesh cloth's
-// particles, within its own reach along the springs (Model::ring).
+// particles, within its own reach along the springs (Topology::ring).
 struct NearInGrid {
   int nu, reach;
   bool grid;
@@ -187,7 +187,8 @@ void refresh_collision_candidates(const Model& m, const State& s, Workspace& w) 
   // on a grid fine enough that d_t spans more steps, else a flat cloth would
   // repel itself.
   const int reach = std::max(2, static_cast<int>(std::ceil(dt_dist / step)));
-  const NearInGrid near_in_grid{m.nu, reach, m.grid, m.ring.data(), m.ring_start.data()};
+  const NearInGrid near_in_grid{m.nu, reach, m.grid, m.topology->ring.data(),
+                                m.topology->ring_start.data()};
   const auto& anchor = w.candidates_anchor;
   auto& movers = w.candidate_movers;
   movers.clear();

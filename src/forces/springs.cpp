@@ -1,7 +1,7 @@
 // Provot's springs, eq. 1: Hooke's law plus damping projected on the spring.
 //
 // The force. Each spring is evaluated once, as a forward edge of the grid's
-// stencil (Model::stencil): particle (i, j) to (i + di, j + dj). A row's edges
+// stencil (Topology::stencil): particle (i, j) to (i + di, j + dj). A row's edges
 // go into rows of numbers (the force on the lower end), zero where the spring
 // is off the grid, and each particle then gathers its 16 springs from them in
 // a fixed order: forward edge of an offset, then the backward one (minus the
@@ -58,7 +58,7 @@ void add_spring_forces(const Model& m, const State& s, Workspace& w) {
     };
     for (int slot = 0; slot < kRing; ++slot)
       for (int e = 0; e < kEdges; ++e) {
-        const auto [lo, hi] = spring_edge_span(m, m.stencil[e]);
+        const auto [lo, hi] = spring_edge_span(m, m.topology->stencil[e]);
         for (int k = 0; k < kSpringFields; ++k) {
           double* const row = edges(slot, e, k);
           std::fill(row - kReach, row + lo, 0.0);
@@ -67,10 +67,10 @@ void add_spring_forces(const Model& m, const State& s, Workspace& w) {
       }
     for (int j = std::max(0, j0 - kReach); j < j1; ++j) {
       for (int e = 0; e < kEdges; ++e) {
-        if (j + m.stencil[e].dj >= m.nv) continue;  // gathered from the zero row instead
+        if (j + m.topology->stencil[e].dj >= m.nv) continue;  // gathered from the zero row instead
         double* out[kSpringFields];
         for (int k = 0; k < kSpringFields; ++k) out[k] = edges(j, e, k);
-        spring_edge_row<double, damped>(m, c, m.stencil[e], j, out);
+        spring_edge_row<double, damped>(m, c, m.topology->stencil[e], j, out);
       }
       if (j < j0) continue;
       // Row j's particles gather: per offset, the edge starting here (force
@@ -78,7 +78,7 @@ void add_spring_forces(const Model& m, const State& s, Workspace& w) {
       const double* fwd[kEdges][kSpringFields];
       const double* bwd[kEdges][kSpringFields];
       for (int e = 0; e < kEdges; ++e) {
-        const StencilEdge& st = m.stencil[e];
+        const StencilEdge& st = m.topology->stencil[e];
         for (int k = 0; k < kSpringFields; ++k) {
           fwd[e][k] = j + st.dj < m.nv ? edges(j, e, k) : zero_row + kReach;
           bwd[e][k] = (j >= st.dj ? edges(j - st.dj, e, k) : zero_row + kReach) - st.di;
@@ -372,7 +372,7 @@ void solve_damping_groups(const Model& m, double h, int damped, const DampingCol
                                t + 5 * stride,
                                t + 6 * stride};
     for (int e = group * kEdges / kGroups; e < (group + 1) * kEdges / kGroups; ++e) {
-      const StencilEdge& st = m.stencil[e];
+      const StencilEdge& st = m.topology->stencil[e];
       if (st.damping == 0) continue;
       const Real c = Real(damped * h * st.damping);
       // A horizontal offset's chains are vertical on the transposed grid.
@@ -424,12 +424,12 @@ void apply_spring_damping(const Model& m, State& s, Workspace& w, double h) {
     return;
   }
   int damped = 0;
-  for (const StencilEdge& st : m.stencil) damped += st.damping > 0;
+  for (const StencilEdge& st : m.topology->stencil) damped += st.damping > 0;
   if (damped == 0) return;
   std::array<int, kGroups> horizontal{};  // each group's horizontal offset, di
   for (int group = 0; group < kGroups; ++group)
     for (int e = group * kEdges / kGroups; e < (group + 1) * kEdges / kGroups; ++e)
-      if (m.stencil[e].dj == 0) horizontal[group] = m.stencil[e].di;
+      if (m.topology->stencil[e].dj == 0) horizontal[group] = m.topology->stencil[e].di;
   const DampingColumns d(m, w);
   load_damping_columns(m, s, d);
   bool first[kGroups] = {true, true};     // per group: nothing in its impulses yet

@@ -153,7 +153,7 @@ void multiply(const Model& m, const State& s, Workspace& w, Vector in, Vector ou
       for (int e = 0; e < 8; ++e) {
         // Edge e's block sits at its lower end: particle a's forward edge (to
         // a + off) at a, its backward edge (from a - off) at a - off.
-        const int off = m.stencil[e].di + m.stencil[e].dj * m.nu;
+        const int off = m.topology->stencil[e].di + m.topology->stencil[e].dj * m.nu;
         const float *s0 = edge_field(m, w, e, 0), *s1 = edge_field(m, w, e, 1),
                     *s2 = edge_field(m, w, e, 2), *beta = edge_field(m, w, e, 3);
         const float *t0 = s0 - off, *t1 = s1 - off, *t2 = s2 - off, *tb = beta - off;
@@ -281,7 +281,7 @@ void add_forces_at_new_velocities(const Model& m, const State& s, Workspace& w, 
     for (const int a : w.fixed_particles)
       for (int e = 0; e < 8; ++e) {
         // An edge off the grid has a zero block (its far end in the padding).
-        const int off = m.stencil[e].di + m.stencil[e].dj * m.nu;
+        const int off = m.topology->stencil[e].di + m.topology->stencil[e].dj * m.nu;
         for (const int at : {a, a - off}) {
           const float* f[4];
           for (int k = 0; k < 4; ++k) f[k] = edge_field(m, w, e, k);
@@ -329,7 +329,7 @@ void assemble_spring_blocks(const Model& m, const State& s, Workspace& w, double
     parallel_for(m, m.nv, [&](int j) {
       const int row = j * nu;
       for (int e = 0; e < 8; ++e) {
-        const StencilEdge& st = m.stencil[e];
+        const StencilEdge& st = m.topology->stencil[e];
         const int off = st.di + st.dj * nu;
         // Particles of the row whose edge e stays on the grid (every forward edge has dj >= 0).
         const int from = j + st.dj < m.nv ? std::max(0, -st.di) : nu;
@@ -396,7 +396,7 @@ void assemble_diagonal_blocks(const Model& m, Workspace& w, double h) {
     }
     for (int e = 0; e < 8; ++e)
       for (const int sign : {1, -1}) {
-        const StencilEdge& st = m.stencil[e];
+        const StencilEdge& st = m.topology->stencil[e];
         const int at = sign > 0 ? 0 : -(st.di + st.dj * nu);
         const float *s0 = edge_field(m, w, e, 0) + at, *s1 = edge_field(m, w, e, 1) + at,
                     *s2 = edge_field(m, w, e, 2) + at, *beta = edge_field(m, w, e, 3) + at;
@@ -581,7 +581,7 @@ double step_strain(const Model& m, const State& s, double h) {
 #pragma omp parallel for reduction(max : worst) num_threads(m.threads) if (m.threads > 1)
   for (int j = 0; j < m.nv; ++j)
     for (int e = 0; e < 4; ++e) {  // structural and shear
-      const StencilEdge& st = m.stencil[e];
+      const StencilEdge& st = m.topology->stencil[e];
       if (j + st.dj >= m.nv) continue;
       const int off = st.di + st.dj * nu, end = j * nu + std::min(nu, nu - st.di);
       // h |Δv| / rest grows with |Δv|², so its largest value is the one of the

@@ -161,7 +161,7 @@ void project_springs(const Model& m, State& s, Workspace& w, double h, bool limi
     for (int i = 0; i < nu; ++i)
       w.class_gate[g * nu + i] = g == 4 || ((i >> (g / 2)) & 1) == g % 2 ? 1.0 : 0.0;
   for (int e = 0; e < 8; ++e) {
-    const StencilEdge& st = m.stencil[e];
+    const StencilEdge& st = m.topology->stencil[e];
     if (st.k <= 0 || (limit_only && (e >= 4 || tau < 0))) continue;
     const int di = st.di, dj = st.dj, off = di + dj * nu;
     const int lo = std::max(0, -di), hi = std::min(nu, nu - di), rows = nv - dj;
@@ -398,7 +398,7 @@ int xpbd_substeps(const Params& p) {
 
 int xpbd_substeps(const Model& m) {
   if (m.grid || m.params.integrator.substeps > 0) return xpbd_substeps(m.params);
-  return static_cast<int>(10 + std::max(0, (m.along - 101 + 9) / 10));
+  return static_cast<int>(10 + std::max(0, (m.topology->along - 101 + 9) / 10));
 }
 
 }  // namespace wetcloth

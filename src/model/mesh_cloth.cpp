@@ -312,20 +312,20 @@ void add_bending_springs(Model& m, const Params& p, const ClothMesh& c, Edges& e
 // Neighbour lists: the edges (contact border, air pockets, handles' patch),
 // the structural and shear springs (strain limiting's order and queue), and
 // self-collision's exclusion.
-void build_neighbour_lists(Model& m, const Params& p,
+void build_neighbour_lists(Model& m, Topology& t, const Params& p,
                            const std::vector<std::array<int, 2>>& edge_pairs,
                            const std::vector<std::array<int, 2>>& strain_pairs) {
   const int n = m.n;
-  lists(n, edge_pairs, m.edge_start, m.edge_neighbour);
+  lists(n, edge_pairs, t.edge_start, t.edge_neighbour);
   {
     std::vector<std::vector<int>> by(n);
     for (std::size_t e = 0; e < strain_pairs.size(); ++e)
       for (const int k : strain_pairs[e]) by[k].push_back(static_cast<int>(e));
-    m.strain_start.assign(n + 1, 0);
-    m.strain_spring.clear();
+    t.strain_start.assign(n + 1, 0);
+    t.strain_spring.clear();
     for (int k = 0; k < n; ++k) {
-      m.strain_spring.insert(m.strain_spring.end(), by[k].begin(), by[k].end());
-      m.strain_start[k + 1] = static_cast<int>(m.strain_spring.size());
+      t.strain_spring.insert(t.strain_spring.end(), by[k].begin(), by[k].end());
+      t.strain_start[k + 1] = static_cast<int>(t.strain_spring.size());
     }
   }
   // Self-collision's exclusion: within `reach` steps along the structural
@@ -338,8 +338,8 @@ void build_neighbour_lists(Model& m, const Params& p,
   lists(n, strain_pairs, strain_list_start, strain_list);
   const int reach = std::max(
       2, m.spacing > 0 ? static_cast<int>(std::ceil(p.self_collision.distance / m.spacing)) : 2);
-  m.ring_start.assign(n + 1, 0);
-  m.ring.clear();
+  t.ring_start.assign(n + 1, 0);
+  t.ring.clear();
   std::vector<int> depth(n, -1), seen;
   for (int k = 0; k < n; ++k) {
     seen.assign(1, k);
@@ -355,14 +355,14 @@ void build_neighbour_lists(Model& m, const Params& p,
     }
     for (const int a : seen) depth[a] = -1;
     std::sort(seen.begin(), seen.end());
-    m.ring.insert(m.ring.end(), seen.begin(), seen.end());
-    m.ring_start[k + 1] = static_cast<int>(m.ring.size());
+    t.ring.insert(t.ring.end(), seen.begin(), seen.end());
+    t.ring_start[k + 1] = static_cast<int>(t.ring.size());
   }
 }
 
 }  // namespace
 
-void build_mesh_cloth(Model& m, const Params& p) {
+void build_mesh_cloth(Model& m, Topology& t, const Params& p) {
   const TriangleMesh mesh = load_scene_mesh(p, "cloth.mesh", p.cloth.mesh);
   const int n = static_cast<int>(mesh.position.size());
   m.grid = false;
@@ -383,7 +383,7 @@ void build_mesh_cloth(Model& m, const Params& p) {
   std::vector<std::array<int, 2>> edge_pairs, strain_pairs;
   add_stretch_springs(m, p, c, edges, edge_pairs, strain_pairs);
   add_bending_springs(m, p, c, edges, edge_pairs);
-  build_neighbour_lists(m, p, edge_pairs, strain_pairs);
+  build_neighbour_lists(m, t, p, edge_pairs, strain_pairs);
   // As a grid's particles along its longer side (xpbd_substeps).
   double longest = 0;
   for (int axis = 0; axis < 3; ++axis) {
@@ -391,7 +391,7 @@ void build_mesh_cloth(Model& m, const Params& p) {
     for (const auto& q : mesh.position) lo = std::min(lo, q[axis]), hi = std::max(hi, q[axis]);
     longest = std::max(longest, p.cloth.mesh_scale * (hi - lo));
   }
-  m.along = m.spacing > 0 ? static_cast<int>(std::lround(longest / m.spacing)) + 1 : 0;
+  t.along = m.spacing > 0 ? static_cast<int>(std::lround(longest / m.spacing)) + 1 : 0;
 }
 
 ClothMeshSize cloth_mesh_size(const Params& p) {
@@ -479,8 +479,8 @@ std::vector<int> mesh_handle_particles(const Model& m, const HandleParams& h) {
   for (std::size_t q = 0; q < picked.size(); ++q) {
     const int a = picked[q];
     if (ring_of[a] >= h.patch) continue;
-    for (int s = m.strain_start[a]; s < m.strain_start[a + 1]; ++s) {
-      const int e = m.strain_spring[s];
+    for (int s = m.topology->strain_start[a]; s < m.topology->strain_start[a + 1]; ++s) {
+      const int e = m.topology->strain_spring[s];
       const SpringSet& set = e < static_cast<int>(m.structural.size()) ? m.structural : m.shear;
       const std::size_t i = e < static_cast<int>(m.structural.size()) ? e : e - m.structural.size();
       const int b = set.a[i] == a ? set.b[i] : set.a[i];
@@ -556,8 +556,8 @@ void compute_normals_mesh(const Model& m, const double* X, Vec3Array& normal) {
 void contact_border_mesh(const Model& m, const State& s, Workspace& w) {
   for (int k = 0; k < m.n; ++k) {
     bool border = m.on_border[k];
-    for (int e = m.edge_start[k]; e < m.edge_start[k + 1] && !border; ++e)
-      border = !s.contact[m.edge_neighbour[e]];
+    for (int e = m.topology->edge_start[k]; e < m.topology->edge_start[k + 1] && !border; ++e)
+      border = !s.contact[m.topology->edge_neighbour[e]];
     w.border[k] = s.contact[k] && border;
   }
 }

@@ -118,20 +118,20 @@ double explicit_step_limit(const Model& m) {
 
 namespace {
 
-void add_spring(SpringSet& s, const Model& m, int edge, int i0, int j0) {
-  const int i1 = i0 + m.stencil[edge].di, j1 = j0 + m.stencil[edge].dj;
+void add_spring(SpringSet& s, const Model& m, const StencilEdge& st, int i0, int j0) {
+  const int i1 = i0 + st.di, j1 = j0 + st.dj;
   auto inside = [&](int i, int j) { return i >= 0 && j >= 0 && i < m.nu && j < m.nv; };
   if (!inside(i0, j0) || !inside(i1, j1)) return;
   const int a = m.index(i0, j0), b = m.index(i1, j1);
   s.a.push_back(a);
   s.b.push_back(b);
   s.rest.push_back((m.rest_position[b] - m.rest_position[a]).norm());
-  s.k.push_back(m.stencil[edge].k);
-  s.damping.push_back(m.stencil[edge].damping);
+  s.k.push_back(st.k);
+  s.damping.push_back(st.damping);
 }
 
 // The grid: particles, areas, springs by stencil offset, triangles.
-void build_grid(Model& m, const Params& p);
+void build_grid(Model& m, Topology& t, const Params& p);
 
 int nearest(double t, int n) {
   return std::clamp(static_cast<int>(std::lround(t * (n - 1))), 0, n - 1);
@@ -152,10 +152,12 @@ Vec3 cloth_start_position(const Params& p, int i, int j) {
 Model build_model(const Params& p) {
   Model m;
   m.params = p;
+  const auto topology = std::make_shared<Topology>();
+  m.topology = topology;
   if (p.cloth.mesh.empty())
-    build_grid(m, p);
+    build_grid(m, *topology, p);
   else
-    build_mesh_cloth(m, p);
+    build_mesh_cloth(m, *topology, p);
   // Triangles sharing an edge (for the wrinkle measure).
   std::unordered_map<long long, int> first;
   for (int t = 0; t < static_cast<int>(m.triangles.size()); ++t)
@@ -163,7 +165,7 @@ Model build_model(const Params& p) {
       const int u = m.triangles[t][e], v = m.triangles[t][(e + 1) % 3];
       const long long key = static_cast<long long>(std::min(u, v)) * m.n + std::max(u, v);
       const auto [it, fresh] = first.emplace(key, t);
-      if (!fresh) m.triangle_pairs.push_back({it->second, t});
+      if (!fresh) topology->triangle_pairs.push_back({it->second, t});
     }
 
   if (p.contact.surface == SurfaceChoice::Table && p.table.enabled)
@@ -223,7 +225,7 @@ Model build_model(const Params& p) {
 
 namespace {
 
-void build_grid(Model& m, const Params& p) {
+void build_grid(Model& m, Topology& t, const Params& p) {
   m.nu = static_cast<int>(p.cloth.resolution[0]);
   m.nv = static_cast<int>(p.cloth.resolution[1]);
   m.n = m.nu * m.nv;
@@ -258,7 +260,7 @@ void build_grid(Model& m, const Params& p) {
   const auto edge = [](int di, int dj, const SpringConstants& c, double rest) {
     return StencilEdge{di, dj, c.k, c.damping, rest};
   };
-  m.stencil = {{edge(1, 0, sp.structural_u, du), edge(0, 1, sp.structural_v, dv),
+  t.stencil = {{edge(1, 0, sp.structural_u, du), edge(0, 1, sp.structural_v, dv),
                 edge(1, 1, sp.shear, diag), edge(-1, 1, sp.shear, diag),
                 edge(2, 0, sp.bending_u, 2 * du), edge(0, 2, sp.bending_v, 2 * dv),
                 edge(2, 2, sp.bending_diagonal, 2 * diag),
@@ -274,14 +276,14 @@ void build_grid(Model& m, const Params& p) {
   for (int j = 0; j < m.nv; ++j) {
     for (int i = 0; i < m.nu; ++i) {
       // Stencil offsets 0-7 (above), each from (i0, j0) to (i0 + di, j0 + dj).
-      add_spring(m.structural, m, 0, i, j);
-      add_spring(m.structural, m, 1, i, j);
-      add_spring(m.shear, m, 2, i, j);
-      add_spring(m.shear, m, 3, i + 1, j);
-      add_spring(m.bending, m, 4, i, j);
-      add_spring(m.bending, m, 5, i, j);
-      add_spring(m.bending, m, 6, i, j);
-      add_spring(m.bending, m, 7, i + 2, j);
+      add_spring(m.structural, m, t.stencil[0], i, j);
+      add_spring(m.structural, m, t.stencil[1], i, j);
+      add_spring(m.shear, m, t.stencil[2], i, j);
+      add_spring(m.shear, m, t.stencil[3], i + 1, j);
+      add_spring(m.bending, m, t.stencil[4], i, j);
+      add_spring(m.bending, m, t.stencil[5], i, j);
+      add_spring(m.bending, m, t.stencil[6], i, j);
+      add_spring(m.bending, m, t.stencil[7], i + 2, j);
       if (i + 1 < m.nu && j + 1 < m.nv) {
         const int a = m.index(i, j), b = m.index(i + 1, j), cc = m.index(i + 1, j + 1),
                   d = m.index(i, j + 1);

@@ -1,0 +1,39 @@
+// What the step's kernels derive from the cloth's springs and triangles: the
+// grid's stencil, a mesh cloth's neighbour lists. Built once with the Model
+// (build_model) and shared by its copies; private to the library, so that the
+// public Model holds what a user reads, not how the solvers walk it.
+#pragma once
+
+#include <array>
+#include <vector>
+
+namespace wetcloth {
+
+// A spring of the grid's stencil, as a forward offset: particle (i, j) is tied
+// to (i + di, j + dj). Eight offsets and their mirror images are all the springs.
+struct StencilEdge {
+  int di = 0, dj = 0;
+  double k = 0, damping = 0, rest = 0;
+};
+
+struct Topology {
+  // The grid's springs by offset (the SpringSets hold them one by one): the
+  // stencil kernels (forces/springs.cpp and the integrators) run on these.
+  std::array<StencilEdge, 8> stencil;
+  // The cloth's edges (its structural springs) per particle, as lists:
+  // particle k's neighbours are edge_neighbour[edge_start[k] .. edge_start[k + 1]).
+  // A mesh cloth only, as the three lists after it.
+  std::vector<int> edge_start, edge_neighbour;
+  // Each particle's structural and shear springs (their index in structural,
+  // then shear + structural.size()).
+  std::vector<int> strain_start, strain_spring;
+  // The particles that never collide with k (within self-collision's reach
+  // along the springs), sorted.
+  std::vector<int> ring_start, ring;
+  // A mesh cloth's particles along its longer side, as a grid's (the file's
+  // bounding box's longest side over the mean edge, plus one): xpbd_substeps.
+  int along = 0;
+  std::vector<std::array<int, 2>> triangle_pairs;  // triangles sharing an edge
+};
+
+}  // namespace wetcloth

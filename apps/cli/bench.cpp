@@ -148,6 +148,95 @@ json measure_in_child(const Grid& g, int repetitions) {
   return r;
 }
 
+// bench.json's first keys, the same beside a peer: the run and the machine.
+json doc_head(const Options& o, const Params& p0, unsigned threads, unsigned cores,
+              const std::string& cpu) {
+  return {{"version", WETCLOTH_VERSION},
+          {"scene", p0.name},
+          {"integrator", to_string(p0.integrator.type)},
+          {"dt_s", p0.integrator.dt},
+          {"threads", threads},
+          {"duration_s", o.duration},
+          {"repetitions", o.repetitions},
+          {"machine", {{"cores", cores}, {"cpu", cpu}}}};
+}
+
+// The scene at each grid, and the steps that take --duration there.
+std::vector<Grid> load_grids(const Options& o, unsigned threads) {
+  std::vector<Grid> grids;
+  for (long long size : o.grids) {
+    std::vector<std::string> sets;
+    sets.push_back("integrator.threads=" + std::to_string(threads));
+    if (!o.integrator.empty()) sets.push_back("integrator.type=\"" + o.integrator + "\"");
+    sets.insert(sets.end(), o.sets.begin(), o.sets.end());
+    // The same cloth at each grid, unless the user chose the time step.
+    Grid grid{size, 0, load_on_grid(o.scene, sets, size, "--grids")};
+    grid.steps = std::llround(o.duration / grid.params.integrator.dt);
+    if (grid.steps < 1)
+      throw SceneError("--duration " + format_number(o.duration) +
+                       " s is shorter than one step (integrator.dt = " +
+                       format_number(grid.params.integrator.dt) + " s)");
+    grids.push_back(std::move(grid));
+  }
+  return grids;
+}
+
+void print_bench_header(const Options& o, const Params& p0, unsigned threads, unsigned cores,
+                        const std::string& cpu) {
+  std::printf(
+      "wetcloth %s bench: scene %s, integrator %s, dt %g s (first grid), %g s simulated per run, "
+      "%d repetitions, "
+      "%u threads\nmachine: %u cores, %s\n\n",
+      WETCLOTH_VERSION, p0.name.c_str(), to_string(p0.integrator.type).c_str(), p0.integrator.dt,
+      o.duration, o.repetitions, threads, cores, cpu.c_str());
+  std::printf(
+      " grid  particles  springs  dt µs   steps  substeps/step    wall s    µs/step  "
+      "ns/particle-step  real-time ×  peak MB  B/particle\n");
+}
+
+// A grid's measurements (measure()'s) as its row of the table and its entry
+// in bench.json, with the medians over the repetitions.
+json report_grid(const Grid& g, const json& r) {
+  const auto walls = r["wall_s"].get<std::vector<double>>();
+  const long long n = r["particles"], springs = r["springs"];
+  std::vector<double> us_step, ns_particle, realtime;
+  for (double w : walls) {
+    us_step.push_back(1e6 * w / g.steps);
+    ns_particle.push_back(1e9 * w / (static_cast<double>(g.steps) * n));
+    realtime.push_back(g.steps * g.params.integrator.dt / w);
+  }
+  const double peak_mb = r["peak_bytes"].get<double>() / 1e6;
+  // What the grid's simulations added to the process: bytes per particle.
+  const double per_particle = (r["peak_bytes"].get<double>() - r["base_bytes"].get<double>()) / n;
+  const double substeps = r["substeps_per_step"];  // the last repetition's: the same in each
+  std::printf(
+      "%5lld  %9lld  %7lld  %5.2f  %6lld  %13.2f  %8.3f  %9.1f  %16.1f  %11.4f  %7.1f  %10.0f\n",
+      g.size, n, springs, 1e6 * g.params.integrator.dt, g.steps, substeps, median(walls),
+      median(us_step), median(ns_particle), median(realtime), peak_mb, per_particle);
+  const double solves = r["solves_per_step"], iterations = r["cg_iterations_per_solve"];
+  if (solves > 0)
+    std::printf(
+        "       implicit Euler: %.2f solves a step, %.1f conjugate-gradient iterations a solve\n",
+        solves, iterations);
+  std::fflush(stdout);
+  return {{"grid", g.size},
+          {"particles", n},
+          {"springs", springs},
+          {"dt_s", g.params.integrator.dt},
+          {"steps", g.steps},
+          {"substeps_per_step", substeps},
+          {"solves_per_step", solves},
+          {"cg_iterations_per_solve", iterations},
+          {"wall_s", walls},
+          {"median",
+           {{"wall_s", median(walls)},
+            {"us_per_step", median(us_step)},
+            {"ns_per_particle_step", median(ns_particle)},
+            {"realtime_factor", median(realtime)}}},
+          {"peak_memory_mb", peak_mb},
+          {"bytes_per_particle", per_particle}};
+}
+
 int run_peer(const Options& o, const std::vector<Grid>& grids, unsigned threads,
              const fs::path& out);
 
@@ -177,45 +266,14 @@ int run_bench(const Options& o) {
   // step on one.
   const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
   const unsigned threads = o.threads.value_or(o.peer.empty() ? cores : 1);
-  std::vector<Grid> grids;
-  for (long long size : o.grids) {
-    std::vector<std::string> sets;
-    sets.push_back("integrator.threads=" + std::to_string(threads));
-    if (!o.integrator.empty()) sets.push_back("integrator.type=\"" + o.integrator + "\"");
-    sets.insert(sets.end(), o.sets.begin(), o.sets.end());
-    // The same cloth at each grid, unless the user chose the time step.
-    Grid grid{size, 0, load_on_grid(o.scene, sets, size, "--grids")};
-    grid.steps = std::llround(o.duration / grid.params.integrator.dt);
-    if (grid.steps < 1)
-      throw SceneError("--duration " + format_number(o.duration) +
-                       " s is shorter than one step (integrator.dt = " +
-                       format_number(grid.params.integrator.dt) + " s)");
-    grids.push_back(std::move(grid));
-  }
+  const std::vector<Grid> grids = load_grids(o, threads);
   if (!o.peer.empty()) return run_peer(o, grids, threads, out);
 
   const Params& p0 = grids.front().params;
-  const double dt = p0.integrator.dt;
   const std::string cpu = cpu_model();
-  std::printf(
-      "wetcloth %s bench: scene %s, integrator %s, dt %g s (first grid), %g s simulated per run, "
-      "%d repetitions, "
-      "%u threads\nmachine: %u cores, %s\n\n",
-      WETCLOTH_VERSION, p0.name.c_str(), to_string(p0.integrator.type).c_str(), dt, o.duration,
-      o.repetitions, threads, cores, cpu.c_str());
-  std::printf(
-      " grid  particles  springs  dt µs   steps  substeps/step    wall s    µs/step  "
-      "ns/particle-step  real-time ×  peak MB  B/particle\n");
-
-  json doc = {{"version", WETCLOTH_VERSION},
-              {"scene", p0.name},
-              {"integrator", to_string(p0.integrator.type)},
-              {"dt_s", dt},
-              {"threads", threads},
-              {"duration_s", o.duration},
-              {"repetitions", o.repetitions},
-              {"machine", {{"cores", cores}, {"cpu", cpu}}},
-              {"grids", json::array()}};
+  print_bench_header(o, p0, threads, cores, cpu);
+  json doc = doc_head(o, p0, threads, cores, cpu);
+  doc["grids"] = json::array();
   for (const Grid& g : grids) {
     const json r = measure_in_child(g, o.repetitions);
     if (r.contains("blow_up")) {
@@ -223,44 +281,7 @@ int run_bench(const Options& o) {
                    r["blow_up"].get<std::string>().c_str());
       return kBlowUp;
     }
-    const auto walls = r["wall_s"].get<std::vector<double>>();
-    const long long n = r["particles"], springs = r["springs"];
-    std::vector<double> us_step, ns_particle, realtime;
-    for (double w : walls) {
-      us_step.push_back(1e6 * w / g.steps);
-      ns_particle.push_back(1e9 * w / (static_cast<double>(g.steps) * n));
-      realtime.push_back(g.steps * g.params.integrator.dt / w);
-    }
-    const double peak_mb = r["peak_bytes"].get<double>() / 1e6;
-    // What the grid's simulations added to the process: bytes per particle.
-    const double per_particle = (r["peak_bytes"].get<double>() - r["base_bytes"].get<double>()) / n;
-    const double substeps = r["substeps_per_step"];  // the last repetition's: the same in each
-    std::printf(
-        "%5lld  %9lld  %7lld  %5.2f  %6lld  %13.2f  %8.3f  %9.1f  %16.1f  %11.4f  %7.1f  %10.0f\n",
-        g.size, n, springs, 1e6 * g.params.integrator.dt, g.steps, substeps, median(walls),
-        median(us_step), median(ns_particle), median(realtime), peak_mb, per_particle);
-    const double solves = r["solves_per_step"], iterations = r["cg_iterations_per_solve"];
-    if (solves > 0)
-      std::printf(
-          "       implicit Euler: %.2f solves a step, %.1f conjugate-gradient iterations a solve\n",
-          solves, iterations);
-    std::fflush(stdout);
-    doc["grids"].push_back({{"grid", g.size},
-                            {"particles", n},
-                            {"springs", springs},
-                            {"dt_s", g.params.integrator.dt},
-                            {"steps", g.steps},
-                            {"substeps_per_step", substeps},
-                            {"solves_per_step", solves},
-                            {"cg_iterations_per_solve", iterations},
-                            {"wall_s", walls},
-                            {"median",
-                             {{"wall_s", median(walls)},
-                              {"us_per_step", median(us_step)},
-                              {"ns_per_particle_step", median(ns_particle)},
-                              {"realtime_factor", median(realtime)}}},
-                            {"peak_memory_mb", peak_mb},
-                            {"bytes_per_particle", per_particle}});
+    doc["grids"].push_back(report_grid(g, r));
   }
   if (out.has_parent_path()) fs::create_directories(out.parent_path());
   write_file_atomic(out, doc.dump(2) + "\n");
@@ -269,6 +290,8 @@ int run_bench(const Options& o) {
 }
 
 #ifdef WETCLOTH_BULLET
+constexpr double kPeerDt = 1.0 / 600.0;  // Bullet's step
+
 // Our cloth's mean height and highest point, m.
 std::pair<double, double> heights(const Simulation& sim) {
   const double* z = sim.state().x.column(2);
@@ -281,21 +304,68 @@ std::pair<double, double> heights(const Simulation& sim) {
   return {sum / n, top};
 }
 
-// `bench --peer bullet`: per grid, rounds of ours (the scene, as run_bench
-// times it) and Bullet's btSoftBody on the same cloth made plain
-// (bullet_peer.hpp), each from t = 0 in a fresh world, one untimed step, then
-// the same simulated time; the two take turns going first. The ratio is the
-// median of each round's ratio of real-time factors.
-int run_peer(const Options& o, const std::vector<Grid>& grids, unsigned threads,
-             const fs::path& out) {
-  constexpr double kPeerDt = 1.0 / 600.0;
-  const long long peer_steps = std::llround(o.duration / kPeerDt);
-  if (peer_steps < 1)
-    throw SceneError("--duration " + format_number(o.duration) +
-                     " s is shorter than one of Bullet's steps (1/600 s)");
-  const Params& p0 = grids.front().params;
-  const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
-  const std::string cpu = cpu_model(), version = bullet_version();
+// One grid's rounds: each simulator's wall times, and where each ended.
+struct PeerRounds {
+  std::vector<double> ours_wall, peer_wall, ratio;
+  std::pair<double, double> ours_end, peer_end;  // mean and highest height, m
+  int links = 0, faces = 0;
+  double peer_mass = 0, ours_time = 0, peer_time = 0;
+};
+
+// Ours from t = 0: one untimed step, then the grid's steps timed. False
+// (said on stderr) when it blew up.
+bool time_ours(const Grid& g, PeerRounds& r) {
+  Simulation sim(g.params);
+  sim.step();
+  const auto start = std::chrono::steady_clock::now();
+  for (long long k = 0; k < g.steps; ++k) sim.step();
+  r.ours_wall.push_back(
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  if (const std::string why = sim.blow_up_reason(); !why.empty()) {
+    std::fprintf(stderr, "wetcloth: grid %lld: %s\nnothing written\n", g.size, why.c_str());
+    return false;
+  }
+  r.ours_end = heights(sim);
+  r.ours_time = sim.state().time;
+  return true;
+}
+
+// Bullet's the same way, on the cloth made plain.
+bool time_bullet(const Grid& g, const Model& model, long long peer_steps, PeerRounds& r) {
+  BulletCloth peer(model, kPeerDt);
+  peer.step();
+  const auto start = std::chrono::steady_clock::now();
+  for (long long k = 0; k < peer_steps; ++k) peer.step();
+  r.peer_wall.push_back(
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  if (!peer.finite()) {
+    std::fprintf(stderr, "wetcloth: grid %lld: Bullet's cloth blew up\nnothing written\n", g.size);
+    return false;
+  }
+  r.peer_end = {peer.mean_z(), peer.max_z()};
+  r.links = peer.links();
+  r.faces = peer.faces();
+  r.peer_mass = peer.mass();
+  r.peer_time = peer.time();
+  return true;
+}
+
+// The rounds of a grid, the two taking turns going first; false when either blew up.
+bool time_rounds(const Options& o, const Grid& g, const Model& model, long long peer_steps,
+                 PeerRounds& r) {
+  for (int round = 0; round < o.repetitions; ++round) {
+    for (int turn = 0; turn < 2; ++turn) {
+      const bool ours = (turn == 0) == (round % 2 == 0);
+      if (!(ours ? time_ours(g, r) : time_bullet(g, model, peer_steps, r))) return false;
+    }
+    r.ratio.push_back((g.steps * g.params.integrator.dt / r.ours_wall.back()) /
+                      (peer_steps * kPeerDt / r.peer_wall.back()));
+  }
+  return true;
+}
+
+void print_peer_header(const Options& o, const Params& p0, unsigned threads, unsigned cores,
+                       const std::string& cpu, const std::string& version) {
   std::printf(
       "wetcloth %s bench --peer bullet: ours and Bullet %s's btSoftBody on the same cloth, "
       "in turn in this process, %d rounds of %g s simulated\n"
@@ -311,111 +381,87 @@ int run_peer(const Options& o, const std::vector<Grid>& grids, unsigned threads,
       " grid  particles  springs  dt µs   µs/step  real-time ×    "
       "links  dt µs  µs/step  real-time ×  ours/Bullet\n");
   std::fflush(stdout);
+}
 
-  json doc = {{"version", WETCLOTH_VERSION},
-              {"scene", p0.name},
-              {"integrator", to_string(p0.integrator.type)},
-              {"dt_s", p0.integrator.dt},
-              {"threads", threads},
-              {"duration_s", o.duration},
-              {"repetitions", o.repetitions},
-              {"machine", {{"cores", cores}, {"cpu", cpu}}},
-              {"peer", {{"name", "bullet"}, {"version", version}, {"dt_s", kPeerDt}}},
-              {"grids", json::array()}};
+// A grid's row of the table, its lines for the end (where each cloth ended)
+// and its entry in bench.json.
+json report_peer_grid(const Options& o, const Grid& g, const Model& model, long long peer_steps,
+                      const PeerRounds& r, std::vector<std::string>& lines) {
+  const double dt = g.params.integrator.dt;
+  const auto real_time = [](const std::vector<double>& walls, double simulated) {
+    std::vector<double> rt;
+    for (double w : walls) rt.push_back(simulated / w);
+    return median(rt);
+  };
+  const double ours_rt = real_time(r.ours_wall, g.steps * dt);
+  const double peer_rt = real_time(r.peer_wall, peer_steps * kPeerDt);
+  const double ours_us = 1e6 * median(r.ours_wall) / g.steps;
+  const double peer_us = 1e6 * median(r.peer_wall) / peer_steps;
+  const double ratio_median = median(r.ratio);
+  const long long springs = model.structural.size() + model.shear.size() + model.bending.size();
+  double area = 0;
+  for (double a : model.area) area += a;
+  std::printf("%5lld  %9d  %7lld  %5.2f  %8.1f  %11.4f  %7d  %5.0f  %7.1f  %11.4f  %11.3f\n",
+              g.size, model.n, springs, 1e6 * dt, ours_us, ours_rt, r.links, 1e6 * kPeerDt, peer_us,
+              peer_rt, ratio_median);
+  std::fflush(stdout);
+  char line[512];
+  std::snprintf(line, sizeof line,
+                "grid %lld: ours/Bullet real-time factor %.3f (ours %.4f x real time, Bullet "
+                "%.4f x; median of %d rounds)\n"
+                "  at the end (ours at %.4g s, Bullet at %.4g s): mean height ours %.4f m, "
+                "Bullet %.4f m; highest ours %.4f m, Bullet %.4f m\n",
+                g.size, ratio_median, ours_rt, peer_rt, o.repetitions, r.ours_time, r.peer_time,
+                r.ours_end.first, r.peer_end.first, r.ours_end.second, r.peer_end.second);
+  lines.push_back(line);
+  return {{"grid", g.size},
+          {"ours",
+           {{"particles", model.n},
+            {"springs", springs},
+            {"dry_mass_kg", g.params.cloth.areal_density * area},
+            {"dt_s", dt},
+            {"steps", g.steps},
+            {"wall_s", r.ours_wall},
+            {"median", {{"us_per_step", ours_us}, {"realtime_factor", ours_rt}}},
+            {"end", {{"mean_z_m", r.ours_end.first}, {"max_z_m", r.ours_end.second}}}}},
+          {"bullet",
+           {{"nodes", model.n},
+            {"links", r.links},
+            {"faces", r.faces},
+            {"mass_kg", r.peer_mass},
+            {"dt_s", kPeerDt},
+            {"steps", peer_steps},
+            {"wall_s", r.peer_wall},
+            {"median", {{"us_per_step", peer_us}, {"realtime_factor", peer_rt}}},
+            {"end", {{"mean_z_m", r.peer_end.first}, {"max_z_m", r.peer_end.second}}}}},
+          {"ratio_per_round", r.ratio},
+          {"ratio_median", ratio_median}};
+}
+
+// `bench --peer bullet`: per grid, rounds of ours (the scene, as run_bench
+// times it) and Bullet's btSoftBody on the same cloth made plain
+// (bullet_peer.hpp), each from t = 0 in a fresh world, one untimed step, then
+// the same simulated time; the two take turns going first. The ratio is the
+// median of each round's ratio of real-time factors.
+int run_peer(const Options& o, const std::vector<Grid>& grids, unsigned threads,
+             const fs::path& out) {
+  const long long peer_steps = std::llround(o.duration / kPeerDt);
+  if (peer_steps < 1)
+    throw SceneError("--duration " + format_number(o.duration) +
+                     " s is shorter than one of Bullet's steps (1/600 s)");
+  const Params& p0 = grids.front().params;
+  const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
+  const std::string cpu = cpu_model(), version = bullet_version();
+  print_peer_header(o, p0, threads, cores, cpu, version);
+  json doc = doc_head(o, p0, threads, cores, cpu);
+  doc["peer"] = {{"name", "bullet"}, {"version", version}, {"dt_s", kPeerDt}};
+  doc["grids"] = json::array();
   std::vector<std::string> lines;
   for (const Grid& g : grids) {
     const Model model = build_model(g.params);
-    const double dt = g.params.integrator.dt;
-    std::vector<double> ours_wall, peer_wall, ratio;
-    std::pair<double, double> ours_end, peer_end;
-    int links = 0, faces = 0;
-    double peer_mass = 0, ours_time = 0, peer_time = 0;
-    for (int round = 0; round < o.repetitions; ++round) {
-      for (int turn = 0; turn < 2; ++turn) {
-        if ((turn == 0) == (round % 2 == 0)) {
-          Simulation sim(g.params);
-          sim.step();
-          const auto start = std::chrono::steady_clock::now();
-          for (long long k = 0; k < g.steps; ++k) sim.step();
-          ours_wall.push_back(
-              std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-          if (const std::string why = sim.blow_up_reason(); !why.empty()) {
-            std::fprintf(stderr, "wetcloth: grid %lld: %s\nnothing written\n", g.size, why.c_str());
-            return kBlowUp;
-          }
-          ours_end = heights(sim);
-          ours_time = sim.state().time;
-        } else {
-          BulletCloth peer(model, kPeerDt);
-          peer.step();
-          const auto start = std::chrono::steady_clock::now();
-          for (long long k = 0; k < peer_steps; ++k) peer.step();
-          peer_wall.push_back(
-              std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
-          if (!peer.finite()) {
-            std::fprintf(stderr, "wetcloth: grid %lld: Bullet's cloth blew up\nnothing written\n",
-                         g.size);
-            return kBlowUp;
-          }
-          peer_end = {peer.mean_z(), peer.max_z()};
-          links = peer.links();
-          faces = peer.faces();
-          peer_mass = peer.mass();
-          peer_time = peer.time();
-        }
-      }
-      ratio.push_back((g.steps * dt / ours_wall.back()) /
-                      (peer_steps * kPeerDt / peer_wall.back()));
-    }
-    const auto real_time = [](const std::vector<double>& walls, double simulated) {
-      std::vector<double> r;
-      for (double w : walls) r.push_back(simulated / w);
-      return median(r);
-    };
-    const double ours_rt = real_time(ours_wall, g.steps * dt);
-    const double peer_rt = real_time(peer_wall, peer_steps * kPeerDt);
-    const double ours_us = 1e6 * median(ours_wall) / g.steps;
-    const double peer_us = 1e6 * median(peer_wall) / peer_steps;
-    const double ratio_median = median(ratio);
-    const long long springs = model.structural.size() + model.shear.size() + model.bending.size();
-    double area = 0;
-    for (double a : model.area) area += a;
-    std::printf("%5lld  %9d  %7lld  %5.2f  %8.1f  %11.4f  %7d  %5.0f  %7.1f  %11.4f  %11.3f\n",
-                g.size, model.n, springs, 1e6 * dt, ours_us, ours_rt, links, 1e6 * kPeerDt, peer_us,
-                peer_rt, ratio_median);
-    std::fflush(stdout);
-    char line[512];
-    std::snprintf(line, sizeof line,
-                  "grid %lld: ours/Bullet real-time factor %.3f (ours %.4f x real time, Bullet "
-                  "%.4f x; median of %d rounds)\n"
-                  "  at the end (ours at %.4g s, Bullet at %.4g s): mean height ours %.4f m, "
-                  "Bullet %.4f m; highest ours %.4f m, Bullet %.4f m\n",
-                  g.size, ratio_median, ours_rt, peer_rt, o.repetitions, ours_time, peer_time,
-                  ours_end.first, peer_end.first, ours_end.second, peer_end.second);
-    lines.push_back(line);
-    doc["grids"].push_back(
-        {{"grid", g.size},
-         {"ours",
-          {{"particles", model.n},
-           {"springs", springs},
-           {"dry_mass_kg", g.params.cloth.areal_density * area},
-           {"dt_s", dt},
-           {"steps", g.steps},
-           {"wall_s", ours_wall},
-           {"median", {{"us_per_step", ours_us}, {"realtime_factor", ours_rt}}},
-           {"end", {{"mean_z_m", ours_end.first}, {"max_z_m", ours_end.second}}}}},
-         {"bullet",
-          {{"nodes", model.n},
-           {"links", links},
-           {"faces", faces},
-           {"mass_kg", peer_mass},
-           {"dt_s", kPeerDt},
-           {"steps", peer_steps},
-           {"wall_s", peer_wall},
-           {"median", {{"us_per_step", peer_us}, {"realtime_factor", peer_rt}}},
-           {"end", {{"mean_z_m", peer_end.first}, {"max_z_m", peer_end.second}}}}},
-         {"ratio_per_round", ratio},
-         {"ratio_median", ratio_median}});
+    PeerRounds r;
+    if (!time_rounds(o, g, model, peer_steps, r)) return kBlowUp;
+    doc["grids"].push_back(report_peer_grid(o, g, model, peer_steps, r, lines));
   }
   std::printf("\n");
   for (const std::string& line : lines) std::fputs(line.c_str(), stdout);

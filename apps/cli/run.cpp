@@ -593,6 +593,109 @@ void finish_run(const Params& p, const fs::path& out, const Simulation& sim,
   }
 }
 
+// Steps until `target`, a step at a time (Simulation::advance_to): a signal
+// stops the run at the end of the step it arrived in, a blow-up at once.
+void advance_to_step(Simulation& sim, long long target) {
+  while (sim.state().steps < target && stop_signal() == 0) {
+    sim.step();
+    if (!sim.blow_up_reason().empty()) break;
+  }
+}
+
+// A run's frames, from where its outputs stand to the last: the simulation,
+// what it writes, and its clock (from `start`, the wall time before a resume
+// added to it).
+struct FrameLoop {
+  const Params& p;
+  const fs::path& out;
+  Simulation& sim;
+  RunOutputs& o;
+  RunResult& r;
+  nlohmann::json first_json, final_json;  // the first and last rows' metrics
+  long long written_at_step = -1;         // the step of the last row written
+  const std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
+
+  double wall() const {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  }
+  long long target_step(long long f) const {
+    return std::llround(frame_time(f, p.run.duration, p.run.fps) / p.integrator.dt);
+  }
+  // The checkpoint: this state, and the outputs as they stood after the last
+  // whole frame (a row at a step between two frames is written again).
+  void save() {
+    o.metrics->sync();
+    if (o.caches) o.caches->position(true);  // on the disk
+    const nlohmann::json rec =
+        record_json(o.at, o.substeps_before + sim.stats().substeps, o.wall_before + wall());
+    save_checkpoint(out / "checkpoint.state", p, sim.state(), rec.dump());
+  }
+  // Frame f: the steps to it, its row, mesh and cache frame. False where the
+  // run ends there (a signal, a blow-up), r saying why.
+  bool frame(long long f, bool progress);
+  void run(bool progress);
+};
+
+bool FrameLoop::frame(long long f, bool progress) {
+  const long long target = target_step(f);
+  advance_to_step(sim, target);
+  const bool ok = sim.blow_up_reason().empty();
+  const int sig = stop_signal();
+  if (sig != 0 && sim.state().steps == written_at_step) {  // the last row is this state's
+    r.code = 128 + sig;
+    save();
+    return false;
+  }
+  const Metrics m = sim.metrics();
+  if (const std::string bad = non_finite_metric(m); !bad.empty()) {
+    r.code = kBlowUp;
+    r.message =
+        "the simulation left the range of numbers at t = " + format_number(sim.state().time) +
+        " s (" + bad + "; not written to metrics.csv). " +
+        (ok ? "Look at positions and sizes far from the origin (cloth.center, "
+              "ball.center, table.height, cloth.size) and the forces."
+            : sim.blow_up_reason());
+    return false;
+  }
+  write_frame(p, out, sim, m, f, o, r, first_json, final_json);
+  written_at_step = sim.state().steps;
+  if (progress) print_progress(sim.state().time, p.run.duration, o.wall_before + wall());
+  if (!ok) {
+    r.code = kBlowUp;
+    r.message = sim.blow_up_reason();
+    return false;
+  }
+  // A whole frame: a resumed run goes on after it.
+  if (sim.state().steps == target) mark_whole_frame(f, o, r, first_json, final_json);
+  if (sig != 0) {
+    r.code = 128 + sig;
+    save();
+    return false;
+  }
+  return true;
+}
+
+void FrameLoop::run(bool progress) {
+  const long long frames = last_frame_index(p.run.duration, p.run.fps);
+  const double every = p.run.checkpoint_every;
+  const auto next_checkpoint_after = [&](double t) {
+    return every > 0 ? (std::floor(t / every + 1e-9) + 1) * every
+                     : std::numeric_limits<double>::infinity();
+  };
+  double next_checkpoint = next_checkpoint_after(sim.state().time);
+  for (long long f = o.at.next_frame; f <= frames; ++f) {
+    if (!frame(f, progress)) break;
+    // Every run.checkpoint_every, at a whole frame with steps to the next
+    // (a row right after a restore is the next step's).
+    if (sim.state().time >= next_checkpoint - 1e-9 * every && f < frames &&
+        target_step(f + 1) > target_step(f)) {
+      save();
+      next_checkpoint = next_checkpoint_after(sim.state().time);
+    }
+  }
+  if (progress) std::fprintf(stderr, "\n");
+}
+
 }  // namespace
 
 RunResult run_scene(const Params& p, const fs::path& out, bool progress,
@@ -610,91 +713,10 @@ RunResult run_scene(const Params& p, const fs::path& out, bool progress,
   const OutputLock lock(out);
   RunOutputs o;
   open_outputs(p, out, sim, resume, o, r);
-  std::optional<CacheWriter>& caches = o.caches;
-  std::optional<MetricsFile>& metrics = o.metrics;
-  OutputsAt& at = o.at;  // where the outputs stand after the last whole frame
-  const long long substeps_before = o.substeps_before;
-  const double wall_before = o.wall_before;
-  nlohmann::json first_json = at.first, final_json = at.final;
-
-  const long long frames = last_frame_index(p.run.duration, p.run.fps);
-  const auto start = std::chrono::steady_clock::now();
-  auto wall = [&] {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  };
-  const double dt = p.integrator.dt;
-  const auto target_step = [&](long long f) {
-    return static_cast<long long>(std::llround(frame_time(f, p.run.duration, p.run.fps) / dt));
-  };
-  // The checkpoint: this state, and the outputs as they stood after the last
-  // whole frame (a row at a step between two frames is written again).
-  const fs::path checkpoint_file = out / "checkpoint.state";
-  const auto save = [&] {
-    metrics->sync();
-    if (caches) caches->position(true);  // on the disk
-    const nlohmann::json rec =
-        record_json(at, substeps_before + sim.stats().substeps, wall_before + wall());
-    save_checkpoint(checkpoint_file, p, sim.state(), rec.dump());
-  };
-  const double every = p.run.checkpoint_every;
-  const auto next_checkpoint_after = [&](double t) {
-    return every > 0 ? (std::floor(t / every + 1e-9) + 1) * every
-                     : std::numeric_limits<double>::infinity();
-  };
-  double next_checkpoint = next_checkpoint_after(sim.state().time);
-  long long written_at_step = -1;  // the step of the last row written
-  for (long long f = at.next_frame; f <= frames; ++f) {
-    // Simulation::advance_to, a step at a time: a signal stops the run at
-    // the end of the step it arrived in.
-    bool ok = true;
-    const long long target = target_step(f);
-    while (sim.state().steps < target && stop_signal() == 0) {
-      sim.step();
-      if (!sim.blow_up_reason().empty()) break;
-    }
-    ok = sim.blow_up_reason().empty();
-    const int sig = stop_signal();
-    if (sig != 0 && sim.state().steps == written_at_step) {  // the last row is this state's
-      r.code = 128 + sig;
-      save();
-      break;
-    }
-    const Metrics m = sim.metrics();
-    if (const std::string bad = non_finite_metric(m); !bad.empty()) {
-      r.code = kBlowUp;
-      r.message =
-          "the simulation left the range of numbers at t = " + format_number(sim.state().time) +
-          " s (" + bad + "; not written to metrics.csv). " +
-          (ok ? "Look at positions and sizes far from the origin (cloth.center, "
-                "ball.center, table.height, cloth.size) and the forces."
-              : sim.blow_up_reason());
-      break;
-    }
-    write_frame(p, out, sim, m, f, o, r, first_json, final_json);
-    written_at_step = sim.state().steps;
-    if (progress) print_progress(sim.state().time, p.run.duration, wall_before + wall());
-    if (!ok) {
-      r.code = kBlowUp;
-      r.message = sim.blow_up_reason();
-      break;
-    }
-    // A whole frame: a resumed run goes on after it.
-    if (sim.state().steps == target) mark_whole_frame(f, o, r, first_json, final_json);
-    if (sig != 0) {
-      r.code = 128 + sig;
-      save();
-      break;
-    }
-    // Every run.checkpoint_every, at a whole frame with steps to the next
-    // (a row right after a restore is the next step's).
-    if (sim.state().time >= next_checkpoint - 1e-9 * every && f < frames &&
-        target_step(f + 1) > target) {
-      save();
-      next_checkpoint = next_checkpoint_after(sim.state().time);
-    }
-  }
-  if (progress) std::fprintf(stderr, "\n");
-  finish_run(p, out, sim, resume, written_at_step >= 0, start, o, r, first_json, final_json);
+  FrameLoop loop{p, out, sim, o, r, o.at.first, o.at.final};
+  loop.run(progress);
+  finish_run(p, out, sim, resume, loop.written_at_step >= 0, loop.start, o, r, loop.first_json,
+             loop.final_json);
   return r;
 }
 

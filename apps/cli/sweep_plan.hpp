@@ -149,12 +149,9 @@ inline std::string name_part(const std::string& text) {
   return o;
 }
 
-// Every case, in the order of the cartesian product (the first key outermost).
-// load(sets) gives the scene with the base overrides and then `sets`; it
-// throws SceneError on a bad value. Throws SceneError on a key given twice, a
-// value given twice (after reading: 0.5 and 0.50 are one) or no key at all.
-inline Plan plan(const std::vector<Varied>& varied,
-                 const std::function<Params(const std::vector<std::string>&)>& load) {
+// The number of cases; SceneError on no key, a key varied twice, a key
+// without values, or too many cases.
+inline std::size_t case_count(const std::vector<Varied>& varied) {
   if (varied.empty())
     throw SceneError("nothing to vary: give --vary KEY=V1,V2,... (or --humidity, --air-models)");
   std::size_t total = 1;
@@ -166,48 +163,52 @@ inline Plan plan(const std::vector<Varied>& varied,
     total *= varied[k].values.size();
     if (total > 100000) throw SceneError("--vary: more than 100000 cases");
   }
-  Plan plan;
-  // Each value of each key as read back ("0.50" -> 0.5), found in the cases.
-  std::vector<std::vector<std::string>> read(varied.size());
-  std::vector<std::vector<double>> omegas(varied.size());
-  for (std::size_t k = 0; k < varied.size(); ++k) {
-    read[k].resize(varied[k].values.size());
-    omegas[k].resize(varied[k].values.size());
-    if (varied[k].key != "cloth.humidity" && varied[k].key != "air.model")
-      plan.extra_keys.push_back(varied[k].key);
-  }
+  return total;
+}
+
+// Case c's value of each key, by index (the first key outermost).
+inline std::vector<std::size_t> value_indices(const std::vector<Varied>& varied, std::size_t c) {
   std::vector<std::size_t> at(varied.size(), 0);
-  for (std::size_t c = 0; c < total; ++c) {
-    std::size_t rest = c;
-    for (std::size_t k = varied.size(); k-- > 0;) {
-      at[k] = rest % varied[k].values.size();
-      rest /= varied[k].values.size();
-    }
-    Case cs;
-    for (std::size_t k = 0; k < varied.size(); ++k)
-      cs.sets.push_back(varied[k].key + "=" + varied[k].values[at[k]]);
-    cs.params = load(cs.sets);
-    for (std::size_t k = 0; k < varied.size(); ++k) {
-      const std::string text = value_text(cs.params, varied[k].key);
-      read[k][at[k]] = text;
-      if (varied[k].key == "cloth.humidity") omegas[k][at[k]] = cs.params.cloth.humidity;
-      if (varied[k].key != "cloth.humidity" && varied[k].key != "air.model")
-        cs.columns.push_back(text);
-    }
-    cs.humidity = cs.params.cloth.humidity;
-    cs.air_model = to_string(cs.params.air.model);
-    plan.cases.push_back(std::move(cs));
+  for (std::size_t k = varied.size(); k-- > 0;) {
+    at[k] = c % varied[k].values.size();
+    c /= varied[k].values.size();
   }
-  for (std::size_t k = 0; k < varied.size(); ++k) {
-    std::vector<std::string> sorted = read[k];
-    std::sort(sorted.begin(), sorted.end());
-    if (const auto twice = std::adjacent_find(sorted.begin(), sorted.end()); twice != sorted.end())
-      throw SceneError(varied[k].option + ": " + *twice + " is given twice");
-  }
-  // The names: a part for each key with several values (humidity always, as
-  // omega_0.70 with the decimals that tell the values apart; an air model as
-  // its name; any other key as NAME=VALUE, NAME its last part unless two keys
-  // share it); with no such key, every key's part.
+  return at;
+}
+
+// Each value of each key as read back from the cases' scenes ("0.50" ->
+// 0.5), and a humidity's as a number.
+struct ReadBack {
+  std::vector<std::vector<std::string>> text;
+  std::vector<std::vector<double>> omega;
+};
+
+inline bool is_extra_key(const std::string& key) {
+  return key != "cloth.humidity" && key != "air.model";
+}
+
+// The decimals that tell the humidities apart, 2 at least.
+inline int humidity_decimals(std::vector<double> w) {
+  std::sort(w.begin(), w.end());
+  const auto distinct = [&](int d) {
+    char a[32], b[32];
+    for (std::size_t i = 1; i < w.size(); ++i) {
+      std::snprintf(a, sizeof a, "%.*f", d, w[i - 1]);
+      std::snprintf(b, sizeof b, "%.*f", d, w[i]);
+      if (std::strcmp(a, b) == 0) return false;
+    }
+    return true;
+  };
+  int decimals = 2;
+  while (!distinct(decimals)) ++decimals;  // ends by 17: the doubles differ
+  return decimals;
+}
+
+// The names: a part for each key with several values (humidity always, as
+// omega_0.70 with the decimals that tell the values apart; an air model as
+// its name; any other key as NAME=VALUE, NAME its last part unless two keys
+// share it); with no such key, every key's part.
+inline void name_cases(const std::vector<Varied>& varied, const ReadBack& read, Plan& plan) {
   std::vector<std::string> shorts;
   for (const auto& v : varied) shorts.push_back(v.key.substr(v.key.rfind('.') + 1));
   std::vector<bool> named(varied.size());
@@ -218,46 +219,68 @@ inline Plan plan(const std::vector<Varied>& varied,
   }
   if (!any) named.assign(varied.size(), true);
   std::vector<int> decimals(varied.size(), 2);
-  for (std::size_t k = 0; k < varied.size(); ++k) {
-    if (varied[k].key != "cloth.humidity") continue;
-    std::vector<double> w = omegas[k];
-    std::sort(w.begin(), w.end());
-    const auto distinct = [&](int d) {
-      char a[32], b[32];
-      for (std::size_t i = 1; i < w.size(); ++i) {
-        std::snprintf(a, sizeof a, "%.*f", d, w[i - 1]);
-        std::snprintf(b, sizeof b, "%.*f", d, w[i]);
-        if (std::strcmp(a, b) == 0) return false;
-      }
-      return true;
-    };
-    while (!distinct(decimals[k])) ++decimals[k];  // ends by 17: the doubles differ
-  }
+  for (std::size_t k = 0; k < varied.size(); ++k)
+    if (varied[k].key == "cloth.humidity") decimals[k] = humidity_decimals(read.omega[k]);
   for (std::size_t c = 0; c < plan.cases.size(); ++c) {
-    Case& cs = plan.cases[c];
-    std::size_t rest = c;
-    for (std::size_t k = varied.size(); k-- > 0;) {
-      at[k] = rest % varied[k].values.size();
-      rest /= varied[k].values.size();
-    }
+    const std::vector<std::size_t> at = value_indices(varied, c);
     std::string name;
     for (std::size_t k = 0; k < varied.size(); ++k) {
       if (!named[k]) continue;
       std::string part;
       if (varied[k].key == "cloth.humidity") {
         char buf[64];
-        std::snprintf(buf, sizeof buf, "omega_%.*f", decimals[k], omegas[k][at[k]]);
+        std::snprintf(buf, sizeof buf, "omega_%.*f", decimals[k], read.omega[k][at[k]]);
         part = buf;
       } else if (varied[k].key == "air.model") {
-        part = read[k][at[k]];
+        part = read.text[k][at[k]];
       } else {
         const bool shared = std::count(shorts.begin(), shorts.end(), shorts[k]) > 1;
-        part = (shared ? varied[k].key : shorts[k]) + "=" + name_part(read[k][at[k]]);
+        part = (shared ? varied[k].key : shorts[k]) + "=" + name_part(read.text[k][at[k]]);
       }
       name += (name.empty() ? "" : "_") + part;
     }
-    cs.name = name;
+    plan.cases[c].name = name;
   }
+}
+
+// Every case, in the order of the cartesian product (the first key outermost).
+// load(sets) gives the scene with the base overrides and then `sets`; it
+// throws SceneError on a bad value. Throws SceneError on a key given twice, a
+// value given twice (after reading: 0.5 and 0.50 are one) or no key at all.
+inline Plan plan(const std::vector<Varied>& varied,
+                 const std::function<Params(const std::vector<std::string>&)>& load) {
+  const std::size_t total = case_count(varied);
+  Plan plan;
+  ReadBack read{std::vector<std::vector<std::string>>(varied.size()),
+                std::vector<std::vector<double>>(varied.size())};
+  for (std::size_t k = 0; k < varied.size(); ++k) {
+    read.text[k].resize(varied[k].values.size());
+    read.omega[k].resize(varied[k].values.size());
+    if (is_extra_key(varied[k].key)) plan.extra_keys.push_back(varied[k].key);
+  }
+  for (std::size_t c = 0; c < total; ++c) {
+    const std::vector<std::size_t> at = value_indices(varied, c);
+    Case cs;
+    for (std::size_t k = 0; k < varied.size(); ++k)
+      cs.sets.push_back(varied[k].key + "=" + varied[k].values[at[k]]);
+    cs.params = load(cs.sets);
+    for (std::size_t k = 0; k < varied.size(); ++k) {
+      const std::string text = value_text(cs.params, varied[k].key);
+      read.text[k][at[k]] = text;
+      if (varied[k].key == "cloth.humidity") read.omega[k][at[k]] = cs.params.cloth.humidity;
+      if (is_extra_key(varied[k].key)) cs.columns.push_back(text);
+    }
+    cs.humidity = cs.params.cloth.humidity;
+    cs.air_model = to_string(cs.params.air.model);
+    plan.cases.push_back(std::move(cs));
+  }
+  for (std::size_t k = 0; k < varied.size(); ++k) {
+    std::vector<std::string> sorted = read.text[k];
+    std::sort(sorted.begin(), sorted.end());
+    if (const auto twice = std::adjacent_find(sorted.begin(), sorted.end()); twice != sorted.end())
+      throw SceneError(varied[k].option + ": " + *twice + " is given twice");
+  }
+  name_cases(varied, read, plan);
   std::set<std::string> names;
   for (const Case& cs : plan.cases)
     if (!names.insert(cs.name).second)

@@ -528,6 +528,48 @@ Stage stage_from(const Params& p) {
 
 enum Material { kPlain = 0, kFabric = 1, kGround = 2 };
 
+// What every pass of one draw shares: its inputs, the two cameras (the eye's
+// and the light's), and the box of what casts shadows.
+struct DrawFrame {
+  const ClothMesh& cloth;
+  const Stage& stage;
+  const Camera& cam;
+  const DrawOptions& opt;
+  Mat4f view_proj = Mat4f::Identity(), light_view_proj = Mat4f::Identity(),
+        ball_model = Mat4f::Identity();
+  Vec3f lo = Vec3f::Zero(), hi = Vec3f::Zero();  // the shadow casters' box (cloth, ball, obstacles)
+  float radius = 0;                              // of the light's frustum around that box
+};
+
+// Receivers this far below the casters still get their shadow.
+constexpr float kShadowReach = 20;
+
+DrawFrame draw_frame(const ClothMesh& cloth, const Stage& stage, const Camera& cam, int width,
+                     int height, const DrawOptions& opt) {
+  DrawFrame f{cloth, stage, cam, opt};
+  f.view_proj = cam.projection(static_cast<float>(width) / std::max(height, 1)) * cam.view();
+  // The ball drawn a hair smaller than it is: the cloth resting on it may sink into it
+  // by a fraction of a millimetre, which would show as specks of ball through the cloth.
+  const float ball_r = std::max(stage.ball_radius - 0.0015f, stage.ball_radius * 0.98f);
+  f.ball_model = translate_scale(stage.ball_center, Vec3f::Constant(ball_r));
+
+  // Light frustum: an orthographic box around what casts shadows (cloth, ball).
+  Vec3f lo = Vec3f::Constant(1e30f), hi = Vec3f::Constant(-1e30f);
+  for (const auto& p : cloth.position) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+  if (stage.ball) {
+    lo = lo.cwiseMin(stage.ball_center - Vec3f::Constant(stage.ball_radius));
+    hi = hi.cwiseMax(stage.ball_center + Vec3f::Constant(stage.ball_radius));
+  }
+  if (stage.obstacles) lo = lo.cwiseMin(stage.obstacles->lo), hi = hi.cwiseMax(stage.obstacles->hi);
+  if (lo.x() > hi.x()) lo = hi = Vec3f::Zero();
+  const Vec3f center = (lo + hi) / 2;
+  f.lo = lo, f.hi = hi;
+  f.radius = (hi - lo).norm() / 2 + 0.02f;
+  f.light_view_proj = ortho(f.radius, 0.0f, 2 * f.radius + kShadowReach) *
+                      look_at(center + stage.light * (f.radius + 0.01f), center, Vec3f::UnitZ());
+  return f;
+}
+
 struct Renderer::Impl {
   GLuint sky = 0, depth = 0, flat = 0;
   GLuint lit[3][2] = {};  // [material][shadows], compiled when first used
@@ -644,46 +686,186 @@ struct Renderer::Impl {
     }
     cloth.upload(vertices, idx, GL_STREAM_DRAW);
   }
-};
 
-Renderer::Renderer() : impl_(std::make_unique<Impl>()) {}
-Renderer::~Renderer() = default;
-
-void Renderer::draw(const ClothMesh& cloth, const Stage& stage, const Camera& cam, int width,
-                    int height, const DrawOptions& opt) {
-  Impl& r = *impl_;
-  r.upload_cloth(cloth);
-  if (stage.obstacles && stage.obstacles.get() != r.uploaded) {
+  void upload_obstacles(const Stage& stage) {
+    if (!stage.obstacles || stage.obstacles.get() == uploaded) return;
     std::vector<float> v;
     std::vector<unsigned> idx;
     const Stage::Obstacles& o = *stage.obstacles;
     for (std::size_t k = 0; k < o.position.size(); ++k)
       push(v, o.position[k], o.normal[k], Vec3f(0.80f, 0.78f, 0.74f));  // a pale stone
     for (const auto& t : o.triangles) idx.insert(idx.end(), t.begin(), t.end());
-    r.obstacles.upload(v, idx, GL_STATIC_DRAW);
-    r.uploaded = stage.obstacles.get();
+    obstacles.upload(v, idx, GL_STATIC_DRAW);
+    uploaded = stage.obstacles.get();
   }
-  const Mat4f identity = Mat4f::Identity();
-  // The ball drawn a hair smaller than it is: the cloth resting on it may sink into it
-  // by a fraction of a millimetre, which would show as specks of ball through the cloth.
-  const float ball_r = std::max(stage.ball_radius - 0.0015f, stage.ball_radius * 0.98f);
-  const Mat4f ball_model = translate_scale(stage.ball_center, Vec3f::Constant(ball_r));
 
-  // Light frustum: an orthographic box around what casts shadows (cloth, ball).
-  Vec3f lo = Vec3f::Constant(1e30f), hi = Vec3f::Constant(-1e30f);
-  for (const auto& p : cloth.position) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
-  if (stage.ball) {
-    lo = lo.cwiseMin(stage.ball_center - Vec3f::Constant(stage.ball_radius));
-    hi = hi.cwiseMax(stage.ball_center + Vec3f::Constant(stage.ball_radius));
+  // The passes of a draw, in order.
+  void shadow_pass(const DrawFrame& f);
+  GLuint use_lit(const DrawFrame& f, Material m, bool shadows);
+  void opaque_pass(const DrawFrame& f);
+  void ground_pass(const DrawFrame& f);
+  void sky_pass(const DrawFrame& f);
+  void overlay_pass(const DrawFrame& f);
+};
+
+Renderer::Renderer() : impl_(std::make_unique<Impl>()) {}
+Renderer::~Renderer() = default;
+
+// The shadow map: the casters' depth seen from the light.
+void Renderer::Impl::shadow_pass(const DrawFrame& f) {
+  const Mat4f identity = Mat4f::Identity();
+  glBindFramebuffer(GL_FRAMEBUFFER, shadow_fbo);
+  glViewport(0, 0, kShadowSize, kShadowSize);
+  glClear(GL_DEPTH_BUFFER_BIT);
+  glEnable(GL_POLYGON_OFFSET_FILL);
+  glPolygonOffset(1.5f, 2.0f);  // slope-scaled bias against shadow acne
+  glUseProgram(depth);
+  set(depth, "u_view_proj", f.light_view_proj);
+  set(depth, "u_model", identity);
+  cloth.draw();
+  if (f.stage.ball) {
+    set(depth, "u_model", f.ball_model);
+    sphere.draw();
   }
-  if (stage.obstacles) lo = lo.cwiseMin(stage.obstacles->lo), hi = hi.cwiseMax(stage.obstacles->hi);
-  if (lo.x() > hi.x()) lo = hi = Vec3f::Zero();
-  const Vec3f center = (lo + hi) / 2;
-  const float radius = (hi - lo).norm() / 2 + 0.02f;
-  const float reach = 20;  // receivers far below the casters still get their shadow
-  const Mat4f light_view_proj =
-      ortho(radius, 0.0f, 2 * radius + reach) *
-      look_at(center + stage.light * (radius + 0.01f), center, Vec3f::UnitZ());
+  if (f.stage.obstacles) {
+    set(depth, "u_model", identity);
+    obstacles.draw();
+  }
+  glDisable(GL_POLYGON_OFFSET_FILL);
+}
+
+// A lit program in use, with the eye and the light set, and the shadow map's
+// lookups where asked for and shadows are on.
+GLuint Renderer::Impl::use_lit(const DrawFrame& f, Material m, bool shadows) {
+  const bool shadowed = shadows && f.opt.shadows;
+  const GLuint p = lit_program(m, shadowed);
+  glUseProgram(p);
+  set(p, "u_view_proj", f.view_proj);
+  set(p, "u_eye", f.cam.eye());
+  set(p, "u_light", f.stage.light);
+  if (shadowed) {
+    const float texel = 2 * f.radius / kShadowSize;
+    set(p, "u_light_view_proj", f.light_view_proj);
+    set(p, "u_shadow_map", 0);
+    const float blur = 0.004f, depth_range = 2 * f.radius + kShadowReach;  // ~4 mm penumbra
+    set(p, "u_softness", blur / (2 * f.radius));
+    set(p, "u_normal_offset", 1.5f * texel);
+    set(p, "u_depth_bias", 0.0005f / depth_range);
+    set(p, "u_slope_bias", blur / depth_range);
+  }
+  return p;
+}
+
+// Opaque things nearest first, so that the expensive ground and sky are shaded
+// only where they show (early depth test): the cloth, the ball, the obstacles.
+void Renderer::Impl::opaque_pass(const DrawFrame& f) {
+  const Mat4f identity = Mat4f::Identity();
+  GLuint p = use_lit(f, f.opt.fabric ? kFabric : kPlain, true);
+  if (f.opt.fabric) set(p, "u_wetness", std::clamp(f.opt.wetness, 0.0f, 1.0f));
+  set(p, "u_model", identity);
+  if (f.opt.wireframe) {  // the lines drawn later must win the depth test
+    glEnable(GL_POLYGON_OFFSET_FILL);
+    glPolygonOffset(1.0f, 1.0f);
+  }
+  cloth.draw();
+  glDisable(GL_POLYGON_OFFSET_FILL);
+
+  if (f.stage.ball) {
+    p = use_lit(f, kPlain, true);
+    set(p, "u_model", f.ball_model);
+    sphere.draw();
+  }
+  if (f.stage.obstacles) {
+    // Pushed back a little, as the ball is drawn a hair small: the cloth
+    // resting on the mesh would show specks of it through.
+    glEnable(GL_POLYGON_OFFSET_FILL);
+    glPolygonOffset(2.0f, 8.0f);
+    p = use_lit(f, kPlain, true);
+    set(p, "u_model", identity);
+    obstacles.draw();
+    glDisable(GL_POLYGON_OFFSET_FILL);
+  }
+}
+
+// The ground in two pieces: a patch where shadows can fall (the casters' box
+// stretched away from the light), then the rest, lost in the fog at its edges,
+// without shadow lookups. Both pushed back a little: the cloth lies within a
+// millimetre of the table.
+void Renderer::Impl::ground_pass(const DrawFrame& f) {
+  const Stage& stage = f.stage;
+  const Eigen::Vector2f shift =
+      -stage.light.head<2>() / stage.light.z() * std::max(0.0f, f.hi.z() - stage.ground_z);
+  const Eigen::Vector2f a =
+      f.lo.head<2>().cwiseMin(f.lo.head<2>() + shift) - Eigen::Vector2f::Constant(0.02f);
+  const Eigen::Vector2f b =
+      f.hi.head<2>().cwiseMax(f.hi.head<2>() + shift) + Eigen::Vector2f::Constant(0.02f);
+  const float extent = 30;
+  glEnable(GL_POLYGON_OFFSET_FILL);
+  for (bool patch : {true, false}) {
+    if (patch && !f.opt.shadows) continue;
+    const GLuint p = use_lit(f, kGround, patch);
+    glUniform4f(loc(p, "u_table"), stage.table_center.x(), stage.table_center.y(), stage.table_half,
+                stage.table ? 1.0f : 0.0f);
+    glUniform2f(loc(p, "u_fog"), f.cam.distance * 2.0f,
+                std::min(f.cam.distance * 8.0f, extent * 0.8f));
+    const Vec3f mid = patch ? Vec3f((a.x() + b.x()) / 2, (a.y() + b.y()) / 2, stage.ground_z)
+                            : Vec3f(stage.table_center.x(), stage.table_center.y(), stage.ground_z);
+    const Vec3f half =
+        patch ? Vec3f((b.x() - a.x()) / 2, (b.y() - a.y()) / 2, 1) : Vec3f(extent, extent, 1);
+    set(p, "u_model", translate_scale(mid, half));
+    glPolygonOffset(patch ? 1.0f : 2.0f, patch ? 4.0f : 16.0f);  // the patch wins over the rest
+    quad.draw();
+  }
+  glDisable(GL_POLYGON_OFFSET_FILL);
+}
+
+// The sky where nothing else was drawn: on the far plane, no depth written.
+void Renderer::Impl::sky_pass(const DrawFrame& f) {
+  glDepthFunc(GL_LEQUAL);
+  glDepthMask(GL_FALSE);
+  glUseProgram(sky);
+  set(sky, "u_inv_view_proj", Mat4f(f.view_proj.inverse()));
+  glBindVertexArray(empty_vao);
+  glDrawArrays(GL_TRIANGLES, 0, 3);
+  glDepthMask(GL_TRUE);
+  glDepthFunc(GL_LESS);
+}
+
+// Flat colour over the picture: the wireframe, and the grab's pull.
+void Renderer::Impl::overlay_pass(const DrawFrame& f) {
+  const Mat4f identity = Mat4f::Identity();
+  glUseProgram(flat);
+  set(flat, "u_view_proj", f.view_proj);
+  if (f.opt.wireframe) {
+    set(flat, "u_model", identity);
+    glUniform4f(loc(flat, "u_color"), 0.05f, 0.07f, 0.12f, 1.0f);
+    glPolygonMode(GL_FRONT_AND_BACK, GL_LINE);
+    cloth.draw();
+    glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
+  }
+  const int grab = f.opt.grab_particle;
+  if (grab >= 0 && grab < static_cast<int>(f.cloth.position.size())) {
+    const Vec3f pa = f.cloth.position[grab], pb = f.opt.grab_target;
+    const float line[6] = {pa.x(), pa.y(), pa.z(), pb.x(), pb.y(), pb.z()};
+    glBindBuffer(GL_ARRAY_BUFFER, line_vbo);
+    glBufferSubData(GL_ARRAY_BUFFER, 0, sizeof line, line);
+    glUniform4f(loc(flat, "u_color"), 1.0f, 0.85f, 0.1f, 1.0f);
+    set(flat, "u_model", identity);
+    glDisable(GL_DEPTH_TEST);  // the pull stays visible through the cloth
+    glBindVertexArray(line_vao);
+    glDrawArrays(GL_LINES, 0, 2);
+    set(flat, "u_model", translate_scale(pb, Vec3f::Constant(f.cam.distance * 0.006f)));
+    sphere.draw();
+    glEnable(GL_DEPTH_TEST);
+  }
+}
+
+void Renderer::draw(const ClothMesh& cloth, const Stage& stage, const Camera& cam, int width,
+                    int height, const DrawOptions& opt) {
+  Impl& r = *impl_;
+  r.upload_cloth(cloth);
+  r.upload_obstacles(stage);
+  const DrawFrame f = draw_frame(cloth, stage, cam, width, height, opt);
 
   GLint target_fbo = 0;
   glGetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &target_fbo);
@@ -694,148 +876,20 @@ void Renderer::draw(const ClothMesh& cloth, const Stage& stage, const Camera& ca
   glDepthFunc(GL_LESS);
   glDepthMask(GL_TRUE);
   glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
-
-  if (opt.shadows) {
-    glBindFramebuffer(GL_FRAMEBUFFER, r.shadow_fbo);
-    glViewport(0, 0, kShadowSize, kShadowSize);
-    glClear(GL_DEPTH_BUFFER_BIT);
-    glEnable(GL_POLYGON_OFFSET_FILL);
-    glPolygonOffset(1.5f, 2.0f);  // slope-scaled bias against shadow acne
-    glUseProgram(r.depth);
-    set(r.depth, "u_view_proj", light_view_proj);
-    set(r.depth, "u_model", identity);
-    r.cloth.draw();
-    if (stage.ball) {
-      set(r.depth, "u_model", ball_model);
-      r.sphere.draw();
-    }
-    if (stage.obstacles) {
-      set(r.depth, "u_model", identity);
-      r.obstacles.draw();
-    }
-    glDisable(GL_POLYGON_OFFSET_FILL);
-  }
+  if (opt.shadows) r.shadow_pass(f);
 
   glBindFramebuffer(GL_FRAMEBUFFER, target_fbo);
   glViewport(0, 0, width, height);
   glClear(GL_DEPTH_BUFFER_BIT);
-  const Mat4f view_proj =
-      cam.projection(static_cast<float>(width) / std::max(height, 1)) * cam.view();
   glActiveTexture(GL_TEXTURE0);
   glBindTexture(GL_TEXTURE_2D, r.shadow_tex);
-  const float texel = 2 * radius / kShadowSize;
-  auto use_lit = [&](Material m, bool shadows) {
-    const GLuint p = r.lit_program(m, shadows && opt.shadows);
-    glUseProgram(p);
-    set(p, "u_view_proj", view_proj);
-    set(p, "u_eye", cam.eye());
-    set(p, "u_light", stage.light);
-    if (shadows && opt.shadows) {
-      set(p, "u_light_view_proj", light_view_proj);
-      set(p, "u_shadow_map", 0);
-      const float blur = 0.004f, depth_range = 2 * radius + reach;  // ~4 mm penumbra
-      set(p, "u_softness", blur / (2 * radius));
-      set(p, "u_normal_offset", 1.5f * texel);
-      set(p, "u_depth_bias", 0.0005f / depth_range);
-      set(p, "u_slope_bias", blur / depth_range);
-    }
-    return p;
-  };
-
-  // Opaque things nearest first, so that the expensive ground and sky are shaded
-  // only where they show (early depth test).
-  GLuint p = use_lit(opt.fabric ? kFabric : kPlain, true);
-  if (opt.fabric) set(p, "u_wetness", std::clamp(opt.wetness, 0.0f, 1.0f));
-  set(p, "u_model", identity);
-  if (opt.wireframe) {  // the lines drawn later must win the depth test
-    glEnable(GL_POLYGON_OFFSET_FILL);
-    glPolygonOffset(1.0f, 1.0f);
-  }
-  r.cloth.draw();
-  glDisable(GL_POLYGON_OFFSET_FILL);
-
-  if (stage.ball) {
-    p = use_lit(kPlain, true);
-    set(p, "u_model", ball_model);
-    r.sphere.draw();
-  }
-  if (stage.obstacles) {
-    // Pushed back a little, as the ball is drawn a hair small: the cloth
-    // resting on the mesh would show specks of it through.
-    glEnable(GL_POLYGON_OFFSET_FILL);
-    glPolygonOffset(2.0f, 8.0f);
-    p = use_lit(kPlain, true);
-    set(p, "u_model", identity);
-    r.obstacles.draw();
-    glDisable(GL_POLYGON_OFFSET_FILL);
-  }
-
-  // The ground in two pieces: a patch where shadows can fall (the casters' box
-  // stretched away from the light), then the rest, lost in the fog at its edges,
-  // without shadow lookups. Both pushed back a little: the cloth lies within a
-  // millimetre of the table.
-  const Eigen::Vector2f shift =
-      -stage.light.head<2>() / stage.light.z() * std::max(0.0f, hi.z() - stage.ground_z);
-  const Eigen::Vector2f a =
-      lo.head<2>().cwiseMin(lo.head<2>() + shift) - Eigen::Vector2f::Constant(0.02f);
-  const Eigen::Vector2f b =
-      hi.head<2>().cwiseMax(hi.head<2>() + shift) + Eigen::Vector2f::Constant(0.02f);
-  const float extent = 30;
-  glEnable(GL_POLYGON_OFFSET_FILL);
-  for (bool patch : {true, false}) {
-    if (patch && !opt.shadows) continue;
-    p = use_lit(kGround, patch);
-    glUniform4f(loc(p, "u_table"), stage.table_center.x(), stage.table_center.y(), stage.table_half,
-                stage.table ? 1.0f : 0.0f);
-    glUniform2f(loc(p, "u_fog"), cam.distance * 2.0f, std::min(cam.distance * 8.0f, extent * 0.8f));
-    const Vec3f mid = patch ? Vec3f((a.x() + b.x()) / 2, (a.y() + b.y()) / 2, stage.ground_z)
-                            : Vec3f(stage.table_center.x(), stage.table_center.y(), stage.ground_z);
-    const Vec3f half =
-        patch ? Vec3f((b.x() - a.x()) / 2, (b.y() - a.y()) / 2, 1) : Vec3f(extent, extent, 1);
-    set(p, "u_model", translate_scale(mid, half));
-    glPolygonOffset(patch ? 1.0f : 2.0f, patch ? 4.0f : 16.0f);  // the patch wins over the rest
-    r.quad.draw();
-  }
-  glDisable(GL_POLYGON_OFFSET_FILL);
-
-  // The sky where nothing else was drawn: on the far plane, no depth written.
-  glDepthFunc(GL_LEQUAL);
-  glDepthMask(GL_FALSE);
-  glUseProgram(r.sky);
-  set(r.sky, "u_inv_view_proj", Mat4f(view_proj.inverse()));
-  glBindVertexArray(r.empty_vao);
-  glDrawArrays(GL_TRIANGLES, 0, 3);
-  glDepthMask(GL_TRUE);
-  glDepthFunc(GL_LESS);
-
-  const GLuint flat = r.flat;
-  glUseProgram(flat);
-  set(flat, "u_view_proj", view_proj);
-  if (opt.wireframe) {
-    set(flat, "u_model", identity);
-    glUniform4f(loc(flat, "u_color"), 0.05f, 0.07f, 0.12f, 1.0f);
-    glPolygonMode(GL_FRONT_AND_BACK, GL_LINE);
-    r.cloth.draw();
-    glPolygonMode(GL_FRONT_AND_BACK, GL_FILL);
-  }
-  if (opt.grab_particle >= 0 && opt.grab_particle < static_cast<int>(cloth.position.size())) {
-    const Vec3f pa = cloth.position[opt.grab_particle], pb = opt.grab_target;
-    const float line[6] = {pa.x(), pa.y(), pa.z(), pb.x(), pb.y(), pb.z()};
-    glBindBuffer(GL_ARRAY_BUFFER, r.line_vbo);
-    glBufferSubData(GL_ARRAY_BUFFER, 0, sizeof line, line);
-    glUniform4f(loc(flat, "u_color"), 1.0f, 0.85f, 0.1f, 1.0f);
-    set(flat, "u_model", identity);
-    glDisable(GL_DEPTH_TEST);  // the pull stays visible through the cloth
-    glBindVertexArray(r.line_vao);
-    glDrawArrays(GL_LINES, 0, 2);
-    set(flat, "u_model", translate_scale(pb, Vec3f::Constant(cam.distance * 0.006f)));
-    r.sphere.draw();
-    glEnable(GL_DEPTH_TEST);
-  }
+  r.opaque_pass(f);
+  r.ground_pass(f);
+  r.sky_pass(f);
+  r.overlay_pass(f);
   glBindVertexArray(0);
   glUseProgram(0);
 }
-
 // --- offscreen target ----------------------------------------------------------------
 
 Framebuffer::Framebuffer(int width, int height, int samples) : w_(width), h_(height) {

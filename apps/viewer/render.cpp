@@ -156,106 +156,144 @@ class FollowCamera {
   std::vector<Vec3f> lo_, hi_;
 };
 
+// A folder never mixes two renders: the frames and video of an earlier one go.
+void clear_render_folder(const fs::path& out) {
+  fs::create_directories(out);
+  for (const auto& e : fs::directory_iterator(out)) {
+    const std::string name = e.path().filename().string();
+    if ((name.starts_with("frame_") && e.path().extension() == ".png") || name == "video.mp4")
+      fs::remove(e.path());
+  }
+}
+
+// A frame simulated, waiting until the camera has seen far enough ahead.
+struct Pending {
+  long long frame;
+  ClothMesh mesh;
+  Legend legend;  // its own: the adhesion scale may follow the frames
+};
+
+// What a render did: its frames, and the time drawing and writing them took.
+struct RenderStats {
+  long long frames = 0;  // the last frame's index
+  long long written = 0;
+  double draw_ms = 0, png_ms = 0;
+  Legend legend;  // the last frame's, for the summary
+};
+
+// The offscreen target and what is drawn into it the same for every frame.
+struct FrameDrawer {
+  const RenderOptions& o;
+  Renderer& renderer;
+  Framebuffer& target;
+  const Stage stage;
+  DrawOptions opt;
+
+  // Draws frame f with its colour key and writes it as OUT/frame_NNNNN.png;
+  // false (said on stderr) where it cannot be written. `timed`: its drawing
+  // counts in the stats.
+  bool write(const Pending& f, const Camera& cam, bool timed, RenderStats& stats) {
+    auto t0 = Clock::now();
+    target.bind();
+    renderer.draw(f.mesh, stage, cam, o.width, o.height, opt);
+    Image img = target.read();
+    if (o.color != ColorBy::Fabric) draw_key(img, f.legend);
+    if (timed) stats.draw_ms += ms_since(t0);
+    t0 = Clock::now();
+    char name[32];
+    std::snprintf(name, sizeof name, "frame_%05lld.png", f.frame);
+    if (!write_png(o.out / name, img)) {
+      std::fprintf(stderr, "wetcloth: error: cannot write %s\n", (o.out / name).c_str());
+      return false;
+    }
+    stats.png_ms += ms_since(t0);
+    ++stats.written;
+    return true;
+  }
+};
+
+// Simulates the scene frame by frame and draws each frame once the camera
+// has seen far enough past it. 0, 1 (a frame could not be written) or 3 (the
+// simulation blew up: the frames so far are kept).
+int draw_frames(const RenderOptions& o, double fps, FrameDrawer& drawer, RenderStats& stats) {
+  const Params& p = o.params;
+  Simulation sim(p);
+  const long long frames = stats.frames = last_frame_index(p.run.duration, fps);
+  const bool progress = !o.quiet && isatty(STDERR_FILENO);
+  FollowCamera follow(static_cast<float>(o.width) / o.height, scene_view(p));
+  std::deque<Pending> pending;
+  float scale = 0;
+  Vec3f lo = Vec3f::Zero(), hi = Vec3f::Zero();
+  bool ok = true;
+  for (long long f = 0; f <= frames && ok; ++f) {
+    const double t = frame_time(f, p.run.duration, fps);
+    ok = sim.advance_to(t);
+    ClothMesh mesh;
+    stats.legend = cloth_mesh(sim, o.color, scale, mesh, o.color_range);
+    // A frame that blew up keeps the box of the one before: its flung
+    // particles would zoom out every frame the camera looks ahead from.
+    if (ok || f == 0) content_box(p, mesh.position, lo, hi);
+    follow.add(t, lo, hi);
+    pending.push_back({f, std::move(mesh), stats.legend});
+    while (!pending.empty() &&
+           (!ok || f == frames || follow.time(pending.front().frame) + follow.reach() <= t)) {
+      const long long g = pending.front().frame;
+      // Frame 0 also compiles the shaders: its drawing is not counted.
+      if (!drawer.write(pending.front(), follow.at(g), g > 0 || frames == 0, stats)) return 1;
+      pending.pop_front();
+      if (progress) std::fprintf(stderr, "\rframe %lld/%lld", g + 1, frames + 1);
+    }
+  }
+  if (progress) std::fprintf(stderr, "\n");
+  if (!ok) {
+    std::fprintf(stderr, "wetcloth: %s\nframes so far: %s\n", sim.blow_up_reason().c_str(),
+                 o.out.c_str());
+    return 3;
+  }
+  return 0;
+}
+
+// OUT/video.mp4 from the frames (ffmpeg); false (said on stderr) where it failed.
+bool make_video(const fs::path& out, double fps) {
+  // yuv420p (what players expect) needs even sizes: pad by a pixel if odd.
+  const int code =
+      spawn_and_wait({"ffmpeg", "-y", "-loglevel", "error", "-framerate", format_number(fps), "-i",
+                      (out / "frame_%05d.png").string(), "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2",
+                      "-pix_fmt", "yuv420p", (out / "video.mp4").string()});
+  if (code == 0) return true;
+  std::fprintf(
+      stderr, "wetcloth: error: %s\n",
+      code < 0 ? "cannot run ffmpeg (apt-get install ffmpeg)" : "ffmpeg failed to make video.mp4");
+  return false;
+}
+
+void print_render_summary(const RenderOptions& o, const RenderStats& s) {
+  std::printf("%s: %lld frame%s, %dx%d, in %s%s (%.1f ms per frame to draw, %.1f ms to write)\n",
+              o.params.name.c_str(), s.written, s.written == 1 ? "" : "s", o.width, o.height,
+              o.out.c_str(), o.video ? " + video.mp4" : "", s.draw_ms / std::max(1LL, s.frames),
+              s.png_ms / s.written);
+  if (o.color != ColorBy::Fabric && !s.legend.binary)
+    std::printf("colour: %s, %s to %s\n", s.legend.title.c_str(), key_number(s.legend.lo).c_str(),
+                key_number(s.legend.hi).c_str());
+}
+
 }  // namespace
 
 int render_frames(const RenderOptions& o) {
-  const Params& p = o.params;
-  const double fps = o.fps > 0 ? o.fps : p.run.fps;
+  const double fps = o.fps > 0 ? o.fps : o.params.run.fps;
   try {
     // The context first: if there is no GL, nothing is written.
     OffscreenContext context;
     Renderer renderer;
     Framebuffer target(o.width, o.height);
-
-    fs::create_directories(o.out);
-    for (const auto& e : fs::directory_iterator(o.out)) {  // a folder never mixes two renders
-      const std::string name = e.path().filename().string();
-      if ((name.starts_with("frame_") && e.path().extension() == ".png") || name == "video.mp4")
-        fs::remove(e.path());
-    }
-
-    Simulation sim(p);
-    const Stage stage = stage_from(p);
-    DrawOptions opt;
-    opt.fabric = o.color == ColorBy::Fabric;
-    opt.wetness = static_cast<float>(p.cloth.humidity);
-    const long long frames = last_frame_index(p.run.duration, fps);
-    const bool progress = !o.quiet && isatty(STDERR_FILENO);
-    FollowCamera follow(static_cast<float>(o.width) / o.height, scene_view(p));
-    // Frames wait here, simulated, until the camera has seen far enough ahead.
-    struct Pending {
-      long long frame;
-      ClothMesh mesh;
-      Legend legend;  // its own: the adhesion scale may follow the frames
-    };
-    std::deque<Pending> pending;
-    float scale = 0;
-    Legend legend;  // the last frame's, for the summary
-    Vec3f lo = Vec3f::Zero(), hi = Vec3f::Zero();
-    double draw_ms = 0, png_ms = 0;
-    long long written = 0;
-    bool ok = true;
-    for (long long f = 0; f <= frames && ok; ++f) {
-      const double t = frame_time(f, p.run.duration, fps);
-      ok = sim.advance_to(t);
-      ClothMesh mesh;
-      legend = cloth_mesh(sim, o.color, scale, mesh, o.color_range);
-      // A frame that blew up keeps the box of the one before: its flung
-      // particles would zoom out every frame the camera looks ahead from.
-      if (ok || f == 0) content_box(p, mesh.position, lo, hi);
-      follow.add(t, lo, hi);
-      pending.push_back({f, std::move(mesh), legend});
-      while (!pending.empty() &&
-             (!ok || f == frames || follow.time(pending.front().frame) + follow.reach() <= t)) {
-        const long long g = pending.front().frame;
-        auto t0 = Clock::now();
-        target.bind();
-        renderer.draw(pending.front().mesh, stage, follow.at(g), o.width, o.height, opt);
-        Image img = target.read();
-        if (o.color != ColorBy::Fabric) draw_key(img, pending.front().legend);
-        if (g > 0 || frames == 0) draw_ms += ms_since(t0);  // frame 0 also compiles the shaders
-        pending.pop_front();
-        t0 = Clock::now();
-        char name[32];
-        std::snprintf(name, sizeof name, "frame_%05lld.png", g);
-        if (!write_png(o.out / name, img)) {
-          std::fprintf(stderr, "wetcloth: error: cannot write %s\n", (o.out / name).c_str());
-          return 1;
-        }
-        png_ms += ms_since(t0);
-        ++written;
-        if (progress) std::fprintf(stderr, "\rframe %lld/%lld", g + 1, frames + 1);
-      }
-    }
-    if (!ok) {
-      if (progress) std::fprintf(stderr, "\n");
-      std::fprintf(stderr, "wetcloth: %s\nframes so far: %s\n", sim.blow_up_reason().c_str(),
-                   o.out.c_str());
-      return 3;
-    }
-    if (progress) std::fprintf(stderr, "\n");
-
-    if (o.video) {
-      // yuv420p (what players expect) needs even sizes: pad by a pixel if odd.
-      const int code = spawn_and_wait(
-          {"ffmpeg", "-y", "-loglevel", "error", "-framerate", format_number(fps), "-i",
-           (o.out / "frame_%05d.png").string(), "-vf", "pad=ceil(iw/2)*2:ceil(ih/2)*2", "-pix_fmt",
-           "yuv420p", (o.out / "video.mp4").string()});
-      if (code != 0) {
-        std::fprintf(stderr, "wetcloth: error: %s\n",
-                     code < 0 ? "cannot run ffmpeg (apt-get install ffmpeg)"
-                              : "ffmpeg failed to make video.mp4");
-        return 1;
-      }
-    }
-    if (!o.quiet)
-      std::printf(
-          "%s: %lld frame%s, %dx%d, in %s%s (%.1f ms per frame to draw, %.1f ms to write)\n",
-          p.name.c_str(), written, written == 1 ? "" : "s", o.width, o.height, o.out.c_str(),
-          o.video ? " + video.mp4" : "", draw_ms / std::max(1LL, frames), png_ms / written);
-    if (!o.quiet && o.color != ColorBy::Fabric && !legend.binary)
-      std::printf("colour: %s, %s to %s\n", legend.title.c_str(), key_number(legend.lo).c_str(),
-                  key_number(legend.hi).c_str());
+    clear_render_folder(o.out);
+    FrameDrawer drawer{o, renderer, target, stage_from(o.params), {}};
+    drawer.opt.fabric = o.color == ColorBy::Fabric;
+    drawer.opt.wetness = static_cast<float>(o.params.cloth.humidity);
+    RenderStats stats;
+    if (const int code = draw_frames(o, fps, drawer, stats); code != 0) return code;
+    if (o.video && !make_video(o.out, fps)) return 1;
+    if (!o.quiet) print_render_summary(o, stats);
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "wetcloth: error: %s\n", e.what());

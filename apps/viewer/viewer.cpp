@@ -523,11 +523,8 @@ class Viewer {
     return changed;
   }
 
-  void panel(int window_h) {
-    ImGui::SetNextWindowPos(ImVec2(10, 10), ImGuiCond_FirstUseEver);
-    ImGui::SetNextWindowSize(ImVec2(kPanelWidth, std::min(window_h - 20.0f, 780.0f)),
-                             ImGuiCond_FirstUseEver);
-    ImGui::Begin("wetcloth");
+  // The scene's name and description, where the run stands, and how fast it goes.
+  void panel_status() {
     const State& s = sim_->state();
     ImGui::Text("%s", params_.name.c_str());
     ImGui::PushTextWrapPos(0);
@@ -546,7 +543,10 @@ class Viewer {
       ImGui::TextColored(ImVec4(1, 0.35f, 0.3f, 1), "%s (R: reset)", blow_up_.c_str());
       ImGui::PopTextWrapPos();
     }
+  }
 
+  // Run, step, reset; record, screenshot; save and load the state.
+  void panel_buttons() {
     if (ImGui::Button(paused_ ? "Run" : "Pause")) paused_ = !paused_;
     ImGui::SameLine();
     if (ImGui::Button("Step")) paused_ = true, step_once_ = true;
@@ -567,9 +567,10 @@ class Viewer {
       ImGui::TextDisabled("%s", status_.c_str());
       ImGui::PopTextWrapPos();
     }
+  }
 
-    ImGui::Separator();
-    ImGui::PushItemWidth(ImGui::GetContentRegionAvail().x * 0.5f);
+  // The scene and the parameters that can change as it runs.
+  void panel_parameters() {
     if (ImGui::BeginCombo("scene", scenes_[scene_index_].first.c_str())) {
       for (int i = 0; i < static_cast<int>(scenes_.size()); ++i)
         if (ImGui::Selectable(scenes_[i].first.c_str(), i == scene_index_)) pick_scene(i);
@@ -605,23 +606,28 @@ class Viewer {
                        ImGuiSliderFlags_Logarithmic);
     ImGui::SliderFloat("physics ms/frame", &budget_ms_, 1, 200, "%.0f",
                        ImGuiSliderFlags_Logarithmic);
+  }
 
-    ImGui::Separator();
+  // What the cloth is coloured by; a new choice finds its scale afresh.
+  void colour_by_combo() {
     int c = static_cast<int>(color_);
     if (ImGui::Combo("colour by", &c, kColorByNames.data(),
                      static_cast<int>(kColorByNames.size()))) {
       color_ = static_cast<ColorBy>(c);
       color_scale_ = 0;
     }
-    ImGui::PopItemWidth();
-    legend();
+  }
+
+  void draw_checkboxes() {
     ImGui::Checkbox("wireframe (O)", &draw_.wireframe);
     ImGui::SameLine();
     ImGui::Checkbox("shadows", &draw_.shadows);
     ImGui::SameLine();
     ImGui::Checkbox("anti-alias", &antialias_);
+  }
 
-    ImGui::Separator();
+  // The last seconds of pressure deficit, contact area and handle height.
+  void panel_plots() {
     ImGui::TextDisabled("last %.2f s of simulated time", pressure_.span());
     // At least 5 % of the breakthrough deficit: a vented or open cloth's 0 Pa stays flat.
     plot("pressure deficit P_atm - p, Pa", pressure_, "%.1f Pa",
@@ -629,7 +635,26 @@ class Viewer {
     plot("contact area, cm\xC2\xB2", contact_, "%.1f cm\xC2\xB2", 1.0f);
     // A pin (measured when there are only pins) holds one height: nothing to plot.
     if (sim_->model().measures_a_pull()) plot("handle height, cm", height_, "%.2f cm", 1.0f);
+  }
 
+  void panel(int window_h) {
+    ImGui::SetNextWindowPos(ImVec2(10, 10), ImGuiCond_FirstUseEver);
+    ImGui::SetNextWindowSize(ImVec2(kPanelWidth, std::min(window_h - 20.0f, 780.0f)),
+                             ImGuiCond_FirstUseEver);
+    ImGui::Begin("wetcloth");
+    panel_status();
+    panel_buttons();
+    ImGui::Separator();
+    // The sliders and menus take half the panel's width, their labels the other half.
+    ImGui::PushItemWidth(ImGui::GetContentRegionAvail().x * 0.5f);
+    panel_parameters();
+    ImGui::Separator();
+    colour_by_combo();
+    ImGui::PopItemWidth();
+    legend();
+    draw_checkboxes();
+    ImGui::Separator();
+    panel_plots();
     if (ImGui::CollapsingHeader("mouse and keys")) {
       ImGui::TextWrapped(
           "Left-drag the cloth: pull it. Left- or right-drag elsewhere: orbit. Middle-drag: pan. "

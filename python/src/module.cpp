@@ -347,12 +347,8 @@ py::dict run_case(const py::object& scene, const std::vector<std::string>& sets,
   return d;
 }
 
-}  // namespace
-
-PYBIND11_MODULE(_wetcloth, m) {
-  m.doc() = "wetcloth's C++ core (see the wetcloth package's docstring)";
-  m.attr("__version__") = WETCLOTH_VERSION;
-
+// SceneError and BlowUp: the library's errors as Python exceptions.
+void bind_errors(py::module_& m) {
   static py::exception<SceneError> scene_error(m, "SceneError", PyExc_ValueError);
   static py::exception<BlowUpError> blow_up(m, "BlowUp", PyExc_RuntimeError);
   scene_error.doc() = "A bad scene, key or value (a ValueError); the message names the key.";
@@ -366,7 +362,10 @@ PYBIND11_MODULE(_wetcloth, m) {
       blow_up(x.what());
     }
   });
+}
 
+// What there is to choose from: the built-in scenes and every parameter.
+void bind_catalogue(py::module_& m) {
   m.def(
       "scenes",
       [] {
@@ -394,7 +393,9 @@ PYBIND11_MODULE(_wetcloth, m) {
       },
       "Every scene parameter, as `wetcloth params` lists them: dicts of key, type, unit, default, "
       "range, meaning.");
+}
 
+void bind_scene(py::module_& m) {
   py::class_<Scene>(m, "Scene", "A scene's parameters, resolved (wetcloth.load_scene).")
       .def_property_readonly("name", [](const Scene& s) { return s.params.name; })
       .def_property_readonly("description", [](const Scene& s) { return s.params.description; })
@@ -417,32 +418,14 @@ PYBIND11_MODULE(_wetcloth, m) {
       "A built-in scene's name or a TOML file's path, with overrides by dotted key "
       "({'cloth.humidity': 0.7}) or keyword (humidity=0.7, cloth__humidity=0.7; grid=G: the "
       "same cloth G particles wide). Raises SceneError naming the key.");
+}
 
-  py::class_<PySimulation>(m, "Simulation", R"doc(A wet cloth stepped from Python.
+using SimulationClass = py::class_<PySimulation>;
 
-Simulation(scene, overrides=None, **keywords): scene is a built-in name, a
-path or a wetcloth.Scene; overrides by dotted key ({"cloth.humidity": 0.7})
-or keyword (humidity=0.7, cloth__humidity=0.7, duration=, threads=; grid=G
-is the same cloth G particles wide). A bad key or value raises SceneError.
-
-positions and velocities are read-only views of the state (n x 3 float64,
-strides (8, 8 n): the library keeps x, y, z in columns), no copy: they follow
-the simulation as it steps. Assign the property to set them (a copy in).
-triangles, in_contact, pressure and adhesion are copies, made at each read.
-Saving and restoring a state is not offered yet: the State does not yet hold
-the whole state of a run.)doc")
-      .def(py::init([](const py::object& scene, const py::object& overrides, const py::kwargs& kw) {
-             std::optional<long long> grid;
-             const auto sets = override_texts(overrides, kw, &grid);
-             const Params p = load(scene, sets, grid);
-             return std::make_unique<PySimulation>(p);
-           }),
-           py::arg("scene"), py::arg("overrides") = py::none())
-      .def("step", &PySimulation::step, "One time step. Raises BlowUp if the state blew up.")
-      .def("advance_to", &PySimulation::advance_to, py::arg("t"),
-           "Steps until time t (s), releasing the GIL while it steps. Raises BlowUp.")
-      .def_property_readonly(
-          "time", [](const PySimulation& s) { return s.sim_.state().time; }, "Simulated time, s.")
+// Time, size and parameters of a Simulation, read and set between steps.
+void bind_simulation_params(SimulationClass& cls) {
+  cls.def_property_readonly(
+         "time", [](const PySimulation& s) { return s.sim_.state().time; }, "Simulated time, s.")
       .def_property_readonly("steps", [](const PySimulation& s) { return s.sim_.state().steps; })
       .def_property_readonly(
           "dt", [](const PySimulation& s) { return s.sim_.model().params.integrator.dt; })
@@ -491,11 +474,15 @@ the whole state of a run.)doc")
             return d;
           },
           "The handles by name: {name: {type, particles, force, velocity}} (set one with "
-          "set('handle.NAME.force', [fx, fy, fz])).")
-      .def_property(
-          "positions", [](py::object self) { return self.cast<PySimulation&>().view(self, false); },
-          [](PySimulation& s, py::handle v) { s.assign(v, false, "positions"); },
-          "n x 3 positions, m: a read-only view, no copy.")
+          "set('handle.NAME.force', [fx, fy, fz])).");
+}
+
+// The state as NumPy arrays: positions and velocities as views, the rest copies.
+void bind_simulation_arrays(SimulationClass& cls) {
+  cls.def_property(
+         "positions", [](py::object self) { return self.cast<PySimulation&>().view(self, false); },
+         [](PySimulation& s, py::handle v) { s.assign(v, false, "positions"); },
+         "n x 3 positions, m: a read-only view, no copy.")
       .def_property(
           "velocities", [](py::object self) { return self.cast<PySimulation&>().view(self, true); },
           [](PySimulation& s, py::handle v) { s.assign(v, true, "velocities"); },
@@ -524,15 +511,19 @@ the whole state of a run.)doc")
           "n inner pressures P_in under each particle, Pa (p_atm where no pocket), a copy.")
       .def_property_readonly(
           "adhesion", [](const PySimulation& s) { return copy_of<double>(s.sim_.adhesion()); },
-          "n adhesion forces |F|, N, of the last step, a copy.")
-      .def(
-          "save",
-          [](const PySimulation& s, const std::string& path) {
-            save_checkpoint(path, s.sim_.model().params, s.sim_.state());
-          },
-          py::arg("path"),
-          "Write the whole state with its scene to PATH (a versioned binary file with a checksum); "
-          "Simulation.load(PATH) continues it with the same bits.")
+          "n adhesion forces |F|, N, of the last step, a copy.");
+}
+
+// A Simulation written to a file and continued from it, with the same bits.
+void bind_simulation_files(SimulationClass& cls) {
+  cls.def(
+         "save",
+         [](const PySimulation& s, const std::string& path) {
+           save_checkpoint(path, s.sim_.model().params, s.sim_.state());
+         },
+         py::arg("path"),
+         "Write the whole state with its scene to PATH (a versioned binary file with a checksum); "
+         "Simulation.load(PATH) continues it with the same bits.")
       .def_static(
           "load",
           [](const std::string& path) {
@@ -541,44 +532,79 @@ the whole state of a run.)doc")
             sim->sim_.restore(c.state);
             return sim;
           },
-          py::arg("path"), "A Simulation continued from a file Simulation.save wrote.")
-      .def("__repr__", [](const PySimulation& s) {
-        return "<wetcloth.Simulation '" + s.sim_.model().params.name +
-               "' t=" + shortest(s.sim_.state().time) + " s>";
-      });
+          py::arg("path"), "A Simulation continued from a file Simulation.save wrote.");
+}
 
-  // For wetcloth.sweep: the cases as `wetcloth sweep` plans them, and one run.
-  m.def("_plan_sweep", [](const py::object& scene, const py::list& varied,
-                          const std::vector<std::string>& base, std::optional<long long> grid) {
-    std::vector<sweep::Varied> vs;
-    for (py::handle item : varied) {
-      const auto pair = item.cast<py::tuple>();
-      sweep::Varied v;
-      v.key = normal_key(pair[0].cast<std::string>());
-      v.option = v.key;
-      const py::object values = pair[1];
-      if (py::isinstance<py::str>(values) || !py::hasattr(values, "__iter__"))
-        throw py::type_error(v.key + ": expected a list of values");
-      for (py::handle e : values) v.values.push_back(toml_value(v.key, e));
-      vs.push_back(v);
-    }
-    const sweep::Plan plan = sweep::plan(vs, [&](const std::vector<std::string>& sets) {
-      std::vector<std::string> all = base;
-      all.insert(all.end(), sets.begin(), sets.end());
-      return load(scene, all, grid);
-    });
-    py::list cases;
-    for (const auto& c : plan.cases) {
-      py::dict d;
-      d["name"] = c.name;
-      d["sets"] = c.sets;
-      d["columns"] = c.columns;
-      d["humidity"] = c.humidity;
-      d["air_model"] = c.air_model;
-      cases.append(d);
-    }
-    return py::make_tuple(plan.extra_keys, cases);
+void bind_simulation(py::module_& m) {
+  SimulationClass cls(m, "Simulation", R"doc(A wet cloth stepped from Python.
+
+Simulation(scene, overrides=None, **keywords): scene is a built-in name, a
+path or a wetcloth.Scene; overrides by dotted key ({"cloth.humidity": 0.7})
+or keyword (humidity=0.7, cloth__humidity=0.7, duration=, threads=; grid=G
+is the same cloth G particles wide). A bad key or value raises SceneError.
+
+positions and velocities are read-only views of the state (n x 3 float64,
+strides (8, 8 n): the library keeps x, y, z in columns), no copy: they follow
+the simulation as it steps. Assign the property to set them (a copy in).
+triangles, in_contact, pressure and adhesion are copies, made at each read.
+Saving and restoring a state is not offered yet: the State does not yet hold
+the whole state of a run.)doc");
+  cls.def(py::init([](const py::object& scene, const py::object& overrides, const py::kwargs& kw) {
+            std::optional<long long> grid;
+            const auto sets = override_texts(overrides, kw, &grid);
+            const Params p = load(scene, sets, grid);
+            return std::make_unique<PySimulation>(p);
+          }),
+          py::arg("scene"), py::arg("overrides") = py::none())
+      .def("step", &PySimulation::step, "One time step. Raises BlowUp if the state blew up.")
+      .def("advance_to", &PySimulation::advance_to, py::arg("t"),
+           "Steps until time t (s), releasing the GIL while it steps. Raises BlowUp.");
+  bind_simulation_params(cls);
+  bind_simulation_arrays(cls);
+  bind_simulation_files(cls);
+  cls.def("__repr__", [](const PySimulation& s) {
+    return "<wetcloth.Simulation '" + s.sim_.model().params.name +
+           "' t=" + shortest(s.sim_.state().time) + " s>";
   });
+}
+
+// wetcloth.sweep's cases as `wetcloth sweep` plans them: (the keys varied
+// besides air model and humidity, a dict per case).
+py::tuple plan_sweep(const py::object& scene, const py::list& varied,
+                     const std::vector<std::string>& base, std::optional<long long> grid) {
+  std::vector<sweep::Varied> vs;
+  for (py::handle item : varied) {
+    const auto pair = item.cast<py::tuple>();
+    sweep::Varied v;
+    v.key = normal_key(pair[0].cast<std::string>());
+    v.option = v.key;
+    const py::object values = pair[1];
+    if (py::isinstance<py::str>(values) || !py::hasattr(values, "__iter__"))
+      throw py::type_error(v.key + ": expected a list of values");
+    for (py::handle e : values) v.values.push_back(toml_value(v.key, e));
+    vs.push_back(v);
+  }
+  const sweep::Plan plan = sweep::plan(vs, [&](const std::vector<std::string>& sets) {
+    std::vector<std::string> all = base;
+    all.insert(all.end(), sets.begin(), sets.end());
+    return load(scene, all, grid);
+  });
+  py::list cases;
+  for (const auto& c : plan.cases) {
+    py::dict d;
+    d["name"] = c.name;
+    d["sets"] = c.sets;
+    d["columns"] = c.columns;
+    d["humidity"] = c.humidity;
+    d["air_model"] = c.air_model;
+    cases.append(d);
+  }
+  return py::make_tuple(plan.extra_keys, cases);
+}
+
+// For wetcloth.sweep: the cases as `wetcloth sweep` plans them, and one run.
+void bind_sweep(py::module_& m) {
+  m.def("_plan_sweep", &plan_sweep);
   m.def("_override_texts", [](const py::object& overrides) {
     std::optional<long long> grid;
     auto sets = override_texts(overrides, py::dict(), &grid);
@@ -586,4 +612,16 @@ the whole state of a run.)doc")
   });
   m.def("_run_case", &run_case);
   m.def("_metrics_columns", &metrics_columns);
+}
+
+}  // namespace
+
+PYBIND11_MODULE(_wetcloth, m) {
+  m.doc() = "wetcloth's C++ core (see the wetcloth package's docstring)";
+  m.attr("__version__") = WETCLOTH_VERSION;
+  bind_errors(m);
+  bind_catalogue(m);
+  bind_scene(m);
+  bind_simulation(m);
+  bind_sweep(m);
 }

@@ -1,5 +1,10 @@
-// Small scenes built in code for the tests.
+// What the tests share: small scenes built in code, and results compared bit
+// for bit.
 #pragma once
+
+#include <cstring>
+#include <string>
+#include <vector>
 
 #include "wetcloth/scene.hpp"
 #include "wetcloth/simulation.hpp"
@@ -32,6 +37,17 @@ inline Params bare(int n = 2) {
 inline Params coarse(const std::string& scene, std::vector<std::string> sets = {}) {
   sets.insert(sets.begin(), "cloth.resolution=[25,25]");
   return load_scene(scene, sets);
+}
+
+// The same bits in every component (NaNs and signed zeros too).
+inline bool same_bits(const Vec3Array& a, const Vec3Array& b) {
+  if (a.size() != b.size()) return false;
+  for (std::size_t i = 0; i < a.size(); ++i)
+    for (int q = 0; q < 3; ++q) {
+      const double x = a[i][q], y = b[i][q];
+      if (std::memcmp(&x, &y, sizeof x) != 0) return false;
+    }
+  return true;
 }
 
 }  // namespace wetcloth::test

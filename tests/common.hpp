@@ -33,6 +33,18 @@ inline Params bare(int n = 2) {
   return p;
 }
 
+// Pins each of `particles` of a grid cloth where it starts, with a pin handle
+// of its own from t = 0: the model's driven particles, as a scene makes them.
+inline void pin_particles(Params& p, const std::vector<int>& particles) {
+  const auto [nu, nv] = p.cloth.resolution;
+  for (const int k : particles) {
+    HandleParams pin;
+    pin.type = HandleType::Pin;
+    pin.at = {double(k % nu) / double(nu - 1), double(k / nu) / double(nv - 1)};
+    p.handles["pin" + std::to_string(k)] = pin;
+  }
+}
+
 // A built-in scene at a coarser grid, with the physics unchanged.
 inline Params coarse(const std::string& scene, std::vector<std::string> sets = {}) {
   sets.insert(sets.begin(), "cloth.resolution=[25,25]");

@@ -1,5 +1,10 @@
-// Small scenes built in code for the tests.
+// What the tests share: small scenes built in code, and results compared bit
+// for bit.
 #pragma once
+
+#include <cstring>
+#include <string>
+#include <vector>
 
 #include "wetcloth/scene.hpp"
 #include "wetcloth/simulation.hpp"
@@ -28,10 +33,33 @@ inline Params bare(int n = 2) {
   return p;
 }
 
+// Pins each of `particles` of a grid cloth where it starts, with a pin handle
+// of its own from t = 0: the model's driven particles, as a scene makes them.
+inline void pin_particles(Params& p, const std::vector<int>& particles) {
+  const auto [nu, nv] = p.cloth.resolution;
+  for (const int k : particles) {
+    HandleParams pin;
+    pin.type = HandleType::Pin;
+    pin.at = {double(k % nu) / double(nu - 1), double(k / nu) / double(nv - 1)};
+    p.handles["pin" + std::to_string(k)] = pin;
+  }
+}
+
 // A built-in scene at a coarser grid, with the physics unchanged.
 inline Params coarse(const std::string& scene, std::vector<std::string> sets = {}) {
   sets.insert(sets.begin(), "cloth.resolution=[25,25]");
   return load_scene(scene, sets);
+}
+
+// The same bits in every component (NaNs and signed zeros too).
+inline bool same_bits(const Vec3Array& a, const Vec3Array& b) {
+  if (a.size() != b.size()) return false;
+  for (std::size_t i = 0; i < a.size(); ++i)
+    for (int q = 0; q < 3; ++q) {
+      const double x = a[i][q], y = b[i][q];
+      if (std::memcmp(&x, &y, sizeof x) != 0) return false;
+    }
+  return true;
 }
 
 }  // namespace wetcloth::test

@@ -3,7 +3,7 @@
 # (headless) imports the rest OBJ, plays the PC2 cache on a Mesh Cache modifier
 # and must give every frame's vertices; VTK's XML reader (python3-vtk9) reads
 # the .pvd and .vtp files. Both up axes. Debian's Blender has no USD (no USD
-# library is in Debian): cloth.usda is read back by tests/test_caches.cpp.
+# library is in Debian): cloth.usda is read back by tests/io/test_caches.cpp.
 set -u
 W="$1"; SRC="$2"
 T=$(mktemp -d); trap 'rm -rf "$T"' EXIT

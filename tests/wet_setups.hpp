@@ -1,4 +1,4 @@
-// Wet-cloth test set-ups shared by the air, adhesion and friction tests.
+// Wet-cloth test set-ups shared by the air, adhesion, contact and friction tests.
 #pragma once
 
 #include <cmath>

@@ -547,8 +547,8 @@ positions and velocities are read-only views of the state (n x 3 float64,
 strides (8, 8 n): the library keeps x, y, z in columns), no copy: they follow
 the simulation as it steps. Assign the property to set them (a copy in).
 triangles, in_contact, pressure and adhesion are copies, made at each read.
-Saving and restoring a state is not offered yet: the State does not yet hold
-the whole state of a run.)doc");
+save(path) writes the whole state of the run (a checkpoint), and the static
+Simulation.load(path) continues it with the same numbers.)doc");
   cls.def(py::init([](const py::object& scene, const py::object& overrides, const py::kwargs& kw) {
             std::optional<long long> grid;
             const auto sets = override_texts(overrides, kw, &grid);

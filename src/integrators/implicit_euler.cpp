@@ -268,8 +268,7 @@ std::pair<double, double> precondition(const Model& m, Workspace& w) {
 // colliding pairs exert at the end of the substep, as the solve took them:
 // f - (1/h) Σ B (v'_a - v'_b), their stiffness over the step and their damping
 // (left out of f). The rig's force (MODEL.md section 9) is minus these: from f
-// alone, it lagged by h K v' and fell with the substep (on the hand-driven
-// oblique pull, by 18 % at max_step_strain 0.1).
+// alone, it lagged by h K v' and fell as the substep grew.
 void add_forces_at_new_velocities(const Model& m, const State& s, Workspace& w, double h) {
   if (w.fixed_particles.empty()) return;
   const Columns v = columns(m, w, kX);

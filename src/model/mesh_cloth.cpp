@@ -4,7 +4,7 @@
 // section 1 gives the rules; docs/guide.md how a scene uses them.
 //
 // The grid is a mesh cloth of one kind: an OBJ file of the grid's quads makes
-// the same particles, areas, springs and constants (tests/test_mesh_cloth.cpp).
+// the same particles, areas, springs and constants (tests/model/test_mesh_cloth.cpp).
 // The grid keeps its own kernels, which are faster; a mesh cloth runs on one
 // thread, so the thread count never changes its result.
 #include <algorithm>

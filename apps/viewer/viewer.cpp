@@ -18,6 +18,7 @@
 
 #include "common/scene_options.hpp"
 #include "draw.hpp"
+#include "integrator_step.hpp"
 #include "programs.hpp"
 #include "wetcloth/checkpoint.hpp"
 #include "wetcloth/scene.hpp"
@@ -155,6 +156,8 @@ class Viewer {
 
   void start_scene() {
     sim_ = std::make_unique<Simulation>(params_);
+    scene_integrator_ = params_.integrator.type;  // what the panel's integrator choice starts from
+    scene_dt_ = params_.integrator.dt;
     frame_camera();
     stage_ = stage_from(params_);
     glfwSetWindowTitle(window_, ("wetcloth - " + params_.name).c_str());
@@ -595,9 +598,13 @@ class Viewer {
       }
       break;
     }
-    if (combo("integrator", params_.integrator.type)) apply_params();
+    if (combo("integrator", params_.integrator.type)) {
+      params_.integrator.dt =
+          step_for_integrator(params_.integrator.type, scene_integrator_, scene_dt_);
+      apply_params();
+    }
     float dt = static_cast<float>(params_.integrator.dt);
-    if (ImGui::SliderFloat("time step, s", &dt, 1e-6f, 1e-3f, "%.1e",
+    if (ImGui::SliderFloat("time step, s", &dt, 1e-6f, 1.0f / 60, "%.1e",
                            ImGuiSliderFlags_Logarithmic)) {
       params_.integrator.dt = dt;
       apply_params();
@@ -743,6 +750,9 @@ class Viewer {
 
   ViewOptions opts_;
   Params params_;
+  // The integrator and step the scene came with (step_for_integrator).
+  IntegratorType scene_integrator_ = IntegratorType::SymplecticEuler;
+  double scene_dt_ = 0;
   std::vector<std::pair<std::string, std::string>> scenes_;  // label, built-in name ("": the file)
   int scene_index_ = 0;
   GLFWwindow* window_ = nullptr;

@@ -13,6 +13,9 @@
 #include <vector>
 
 #include "viewer/commands.hpp"
+#include "viewer/integrator_step.hpp"
+#include "wetcloth/scene.hpp"
+#include "wetcloth/simulation.hpp"
 
 #define STB_IMAGE_STATIC
 #define STB_IMAGE_IMPLEMENTATION
@@ -214,6 +217,35 @@ TEST(View, ScreenshotUnderXvfbShowsTheSceneAndThePanel) {
       dark += p[0] < 40 && p[1] < 40 && p[2] < 40;
     }
   EXPECT_GT(dark, total / 2) << "the panel is visible";
+}
+
+// An integrator picked in the panel gets a step of its kind: the large-step
+// ones 1/240 s from a small-step scene (at 5e-5 s xpbd would take ten
+// substeps where one is too many), the small-step ones 5e-5 s from a
+// large-step scene; a step of the scene's own kind stays. The step picked
+// runs: xpbd takes the straight pull 0.05 s in 12 steps.
+TEST(Panel, AnIntegratorPickedGetsAStepOfItsKind) {
+  using wetcloth::IntegratorType;
+  using wetcloth::viewer::step_for_integrator;
+  const wetcloth::Params pull = wetcloth::load_scene("pull-straight");
+  const wetcloth::Params sleeve = wetcloth::load_scene("sleeve-pull");
+  ASSERT_EQ(pull.integrator.type, IntegratorType::SymplecticEuler);
+  ASSERT_EQ(sleeve.integrator.type, IntegratorType::Xpbd);
+  const auto from = [](const wetcloth::Params& p, IntegratorType picked) {
+    return step_for_integrator(picked, p.integrator.type, p.integrator.dt);
+  };
+  EXPECT_EQ(from(pull, IntegratorType::Xpbd), 1.0 / 240);
+  EXPECT_EQ(from(pull, IntegratorType::ImplicitEuler), 1.0 / 240);
+  EXPECT_EQ(from(pull, IntegratorType::ExplicitEuler), pull.integrator.dt);
+  EXPECT_EQ(from(sleeve, IntegratorType::SymplecticEuler), 5e-5);
+  EXPECT_EQ(from(sleeve, IntegratorType::ImplicitEuler), sleeve.integrator.dt);
+
+  wetcloth::Params p = pull;
+  p.integrator.type = IntegratorType::Xpbd;
+  p.integrator.dt = from(pull, p.integrator.type);
+  wetcloth::Simulation sim(p);
+  ASSERT_TRUE(sim.advance_to(0.05)) << sim.blow_up_reason();
+  EXPECT_EQ(sim.state().steps, 12);
 }
 
 TEST(ContactSheet, LabelledTilesSideBySide) {

@@ -109,6 +109,20 @@ def without(words, options, flags=()):
     return out
 
 
+_mesh = {}
+
+
+def mesh_cloth(scene):
+    """Whether SCENE's cloth is a mesh (cloth.mesh set), as `check` prints it."""
+    if scene not in _mesh:
+        out = subprocess.run([W, "check", scene], capture_output=True, text=True).stdout
+        section, _mesh[scene] = "", False
+        for l in out.splitlines():
+            section = l if l.startswith("[") else section
+            _mesh[scene] |= section == "[cloth]" and bool(re.match(r'mesh = "[^"]', l))
+    return _mesh[scene]
+
+
 def small(words):
     """A doc's wetcloth command made quick: (arguments, allowed exit codes, note),
     or (None, None, reason) to skip it."""
@@ -138,7 +152,10 @@ def small(words):
             if "--video" in rest and not FFMPEG:
                 drop_flags, note = ("--video",), " (no ffmpeg: without --video)"
         args = without(rest, {"--grid", "--duration", "--size"}, drop_flags)
-        args = [sub] + args + ["--grid", GRID, "--duration", DURATION]
+        scene = next((w for w in args if not w.startswith("-")), None)
+        # A mesh cloth has no grid to shrink (--grid is an error there).
+        grid = [] if scene and mesh_cloth(scene) else ["--grid", GRID]
+        args = [sub] + args + grid + ["--duration", DURATION]
         if sub == "render":
             args += ["--size", "160x90"]
         return args, {0}, note

@@ -55,7 +55,8 @@ Params parse_scene(const std::string& toml_text, const std::string& source_name,
 // explicit step shrinks as its stability limit does (the same springs on
 // particles 1/grid² as heavy: Δt ∝ 1/grid). `--grid` and the benchmarks use
 // it; `--set cloth.resolution` alone changes only the grid. Throws SceneError
-// when a side would be under 3 or over cloth.resolution's range.
+// when a side would be under 3 or over cloth.resolution's range, and for a
+// mesh cloth (cloth.mesh), whose resolution is its file's.
 Params at_resolution(Params p, long long grid);
 
 // The text of a file a scene names by `key` (cloth.mesh, obstacle.NAME.mesh):

@@ -1184,6 +1184,11 @@ std::string params_markdown() {
 }
 
 Params at_resolution(Params p, long long grid) {
+  if (!p.cloth.mesh.empty())  // silently keeping the mesh would report a grid never run
+    throw SceneError("a grid " + std::to_string(grid) +
+                     " wide was asked of a cloth that is a mesh (" + "cloth.mesh = \"" +
+                     p.cloth.mesh + "\"): its vertices are its particles and " +
+                     "cloth.resolution is not used; remesh the file for another resolution");
   const auto [nu, nv] = p.cloth.resolution;
   const double scale = static_cast<double>(grid - 1) / static_cast<double>(nu - 1);
   const long long height = std::llround(static_cast<double>(nv - 1) * scale) + 1;

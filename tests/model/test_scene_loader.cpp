@@ -204,7 +204,7 @@ TEST(SceneLoader, EveryParameterIsDocumented) {
 // The same cloth on another grid: its height in particles scales with its
 // width, a handle's patch keeps its size in metres, an explicit step shrinks
 // with the spacing (an implicit one is left alone), and a side outside
-// cloth.resolution's range is refused.
+// cloth.resolution's range, or a cloth that is a mesh, is refused.
 TEST(SceneLoader, AtResolutionKeepsTheClothInMetres) {
   const std::string text =
       "[cloth]\nresolution = [21, 11]\n[handle.pull]\ntype = \"force\"\npatch = 2\n";
@@ -221,6 +221,16 @@ TEST(SceneLoader, AtResolutionKeepsTheClothInMetres) {
   EXPECT_EQ(at_resolution(implicit, 41).integrator.dt, implicit.integrator.dt);
   EXPECT_THROW(at_resolution(p, 1), SceneError);  // 1 x 1
   EXPECT_THROW(at_resolution(p, 2002), SceneError);
+  // A mesh cloth's particles are its file's vertices: no grid to resize, and
+  // the error says so rather than running the file's mesh under another name.
+  try {
+    at_resolution(load_scene("drape-disc"), 21);
+    ADD_FAILURE() << "a mesh cloth took a grid";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("cloth.mesh = \"meshes/cloth_disc.obj\""),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 // Params made in code get the checks a scene file gets: a Simulation is not

@@ -378,19 +378,20 @@ void assemble_diagonal_blocks(const Model& m, Workspace& w, double h) {
       d0[a] = d1[a] = d2[a] = m.mass[a] + h * c * m.area[a] + (w.colliding[a] ? h * kf : 0.0);
       d3[a] = d4[a] = d5[a] = 0.0;
     }
+    // An edge's block s sᵀ + β I, added at particle a.
+    const auto add = [&](int a, double x, double y, double z, double b) {
+      d0[a] += x * x + b;
+      d1[a] += y * y + b;
+      d2[a] += z * z + b;
+      d3[a] += x * y;
+      d4[a] += x * z;
+      d5[a] += y * z;
+    };
     if (!m.grid) {
       const float* block = w.mesh_blocks.data();
       for (const SpringSet* set : {&m.structural, &m.shear, &m.bending})
         for (std::size_t e = 0; e < set->size(); ++e, block += 4)
-          for (const int a : {set->a[e], set->b[e]}) {
-            const double x = block[0], y = block[1], z = block[2], b = block[3];
-            d0[a] += x * x + b;
-            d1[a] += y * y + b;
-            d2[a] += z * z + b;
-            d3[a] += x * y;
-            d4[a] += x * z;
-            d5[a] += y * z;
-          }
+          for (const int a : {set->a[e], set->b[e]}) add(a, block[0], block[1], block[2], block[3]);
       return;
     }
     for (int e = 0; e < 8; ++e)
@@ -400,15 +401,7 @@ void assemble_diagonal_blocks(const Model& m, Workspace& w, double h) {
         const float *s0 = edge_field(m, w, e, 0) + at, *s1 = edge_field(m, w, e, 1) + at,
                     *s2 = edge_field(m, w, e, 2) + at, *beta = edge_field(m, w, e, 3) + at;
 #pragma GCC ivdep
-        for (int a = a0; a < a1; ++a) {
-          const double x = s0[a], y = s1[a], z = s2[a], b = beta[a];
-          d0[a] += x * x + b;
-          d1[a] += y * y + b;
-          d2[a] += z * z + b;
-          d3[a] += x * y;
-          d4[a] += x * z;
-          d5[a] += y * z;
-        }
+        for (int a = a0; a < a1; ++a) add(a, s0[a], s1[a], s2[a], beta[a]);
       }
   });
   for (CollisionPair& p : w.collision_pairs) {

@@ -200,8 +200,6 @@ inline int grid_neighbour(const Model& m, int i, int j, int di, int dj) {
 // only the elastic part. Implicit Euler takes the damping into its matrix, the
 // symplectic step takes it with apply_spring_damping, after its velocity
 // update and before the move.
-// The stiffness of explicit_step_limit's chain of springs, N/m.
-double chain_stiffness(const Params& p);
 // The springs explicit_step_limit looks at, for a blow-up message:
 // "structural 200 N/m, shear 20 N/m, bending 20 N/m".
 std::string step_limit_springs_text(const Params& p);
@@ -213,6 +211,16 @@ void compute_normals_mesh(const Model& m, const double* X, Vec3Array& normal);
 void contact_border_mesh(const Model& m, const State& s, Workspace& w);
 void apply_spring_damping(const Model& m, State& s, Workspace& w, double h);
 void add_gravity(const Model& m, Vec3Array& f);
+// forces/bending.cpp: the quadratic bending's Q from the rest triangles (each
+// split's triangles counted 1 / splits), rigidity B; for a model, its grid
+// split both ways or its mesh's triangles. The force -Q x into f, and the
+// energy ½ xᵀ Q x.
+BendingMatrix build_bending_matrix(const std::vector<Vec3>& rest,
+                                   const std::vector<std::vector<std::array<int, 3>>>& splits,
+                                   const std::vector<std::uint8_t>& on_border, double rigidity);
+BendingMatrix build_bending_matrix(const Model& m, double rigidity);
+void add_bending_forces(const Model& m, const State& s, Vec3Array& f);
+double bending_energy(const Model& m, const Vec3Array& x);
 void add_viscous_damping(const Model& m, const State& s, Vec3Array& f);
 void add_wind(const Model& m, const State& s, const Workspace& w, Vec3Array& f);
 void add_air_pressure(const Model& m, const State& s, Workspace& w);

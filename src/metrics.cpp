@@ -51,8 +51,8 @@ double wrinkle_angle(const Model& m, const State& s) {
   return count ? sum / count : 0.0;
 }
 
-// The pull across the contact region's edge: the springs from lifted
-// particles to particles in contact, their elastic force on the latter along
+// The pull across the contact region's edge: the springs (and the bending)
+// from lifted particles to particles in contact, their elastic force on the latter along
 // the surface normal (the springs between two contact particles cancel). A
 // peel rig's force is the lifted part's weight and suction plus this.
 double front_pull(const Model& m, const State& s, const Vec3Array& surface_normal) {
@@ -79,6 +79,15 @@ double front_pull(const Model& m, const State& s, const Vec3Array& surface_norma
           const double len = d.norm();
           if (len > 0) pull += e.k * (len - e.rest) / len * d.dot(surface_normal[k]);
         }
+    }
+  // The quadratic bending: -Q_kj (x_j - x_k) on contact particle k from each lifted j.
+  const BendingMatrix& b = m.topology->bending;
+  if (m.contact_surface != SurfaceKind::None && !b.start.empty())
+    for (int k = 0; k < m.n; ++k) {
+      if (!s.contact[k]) continue;
+      for (int e = b.start[k]; e < b.start[k + 1]; ++e)
+        if (const int o = b.column[e]; !s.contact[o])
+          pull -= b.value[e] * (s.x[o] - s.x[k]).dot(surface_normal[k]);
     }
   return pull;
 }

@@ -82,7 +82,8 @@ void Simulation::reset() {
   ws_->grab_particle = grab_particle_;
   ws_->grab_target = grab_target_;
   ws_->grab_k = grab_k_;
-  for (auto* a : {&ws_->force, &ws_->normal, &ws_->surface_normal, &ws_->air_direction})
+  for (auto* a :
+       {&ws_->force, &ws_->bending_force, &ws_->normal, &ws_->surface_normal, &ws_->air_direction})
     a->assign(n, Vec3::Zero());
   ws_->x_before.assign(n, Vec3::Zero());
   ws_->row_sums.assign(model_.nv, 0.0);
@@ -173,6 +174,7 @@ namespace {
 void accumulate_forces(const Model& m, const State& s, Workspace& w, bool implicit) {
   for_each_particle(m, [&](int i) { put(w.force[i], Vec3::Zero()); });
   add_spring_forces(m, s, w, m.params.integrator.type == IntegratorType::ExplicitEuler);
+  add_bending_forces(m, s, w.force);
   compute_normals(m, s.x.column(0), w.normal, w.normals_scratch);
   add_gravity(m, w.force);
   if (!implicit) add_viscous_damping(m, s, w.force);

@@ -50,6 +50,7 @@ struct ThreadChoice {
 // Scratch arrays, reused every step: nothing is allocated per step.
 struct Workspace {
   Vec3Array force, normal, surface_normal;
+  Vec3Array bending_force;  // xpbd: the quadratic bending's, apart (add_external_velocity)
   std::vector<Vec3> x_before;
   NormalsScratch normals_scratch;
   std::vector<double> distance;       // signed distance to the contact surface
@@ -129,6 +130,7 @@ struct Workspace {
   std::vector<double> cg_columns;
   std::vector<int> fixed_particles;
   std::vector<double> row_sums, row_max;
+  double bending_h2 = 0;              // implicit Euler: the substep's h², Q's factor in its matrix
   int cg_iterations = 0;              // of the last implicit solve
   long long cg_iterations_total = 0;  // of every implicit solve since reset
   // Implicit Euler's step control: velocities at the start of a try; substeps

@@ -17,7 +17,9 @@ inline Params bare(int n = 2) {
   p.cloth.resolution = {n, n};
   p.cloth.size = {0.01 * (n - 1), 0.01 * (n - 1)};
   p.cloth.center = {0, 0, 1};
-  // Spring constants set directly (200/20/20 N/m at any spacing), undamped.
+  // Spring constants set directly (200/20/20 N/m at any spacing), undamped:
+  // Provot's bending springs, whose constant is a spring's.
+  p.material.bending = BendingModel::Provot;
   p.springs.structural_k = 200;
   p.springs.shear_k = 20;
   p.springs.bending_k = 20;

@@ -37,6 +37,11 @@ enum class AirForceDirection { Surface, Cloth };  // n_s; the cloth normal
 WETCLOTH_CHOICE(AirForceDirection, "surface", "cloth")
 enum class IntegratorType { SymplecticEuler, Xpbd, ImplicitEuler, ExplicitEuler };
 WETCLOTH_CHOICE(IntegratorType, "symplectic-euler", "xpbd", "implicit-euler", "explicit-euler")
+// Bending (MODEL.md section 1): the quadratic curvature energy (Bergou et al.
+// 2006), the same fabric at any grid; Provot's chord springs (i±2), the
+// paper's literal model, which soften on a finer grid.
+enum class BendingModel { Quadratic, Provot };
+WETCLOTH_CHOICE(BendingModel, "quadratic", "provot")
 enum class UpAxis { Z, Y };  // of the files written: the simulation's z, or y
 WETCLOTH_CHOICE(UpAxis, "z", "y")
 #undef WETCLOTH_CHOICE
@@ -101,12 +106,15 @@ struct Params {
   // any grid. Each spring's constants follow from them and the spacing
   // (resolve_springs); a 0.3 m cloth of 51 x 51 (l = 6 mm) gets 200/20/20 N/m.
   struct Material {
-    double stretch_stiffness = 200;    // membrane stiffness per unit width, N/m
-    double stretch_damping = 0.01;     // N·s/m
-    double shear_stiffness = 20;       // N/m
-    double shear_damping = 0.01;       // N·s/m
-    double bending_rigidity = 7.2e-4;  // B, N·m: bending springs get B / l²
-    double bending_damping = 3.6e-7;   // N·s·m: bending springs get it / l²
+    double stretch_stiffness = 200;  // membrane stiffness per unit width, N/m
+    double stretch_damping = 0.01;   // N·s/m
+    double shear_stiffness = 20;     // N/m
+    double shear_damping = 0.01;     // N·s/m
+    BendingModel bending = BendingModel::Quadratic;
+    // B, N·m: a cylindrical bend of curvature κ stores B κ²/2 per unit area
+    // (quadratic); Provot's bending springs get B / l².
+    double bending_rigidity = 2e-5;
+    double bending_damping = 3.6e-7;  // N·s·m: Provot's bending springs get it / l²
   } material;
 
   // Spring constants set directly (the blog's way): the same at every grid.

@@ -136,7 +136,8 @@ void update_vented(const Model& m, State& s, Workspace& w, double dt) {
     }
     v_atm = open ? v_sum : exchange(p, v_atm, v_old, v_sum, a_sum, dt, true);
     s.pocket_air.push_back(open ? PocketAir{} : pocket_air(p, v_atm, v_sum, a_sum, true));
-    const double pin = pressure(p, v_atm, v_sum);
+    // Open: P_atm exactly (P_atm V / V may round an ulp off it).
+    const double pin = open ? p.air.p_atm : pressure(p, v_atm, v_sum);
     for (int k : w.queue) {
       if (s.pocket[k] != id) continue;
       s.air_share[k] = v_sum > 0 ? v_atm * m.area[k] * air_gap(m, w.distance[k]) / v_sum : 0;

@@ -99,6 +99,24 @@ void filter(const Model& m, Workspace& w, Vector v) {
   });
 }
 
+// y += h² Q x over [a0, a1) (Q's off-diagonal entries: its diagonal is in the
+// diagonal blocks): the quadratic bending, a constant part of the matrix.
+void add_bending_product(const Model& m, Workspace& w, const Columns& x, const Columns& y, int a0,
+                         int a1) {
+  const BendingMatrix& b = m.topology->bending;
+  if (b.start.empty()) return;
+  const double h2 = w.bending_h2;
+  for (int k = 0; k < 3; ++k) {
+    const double* __restrict in = x.c[k];
+    double* __restrict out = y.c[k];
+    for (int a = a0; a < a1; ++a) {
+      double sum = 0;
+      for (int e = b.start[a]; e < b.start[a + 1]; ++e) sum += b.value[e] * in[b.column[e]];
+      out[a] += h2 * sum;
+    }
+  }
+}
+
 // y = A x over the free particles; fixed ones have identity rows (their x
 // never changes, so their columns only enter through the starting residual).
 // Each thread takes its block of rows, offset by offset in stencil order,
@@ -131,6 +149,7 @@ void multiply(const Model& m, const State& s, Workspace& w, Vector in, Vector ou
           y2[a] -= sz * t + beta * x2[b];
         }
       }
+    add_bending_product(m, w, xc, yc, 0, m.n);
     for (const int a : w.fixed_particles) {
       y0[a] = x0[a];
       y1[a] = x1[a];
@@ -171,6 +190,7 @@ void multiply(const Model& m, const State& s, Workspace& w, Vector in, Vector ou
           y2[a] = f2 - (t2[a] * tx + tb[a] * m2[a]);
         }
       }
+      add_bending_product(m, w, xc, yc, a0, a1);
       for (const int a : w.fixed_particles)
         if (a >= a0 && a < a1) {
           y0[a] = x0[a];
@@ -298,6 +318,15 @@ void add_forces_at_new_velocities(const Model& m, const State& s, Workspace& w, 
   for (const CollisionPair& c : w.collision_pairs)
     for (const auto& [a, b] : {std::pair{c.i, c.j}, std::pair{c.j, c.i}})
       if (fixed(m, s, a)) w.force[a] -= times(c.block, v.at(a) - v.at(b)) / h;
+  // The quadratic bending's -Q (x + h v'): its -h Q v'.
+  const BendingMatrix& b = m.topology->bending;
+  if (!b.start.empty())
+    for (const int a : w.fixed_particles) {
+      Vec3 qv = Vec3::Zero();
+      for (int e = b.start[a]; e < b.start[a + 1]; ++e)
+        qv += b.value[e] * (v.at(b.column[e]) - v.at(a));
+      w.force[a] -= h * qv;
+    }
 }
 
 // body(first, end) over each thread's block of particles.
@@ -365,6 +394,8 @@ void assemble_spring_blocks(const Model& m, const State& s, Workspace& w, double
 void assemble_diagonal_blocks(const Model& m, Workspace& w, double h) {
   const double h2 = h * h, c = m.params.forces.viscous_damping;
   const double kf = m.params.self_collision.damping;
+  const std::vector<double>& bending = m.topology->bending.diagonal;
+  w.bending_h2 = h2;
   const int nu = m.nu;
   for_each_row_block(m, [&](int j0, int j1, int) {
     const int a0 = j0 * nu, a1 = j1 * nu;
@@ -375,7 +406,8 @@ void assemble_diagonal_blocks(const Model& m, Workspace& w, double h) {
     double* __restrict d4 = diagonal_field(m, w, 4);
     double* __restrict d5 = diagonal_field(m, w, 5);
     for (int a = a0; a < a1; ++a) {
-      d0[a] = d1[a] = d2[a] = m.mass[a] + h * c * m.area[a] + (w.colliding[a] ? h * kf : 0.0);
+      d0[a] = d1[a] = d2[a] = m.mass[a] + h * c * m.area[a] + (w.colliding[a] ? h * kf : 0.0) +
+                              (bending.empty() ? 0.0 : h2 * bending[a]);
       d3[a] = d4[a] = d5[a] = 0.0;
     }
     // An edge's block s sᵀ + β I, added at particle a.

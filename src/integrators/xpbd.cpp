@@ -316,9 +316,19 @@ void collide_with_friction(const Model& m, State& s, Workspace& w,
 
 namespace {
 
-// v += h F / m, the viscous drag on each particle's own velocity implicit.
+// v += h F / m, the viscous drag on each particle's own velocity implicit;
+// and the quadratic bending's force (w.bending_force), taken with the mass a
+// substep needs to take it stably. Alone, a symplectic step of h holds while
+// h² λ_max(M⁻¹ Q) < 4, and Gershgorin bounds λ_max by max_i Σ_j |Q_ij| / m_i;
+// a particle whose row would pass h² Σ_j |Q_ij| / m_i = 1 is taken as that
+// much heavier (with the constraints' projections after it, 3.5 let `hang`
+// at 201 x 201 stretch 66 % in 0.05 s where 1 keeps it at 12 %). That slows
+// the fast bends of fine grids only (by 1.4 at most at 51 x 51 in 10
+// substeps); where the cloth comes to rest the forces balance as they would.
 void add_external_velocity(const Model& m, State& s, const Workspace& w, double h) {
   const double c = m.params.forces.viscous_damping;
+  const BendingMatrix& b = m.topology->bending;
+  const double stable = 1.0 / (h * h);
   for_each_particle_block(m, [&](int first, int end) {
     for (int q = 0; q < 3; ++q) {
       const double* __restrict f = w.force.column(q);
@@ -328,6 +338,12 @@ void add_external_velocity(const Model& m, State& s, const Workspace& w, double 
         const double hm = h * m.inv_mass[i];
         v[i] += hm / (1 + hm * c * m.area[i]) * f[i];
       }
+      if (b.start.empty()) continue;
+      const double* __restrict fb = w.bending_force.column(q);
+      const double* __restrict bound = b.bound.data();
+#pragma GCC ivdep
+      for (int i = first; i < end; ++i)
+        v[i] += h * std::min(m.inv_mass[i], stable / bound[i]) * fb[i];
     }
   });
 }
@@ -354,6 +370,10 @@ void xpbd_step(const Model& m, State& s, Workspace& w) {
     add_air_pressure(m, s, w);
     add_adhesion(m, s, w);
     add_handle_forces(m, s, w);
+    if (!m.topology->bending.start.empty()) {
+      for_each_particle(m, [&](int i) { put(w.bending_force[i], Vec3::Zero()); });
+      add_bending_forces(m, s, w.bending_force);
+    }
     add_external_velocity(m, s, w, h);
     w.x_prev = s.x;
     move_at_new_velocities(m, s, w, h);  // the air term implicit, then x += h v

@@ -382,7 +382,7 @@ void build_mesh_cloth(Model& m, Topology& t, const Params& p) {
   Edges edges = polygon_edges(c);
   std::vector<std::array<int, 2>> edge_pairs, strain_pairs;
   add_stretch_springs(m, p, c, edges, edge_pairs, strain_pairs);
-  add_bending_springs(m, p, c, edges, edge_pairs);
+  if (p.material.bending == BendingModel::Provot) add_bending_springs(m, p, c, edges, edge_pairs);
   build_neighbour_lists(m, t, p, edge_pairs, strain_pairs);
   // As a grid's particles along its longer side (xpbd_substeps).
   double longest = 0;

@@ -72,10 +72,29 @@ ResolvedSprings resolve_springs(const Params& p) {
   r.bending_diagonal = spring(s.bending_k, s.bending_damping,
                               m.bending_rigidity / (du * dv) * (shear_ratio * shear_ratio),
                               m.bending_damping / (du * dv) * (shear_ratio * shear_ratio));
+  // The quadratic bending is no spring (forces/bending.cpp).
+  if (m.bending == BendingModel::Quadratic) r.bending_u = r.bending_v = r.bending_diagonal = {};
   return r;
 }
 
-double detail::chain_stiffness(const Params& p) {
+std::string detail::step_limit_springs_text(const Params& p) {
+  const ResolvedSprings r = resolve_springs(p);
+  char b[200];
+  if (p.material.bending == BendingModel::Quadratic)
+    std::snprintf(b, sizeof b, "structural %g N/m, shear %g N/m, bending B %g N·m",
+                  std::max(r.structural_u.k, r.structural_v.k), r.shear.k,
+                  p.material.bending_rigidity);
+  else
+    std::snprintf(b, sizeof b, "structural %g N/m, shear %g N/m, bending %g N/m",
+                  std::max(r.structural_u.k, r.structural_v.k), r.shear.k,
+                  std::max({r.bending_u.k, r.bending_v.k, r.bending_diagonal.k}));
+  return b;
+}
+
+namespace {
+
+// The stiffness of the explicit limit's chain of springs, N/m.
+double chain_stiffness(const Params& p) {
   const ResolvedSprings r = resolve_springs(p);
   const double ks = std::max(r.structural_u.k, r.structural_v.k);
   const double kb = std::max({r.bending_u.k, r.bending_v.k, r.bending_diagonal.k});
@@ -84,36 +103,55 @@ double detail::chain_stiffness(const Params& p) {
   return ks >= 4 * kb ? ks : (2 * ks + 4 * kb + ks * ks / (4 * kb)) / 4;
 }
 
-std::string detail::step_limit_springs_text(const Params& p) {
+// The springs' highest frequency squared, 8 k / m, for the lightest particle
+// (a corner's) and the stiffest chain (chain_stiffness). The shear springs add
+// to the stiffest mode as the structural ones do (a particle's four diagonal
+// neighbours pull along its motion with k_shear / 2 each): without them a
+// stiff shear spring blew up "within the limit".
+double spring_omega2(const Params& p) {
   const ResolvedSprings r = resolve_springs(p);
-  char b[200];
-  std::snprintf(b, sizeof b, "structural %g N/m, shear %g N/m, bending %g N/m",
-                std::max(r.structural_u.k, r.structural_v.k), r.shear.k,
-                std::max({r.bending_u.k, r.bending_v.k, r.bending_diagonal.k}));
-  return b;
+  const double k = chain_stiffness(p) + r.shear.k;
+  const double m_min = particle_areal_mass(p) * r.du * r.dv / 4;  // a corner's
+  return 8.0 * k / m_min;
 }
 
+double step_limit(double omega2) { return omega2 > 0 ? 2.0 / std::sqrt(omega2) : 1.0; }
+
+}  // namespace
+
 double explicit_step_limit(const Params& p) {
-  const ResolvedSprings r = resolve_springs(p);
-  // The shear springs add to the stiffest mode as the structural ones do (a
-  // particle's four diagonal neighbours pull along its motion with k_shear / 2
-  // each): without them a stiff shear spring blew up "within the limit".
-  const double k = detail::chain_stiffness(p) + r.shear.k;
-  const double m_min = particle_areal_mass(p) * r.du * r.dv / 4;  // a corner's
-  return k > 0 ? 2.0 / std::sqrt(8.0 * k / m_min) : 1.0;
+  double omega2 = spring_omega2(p);
+  if (p.material.bending == BendingModel::Quadratic) {
+    // The quadratic bending's highest mode: B (4/du² + 4/dv²)² / ρ inside the
+    // cloth (the 13-point biharmonic's Gershgorin bound, 64 B / l⁴ρ on a square
+    // grid), twice that for the rows next to the border, which carry its area.
+    const ResolvedSprings r = resolve_springs(p);
+    const double lap = 4 / (r.du * r.du) + 4 / (r.dv * r.dv);
+    omega2 += 2 * p.material.bending_rigidity * lap * lap / particle_areal_mass(p);
+  }
+  return step_limit(omega2);
 }
 
 double explicit_step_limit(const Model& m) {
-  if (m.grid) return explicit_step_limit(m.params);
-  // The grid's rule, with the mesh's stiffest springs and lightest particle.
-  const auto stiffest = [](const SpringSet& s) {
-    return s.k.empty() ? 0.0 : *std::max_element(s.k.begin(), s.k.end());
-  };
-  const double ks = stiffest(m.structural), kb = stiffest(m.bending);
-  const double chain = ks >= 4 * kb ? ks : (2 * ks + 4 * kb + ks * ks / (4 * kb)) / 4;
-  const double k = chain + stiffest(m.shear);
-  const double m_min = m.mass.empty() ? 0.0 : *std::min_element(m.mass.begin(), m.mass.end());
-  return k > 0 && m_min > 0 ? 2.0 / std::sqrt(8.0 * k / m_min) : 1.0;
+  double omega2 = 0;
+  if (m.grid) {
+    omega2 = spring_omega2(m.params);
+  } else {  // the grid's rule, with the mesh's stiffest springs and lightest particle
+    const auto stiffest = [](const SpringSet& s) {
+      return s.k.empty() ? 0.0 : *std::max_element(s.k.begin(), s.k.end());
+    };
+    const double ks = stiffest(m.structural), kb = stiffest(m.bending);
+    const double chain = ks >= 4 * kb ? ks : (2 * ks + 4 * kb + ks * ks / (4 * kb)) / 4;
+    const double k = chain + stiffest(m.shear);
+    const double m_min = m.mass.empty() ? 0.0 : *std::min_element(m.mass.begin(), m.mass.end());
+    if (m_min > 0) omega2 = 8.0 * k / m_min;
+  }
+  // The quadratic bending: Gershgorin's bound on each row of M⁻¹ Q.
+  const BendingMatrix& b = m.topology->bending;
+  double bending = 0;
+  for (std::size_t i = 0; i < b.bound.size(); ++i)
+    if (m.mass[i] > 0) bending = std::max(bending, b.bound[i] / m.mass[i]);
+  return step_limit(omega2 + bending);
 }
 
 namespace {
@@ -121,7 +159,7 @@ namespace {
 void add_spring(SpringSet& s, const Model& m, const StencilEdge& st, int i0, int j0) {
   const int i1 = i0 + st.di, j1 = j0 + st.dj;
   auto inside = [&](int i, int j) { return i >= 0 && j >= 0 && i < m.nu && j < m.nv; };
-  if (!inside(i0, j0) || !inside(i1, j1)) return;
+  if (!inside(i0, j0) || !inside(i1, j1) || (st.k == 0 && st.damping == 0)) return;
   const int a = m.index(i0, j0), b = m.index(i1, j1);
   s.a.push_back(a);
   s.b.push_back(b);
@@ -158,6 +196,8 @@ Model build_model(const Params& p) {
     build_grid(m, *topology, p);
   else
     build_mesh_cloth(m, *topology, p);
+  if (p.material.bending == BendingModel::Quadratic)
+    topology->bending = detail::build_bending_matrix(m, p.material.bending_rigidity);
   // Triangles sharing an edge (for the wrinkle measure).
   std::unordered_map<long long, int> first;
   for (int t = 0; t < static_cast<int>(m.triangles.size()); ++t)

@@ -189,12 +189,19 @@ std::vector<ParamDef> cloth_defs() {
       field("material.shear_damping", "N·s/m", 0, 1e3,
             "damping of shear: the shear springs' on a square grid of any spacing",
             P(material.shear_damping)),
+      field("material.bending", "", 1, 0,
+            "bending model: quadratic (a curvature energy, Bergou et al. 2006: the same fabric at "
+            "any grid) or provot (the paper's chord springs across two grid steps, which soften "
+            "on a finer grid)",
+            P(material.bending)),
       field("material.bending_rigidity", "N·m", 0, 1e3,
-            "bending rigidity B: the bending springs get B / l² at spacing l (20 N/m at 6 mm, a "
-            "0.3 m cloth of 51 × 51)",
+            "bending rigidity B (Kawabata's B): a bend of curvature κ stores B κ²/2 per unit "
+            "area; with material.bending = \"provot\" the bending springs get B / l² at spacing l "
+            "(7.2e-4 gives the paper's 20 N/m at 6 mm)",
             P(material.bending_rigidity)),
       field("material.bending_damping", "N·s·m", 0, 1,
-            "damping of bending: the bending springs get it / l² (0.01 N·s/m at 6 mm)",
+            "damping of Provot's bending springs: they get it / l² (0.01 N·s/m at 6 mm); the "
+            "quadratic bending is undamped",
             P(material.bending_damping)),
       optional_field("springs.structural_k", "N/m", 0, 1e7,
                      "every structural spring's constant at any grid, set directly (the blog's "
@@ -959,6 +966,11 @@ void check_consistency(const Params& p, const std::string& source,
   for (int i = 0; i < 2; ++i)
     if (p.wind.region_min[i] > p.wind.region_max[i])
       bad("wind.region_min", "must not exceed wind.region_max");
+  if (p.material.bending == BendingModel::Quadratic &&
+      (p.springs.bending_k || p.springs.bending_damping))
+    bad(p.springs.bending_k ? "springs.bending_k" : "springs.bending_damping",
+        "sets Provot's bending springs, which material.bending = \"quadratic\" (the default) "
+        "does not have: set material.bending = \"provot\", or material.bending_rigidity");
   check_cloth_start(p, bad);
   // Params made in code (validate) may step to any time they like.
   if (source != kInCode) check_run_timing(p, bad);
@@ -1200,20 +1212,18 @@ Params at_resolution(Params p, long long grid) {
                        std::to_string(std::llround(d.min)) + " to " +
                        std::to_string(std::llround(d.max)) + " particles");
   for (auto& [name, h] : p.handles) h.patch = std::llround(static_cast<double>(h.patch) * scale);
-  const double k_before = detail::chain_stiffness(p);
+  const double limit_before = explicit_step_limit(p);
   p.cloth.resolution = {grid, height};
   // A set number of xpbd substeps grows with the grid (0, the default, grows by itself).
   if (p.integrator.type == IntegratorType::Xpbd && scale > 1 && p.integrator.substeps > 0)
     p.integrator.substeps =
         std::llround(std::ceil(static_cast<double>(p.integrator.substeps) * scale));
-  // The particles get lighter as the spacing squared; bending springs stiffer
-  // (B / l²), and from about 101 x 101 on a 0.3 m cloth they set the limit.
+  // The particles get lighter as the spacing squared, the springs' limit
+  // falls as the spacing, the bending's (quadratic, or Provot's B / l²) faster:
+  // the step falls as the spacing, or as the limit where that falls faster.
   if (p.integrator.type != IntegratorType::ImplicitEuler &&
-      p.integrator.type != IntegratorType::Xpbd && scale > 1) {
-    p.integrator.dt /= scale;
-    const double k_after = detail::chain_stiffness(p);
-    if (k_after > k_before) p.integrator.dt *= std::sqrt(k_before / k_after);
-  }
+      p.integrator.type != IntegratorType::Xpbd && scale > 1)
+    p.integrator.dt *= std::min(1.0 / scale, explicit_step_limit(p) / limit_before);
   return p;
 }
 
@@ -1255,6 +1265,11 @@ std::string springs_text(const Params& p) {
     << source(p.springs.shear_k, "material.shear_stiffness") << "); damping "
     << num(r.shear.damping) << " N·s/m ("
     << source(p.springs.shear_damping, "material.shear_damping") << ")\n";
+  if (p.material.bending == BendingModel::Quadratic) {
+    o << "#   bending: quadratic (a curvature energy, no springs), B "
+      << num(p.material.bending_rigidity) << " N·m (material.bending_rigidity)\n";
+    return o.str();
+  }
   o << "#   bending: k "
     << values({{r.bending_u.k, "along u"},
                {r.bending_v.k, "along v"},

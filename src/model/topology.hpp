@@ -5,6 +5,7 @@
 #pragma once
 
 #include <array>
+#include <cstdint>
 #include <vector>
 
 namespace wetcloth {
@@ -14,6 +15,16 @@ namespace wetcloth {
 struct StencilEdge {
   int di = 0, dj = 0;
   double k = 0, damping = 0, rest = 0;
+};
+
+// The quadratic bending's Q (forces/bending.cpp), N/m: E = ½ xᵀ Q x per
+// component. Its off-diagonal entries by row, sorted (row i's are
+// [start[i], start[i + 1])), exactly symmetric; the diagonal, each row's sum
+// zero; bound, each row's Σ_j |Q_ij| (Gershgorin's bound on its stiffness).
+// Empty with material.bending = "provot".
+struct BendingMatrix {
+  std::vector<int> start, column;
+  std::vector<double> value, diagonal, bound;
 };
 
 struct Topology {
@@ -34,6 +45,7 @@ struct Topology {
   // bounding box's longest side over the mean edge, plus one): xpbd_substeps.
   int along = 0;
   std::vector<std::array<int, 2>> triangle_pairs;  // triangles sharing an edge
+  BendingMatrix bending;
 };
 
 }  // namespace wetcloth

@@ -32,17 +32,22 @@ TEST(SceneLoader, ReadsValuesAndKeepsDefaults) {
 // constant set directly is that constant at every grid.
 TEST(SceneLoader, SpringsFollowTheMaterialAndTheSpacing) {
   const auto stencil = [](const Params& p) { return build_model(p).topology->stencil; };
+  // The quadratic bending (the default) has no springs: offsets 4-7 are empty.
   for (const auto& e : stencil(load_scene("pull-straight"))) {
     const bool structural = std::abs(e.di) + std::abs(e.dj) == 1;
     const bool shear = std::abs(e.di) == 1 && std::abs(e.dj) == 1;
-    EXPECT_EQ(e.k, structural ? 200.0 : 20.0) << e.di << "," << e.dj;
-    EXPECT_EQ(e.damping, 0.01) << e.di << "," << e.dj;
-    (void)shear;
+    EXPECT_EQ(e.k, structural ? 200.0 : shear ? 20.0 : 0.0) << e.di << "," << e.dj;
+    EXPECT_EQ(e.damping, structural || shear ? 0.01 : 0.0) << e.di << "," << e.dj;
   }
+  // Provot's: the paper's 20 N/m at 6 mm from B = 7.2e-4 N·m.
+  const std::vector<std::string> provot = {"material.bending=\"provot\"",
+                                           "material.bending_rigidity=7.2e-4"};
+  for (const auto& e : stencil(load_scene("pull-straight", provot)))
+    if (std::abs(e.di) == 2 || std::abs(e.dj) == 2) EXPECT_EQ(e.k, 20.0) << e.di << "," << e.dj;
   // l = 12 mm and 3 mm: bending B / l² = 5 and 80 N/m, its damping alike;
   // structural and shear as given.
   for (const auto& [grid, bending] : {std::pair{26, 5.0}, std::pair{101, 80.0}}) {
-    const auto s = stencil(at_resolution(load_scene("pull-straight"), grid));
+    const auto s = stencil(at_resolution(load_scene("pull-straight", provot), grid));
     EXPECT_DOUBLE_EQ(s[0].k, 200) << grid;
     EXPECT_DOUBLE_EQ(s[2].k, 20) << grid;
     for (int e = 4; e < 8; ++e) {
@@ -51,16 +56,21 @@ TEST(SceneLoader, SpringsFollowTheMaterialAndTheSpacing) {
     }
   }
   // Set directly: the same at every grid.
-  const auto set = stencil(at_resolution(
-      load_scene("pull-straight", {"springs.bending_k=20", "springs.structural_damping=0.5"}),
-      101));
+  const auto set = stencil(
+      at_resolution(load_scene("pull-straight",
+                               {"material.bending=\"provot\"", "material.bending_rigidity=7.2e-4",
+                                "springs.bending_k=20", "springs.structural_damping=0.5"}),
+                    101));
   EXPECT_EQ(set[4].k, 20);
   EXPECT_EQ(set[7].k, 20);
   EXPECT_EQ(set[0].damping, 0.5);
   EXPECT_NEAR(set[4].damping, 0.04, 1e-12);  // unset: from the material
   // A grid that is not square (du = 15 mm, dv = 30 mm): the membrane keeps
   // its stiffness per unit width in every direction.
-  const auto r = resolve_springs(parse_scene("[cloth]\nresolution = [21, 11]\n", "s.toml"));
+  const auto r =
+      resolve_springs(parse_scene("[cloth]\nresolution = [21, 11]\n[material]\nbending = "
+                                  "\"provot\"\nbending_rigidity = 7.2e-4\n",
+                                  "s.toml"));
   EXPECT_DOUBLE_EQ(r.structural_u.k, 400);
   EXPECT_DOUBLE_EQ(r.structural_v.k, 100);
   EXPECT_DOUBLE_EQ(r.shear.k, 16);
@@ -84,8 +94,13 @@ TEST(SceneLoader, MaterialAndSpringOverridesAreCheckedAndPrinted) {
   EXPECT_NE(text.find("shear_k = 30.0\n"), std::string::npos) << text;
   EXPECT_NE(text.find("# structural_k: unset, from [material]\n"), std::string::npos) << text;
   EXPECT_NE(text.find("#   shear: k 30 N/m (set in [springs])"), std::string::npos) << text;
-  EXPECT_NE(text.find("#   bending: k 20 N/m (from material.bending_rigidity)"), std::string::npos)
+  EXPECT_NE(text.find("#   bending: quadratic (a curvature energy, no springs), B 2e-05 N·m "
+                      "(material.bending_rigidity)"),
+            std::string::npos)
       << text;
+  EXPECT_NE(to_toml(load_scene("pull-straight", {"material.bending=\"provot\""}))
+                .find("#   bending: k 0.5556 N/m (from material.bending_rigidity)"),
+            std::string::npos);
   const Params q = parse_scene(text, "resolved.toml");
   EXPECT_EQ(q.springs.shear_k, 30.0);
   EXPECT_FALSE(q.springs.structural_k);
@@ -212,7 +227,11 @@ TEST(SceneLoader, AtResolutionKeepsTheClothInMetres) {
   const Params fine = at_resolution(p, 41);
   EXPECT_EQ(fine.cloth.resolution, (Vec2i{41, 21}));
   EXPECT_EQ(fine.handles.at("pull").patch, 4);
-  EXPECT_DOUBLE_EQ(fine.integrator.dt, p.integrator.dt / 2);
+  // The step falls as the spacing, or as the explicit limit where that falls
+  // faster (the bending's falls as the spacing squared).
+  EXPECT_DOUBLE_EQ(fine.integrator.dt, p.integrator.dt * std::min(0.5, explicit_step_limit(fine) /
+                                                                           explicit_step_limit(p)));
+  EXPECT_LT(fine.integrator.dt, p.integrator.dt / 2);
   const Params coarse = at_resolution(p, 11);
   EXPECT_EQ(coarse.cloth.resolution, (Vec2i{11, 6}));
   EXPECT_EQ(coarse.handles.at("pull").patch, 1);

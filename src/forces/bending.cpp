@@ -1,0 +1,253 @@
+// Quadratic bending (MODEL.md section 1; after Bergou, Wardetzky, Harmon,
+// Zorin & Grinspun 2006, "A Quadratic Bending Model for Inextensible
+// Surfaces"). For a cloth whose rest shape is flat and whose stretch stays
+// small, the bending energy is ½ B ∫ |∇∇x|² dA = ½ B ∫ (κ₁² + κ₂²) dA: each
+// particle's Hessian of the positions is linear in them, with weights from
+// the rest shape alone, so E = ½ xᵀ Q x with Q constant and the force -Q x
+// linear. The symplectic step adds it, implicit Euler adds Q to its matrix
+// once, xpbd adds it with the mass a substep needs to take it stably.
+//
+// Choices (docs/model.md section 1, with the measurements):
+// - The squared Hessian (a plate of Poisson's ratio 0), not Bergou's squared
+//   mean curvature (κ₁ + κ₂)²: the two agree on every bend a cloth can make
+//   without stretching, but a saddle (κ₂ = -κ₁) costs nothing in the second,
+//   and a strip bent along its length then curls across it as far as its
+//   soft membrane lets it: Peirce's cantilever gave back 0.75 B at every
+//   grid. Its per-edge stencils, on a grid of right triangles, also store a
+//   cylinder bend at 45° to the rows at twice the energy of one along them.
+// - Each inner particle's Hessian is the least-squares quadratic through its
+//   neighbours in the rest shape's tangent plane (exact for any quadratic,
+//   zero for an affine map: a flat or rigidly moved cloth feels nothing),
+//   weighted by its mixed Voronoi area (Meyer et al. 2003).
+// - A border particle's own fit would be one-sided: its area goes in equal
+//   shares to its inner neighbours, whose curvature stands for it. A uniform
+//   bend then stores B κ²/2 over the whole cloth.
+// - The rest shape's own angles and lengths: a mesh cloth's rest is its flat
+//   pattern. A grid is split both ways and the two averaged (its areas and
+//   neighbours do not depend on the split).
+#include <Eigen/SVD>
+#include <algorithm>
+#include <cmath>
+
+#include "detail.hpp"
+
+namespace wetcloth::detail {
+
+namespace {
+
+// Per row, (column, value) pairs being summed.
+using Row = std::vector<std::pair<int, double>>;
+
+void add_to(Row& row, int column, double value) {
+  for (auto& [c, v] : row)
+    if (c == column) {
+      v += value;
+      return;
+    }
+  row.push_back({column, value});
+}
+
+// Each particle's neighbours along the triangles' edges, sorted; and its
+// mixed Voronoi area (Meyer et al. 2003), each split's triangles counted
+// 1 / splits.
+struct Rings {
+  std::vector<std::vector<int>> around;
+  std::vector<double> area;
+  std::vector<Vec3> normal;  // area-weighted, of the rest triangles at it
+};
+
+Rings rings_of(const std::vector<Vec3>& x,
+               const std::vector<std::vector<std::array<int, 3>>>& splits) {
+  const std::size_t n = x.size();
+  Rings r{std::vector<std::vector<int>>(n), std::vector<double>(n, 0.0),
+          std::vector<Vec3>(n, Vec3::Zero())};
+  const double weight = 1.0 / static_cast<double>(splits.size());
+  for (const auto& triangles : splits)
+    for (const auto& t : triangles) {
+      const Vec3 e[3] = {x[t[2]] - x[t[1]], x[t[0]] - x[t[2]], x[t[1]] - x[t[0]]};  // opposite k
+      const Vec3 cross = e[1].cross(e[2]);
+      const double twice_area = cross.norm();
+      if (!(twice_area > 0)) continue;  // a degenerate triangle holds nothing
+      double cot[3];
+      for (int k = 0; k < 3; ++k) cot[k] = -e[(k + 1) % 3].dot(e[(k + 2) % 3]) / twice_area;
+      const int obtuse = cot[0] < 0 ? 0 : cot[1] < 0 ? 1 : cot[2] < 0 ? 2 : -1;
+      for (int k = 0; k < 3; ++k) {
+        // Voronoi: |e|² cot / 8 over the two sides at k; at an obtuse
+        // triangle half its area to the obtuse corner, a quarter to the others.
+        const double a = obtuse < 0 ? (e[(k + 1) % 3].squaredNorm() * cot[(k + 1) % 3] +
+                                       e[(k + 2) % 3].squaredNorm() * cot[(k + 2) % 3]) /
+                                          8
+                                    : twice_area / (obtuse == k ? 4 : 8);
+        r.area[t[k]] += weight * a;
+        r.normal[t[k]] += weight * cross;
+        for (const int other : {t[(k + 1) % 3], t[(k + 2) % 3]}) r.around[t[k]].push_back(other);
+      }
+    }
+  for (auto& a : r.around) {
+    std::sort(a.begin(), a.end());
+    a.erase(std::unique(a.begin(), a.end()), a.end());
+  }
+  return r;
+}
+
+// The stencil of particle i's Hessian: fitted by least squares over its
+// neighbours in the rest shape's tangent plane, x_j - x_i ≈ g·d + ½ dᵀ H d
+// (d their rest offsets there), which is exact for any quadratic field and
+// so zero for an affine one. Returns the particles and, for each, its
+// coefficients in H_uu, H_uv, H_vv; empty where the fit is not determined.
+struct HessianStencil {
+  std::vector<int> particle;
+  std::vector<std::array<double, 3>> c;
+};
+
+HessianStencil hessian_stencil(const std::vector<Vec3>& x, const Rings& r, int i) {
+  std::vector<int> near = r.around[i];
+  if (near.size() < 6) {  // too few for five unknowns, well posed: the next ring too
+    for (const int j : r.around[i]) near.insert(near.end(), r.around[j].begin(), r.around[j].end());
+    std::sort(near.begin(), near.end());
+    near.erase(std::unique(near.begin(), near.end()), near.end());
+    near.erase(std::remove(near.begin(), near.end(), i), near.end());
+  }
+  const Vec3 n = r.normal[i].normalized();
+  const Vec3 t1 = n.unitOrthogonal(), t2 = n.cross(t1);
+  const int k = static_cast<int>(near.size());
+  Eigen::MatrixXd a(k, 5);
+  double scale = 0;
+  for (int q = 0; q < k; ++q) scale = std::max(scale, (x[near[q]] - x[i]).norm());
+  for (int q = 0; q < k; ++q) {  // in units of the farthest neighbour: well scaled
+    const Vec3 d = (x[near[q]] - x[i]) / scale;
+    const double u = d.dot(t1), v = d.dot(t2);
+    a.row(q) << u, v, 0.5 * u * u, u * v, 0.5 * v * v;
+  }
+  const Eigen::JacobiSVD<Eigen::MatrixXd> svd(a, Eigen::ComputeThinU | Eigen::ComputeThinV);
+  const auto& sv = svd.singularValues();
+  if (k < 5 || !(sv(4) > 1e-6 * sv(0))) return {};
+  const Eigen::MatrixXd fit = svd.solve(Eigen::MatrixXd::Identity(k, k));  // 5 x k
+  HessianStencil h;
+  h.particle = near;
+  h.particle.push_back(i);
+  std::array<double, 3> self{};
+  for (int q = 0; q < k; ++q) {
+    std::array<double, 3> c;
+    for (int e = 0; e < 3; ++e) {
+      c[e] = fit(2 + e, q) / (scale * scale);
+      self[e] -= c[e];
+    }
+    h.c.push_back(c);
+  }
+  h.c.push_back(self);
+  return h;
+}
+
+}  // namespace
+
+BendingMatrix build_bending_matrix(const std::vector<Vec3>& rest,
+                                   const std::vector<std::vector<std::array<int, 3>>>& splits,
+                                   const std::vector<std::uint8_t>& on_border, double rigidity) {
+  const int n = static_cast<int>(rest.size());
+  const Rings r = rings_of(rest, splits);
+  // Each inner particle's area and its share of its border neighbours'.
+  std::vector<double> carried(r.area);
+  for (int k = 0; k < n; ++k) {
+    if (!on_border[k]) continue;
+    carried[k] = 0;
+    int inner = 0;
+    for (const int j : r.around[k]) inner += !on_border[j];
+    for (const int j : r.around[k])
+      if (!on_border[j]) carried[j] += r.area[k] / inner;
+  }
+  // E = ½ B Σ_i A_i (H_uu² + 2 H_uv² + H_vv²): row j of Q gets, from each
+  // inner particle i whose stencil holds j, B A_i Σ_e w_e c_je c_i·e.
+  std::vector<Row> q(n);
+  for (int i = 0; i < n; ++i) {
+    if (on_border[i] || !(carried[i] > 0)) continue;
+    const HessianStencil h = hessian_stencil(rest, r, i);
+    const double w = rigidity * carried[i];
+    for (std::size_t a = 0; a < h.particle.size(); ++a)
+      for (std::size_t b = 0; b < h.particle.size(); ++b) {
+        const auto &ca = h.c[a], &cb = h.c[b];
+        add_to(q[h.particle[a]], h.particle[b],
+               w * (ca[0] * cb[0] + 2 * ca[1] * cb[1] + ca[2] * cb[2]));
+      }
+  }
+  BendingMatrix b;
+  b.start.push_back(0);
+  b.diagonal.assign(n, 0.0);
+  b.bound.assign(n, 0.0);
+  for (int j = 0; j < n; ++j) {
+    std::sort(q[j].begin(), q[j].end());
+    for (const auto& [k, v] : q[j]) {
+      if (k == j || v == 0) continue;
+      b.column.push_back(k);
+      b.value.push_back(v);
+    }
+    b.start.push_back(static_cast<int>(b.column.size()));
+  }
+  // Exactly symmetric (Q_jk and Q_kj summed the same terms in other orders),
+  // so that the forces' pairs cancel: momentum is kept to the last bit of
+  // each pair. The diagonal makes each row sum to zero.
+  for (int j = 0; j < n; ++j)
+    for (int e = b.start[j]; e < b.start[j + 1]; ++e) {
+      const int k = b.column[e];
+      if (k < j) {
+        const auto first = b.column.begin() + b.start[k], last = b.column.begin() + b.start[k + 1];
+        b.value[e] = b.value[std::lower_bound(first, last, j) - b.column.begin()];
+      }
+    }
+  for (int j = 0; j < n; ++j)
+    for (int e = b.start[j]; e < b.start[j + 1]; ++e) {
+      b.diagonal[j] -= b.value[e];
+      b.bound[j] += std::abs(b.value[e]);
+    }
+  for (int j = 0; j < n; ++j) b.bound[j] += std::abs(b.diagonal[j]);
+  return b;
+}
+
+BendingMatrix build_bending_matrix(const Model& m, double rigidity) {
+  if (!m.grid) return build_bending_matrix(m.rest_position, {m.triangles}, m.on_border, rigidity);
+  std::vector<std::array<int, 3>> one, other;  // each quad split along one diagonal, then the other
+  for (int j = 0; j + 1 < m.nv; ++j)
+    for (int i = 0; i + 1 < m.nu; ++i) {
+      const int a = m.index(i, j), b = m.index(i + 1, j), c = m.index(i + 1, j + 1),
+                d = m.index(i, j + 1);
+      one.push_back({a, b, c});
+      one.push_back({a, c, d});
+      other.push_back({a, b, d});
+      other.push_back({b, c, d});
+    }
+  return build_bending_matrix(m.rest_position, {one, other}, m.on_border, rigidity);
+}
+
+// f_i -= Σ_j Q_ij (x_j - x_i): the rows sum to zero, so this is -Q x, taken
+// on differences so that a cloth far from the origin loses no precision.
+// Each particle sums its own row in order: the same bits on any threads.
+void add_bending_forces(const Model& m, const State& s, Vec3Array& f) {
+  const BendingMatrix& b = m.topology->bending;
+  if (b.start.empty()) return;
+  const int* const start = b.start.data();
+  const int* const column = b.column.data();
+  const double* const value = b.value.data();
+  for_each_particle_block(m, [&](int first, int end) {
+    for (int k = 0; k < 3; ++k) {
+      const double* __restrict x = s.x.column(k);
+      double* __restrict out = f.column(k);
+      for (int i = first; i < end; ++i) {
+        double sum = 0;
+        for (int e = start[i]; e < start[i + 1]; ++e) sum += value[e] * (x[column[e]] - x[i]);
+        out[i] -= sum;
+      }
+    }
+  });
+}
+
+// ½ xᵀ Q x = -¼ Σ_i Σ_j≠i Q_ij |x_j - x_i|² (the rows sum to zero).
+double bending_energy(const Model& m, const Vec3Array& x) {
+  const BendingMatrix& b = m.topology->bending;
+  double e = 0;
+  for (int i = 0; i + 1 < static_cast<int>(b.start.size()); ++i)
+    for (int c = b.start[i]; c < b.start[i + 1]; ++c)
+      e -= 0.25 * b.value[c] * (x[b.column[c]] - x[i]).squaredNorm();
+  return e;
+}
+
+}  // namespace wetcloth::detail

@@ -1,0 +1,160 @@
+// The quadratic bending (MODEL.md section 1, forces/bending.cpp) against the
+// laws it must meet exactly: a cylinder bend stores B κ²/2 per unit area on a
+// grid and on an irregular mesh, a flat or rigidly moved cloth feels nothing,
+// the forces sum to zero.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+#include <random>
+
+#include "common.hpp"
+#include "detail.hpp"
+
+using namespace wetcloth;
+
+namespace {
+
+constexpr double kB = 2e-5;  // N·m
+
+// ½ xᵀ Q x of a matrix built by hand (detail::bending_energy's sum).
+double energy(const BendingMatrix& b, const std::vector<Vec3>& x) {
+  double e = 0;
+  for (std::size_t i = 0; i + 1 < b.start.size(); ++i)
+    for (int c = b.start[i]; c < b.start[i + 1]; ++c)
+      e -= 0.25 * b.value[c] * (x[b.column[c]] - x[i]).squaredNorm();
+  return e;
+}
+
+// The flat point (u, v) on a cylinder of curvature κ whose axis runs at
+// `degrees` to u: arc length across the axis kept (an isometric bend).
+Vec3 on_cylinder(double u, double v, double kappa, double degrees) {
+  const double a = degrees * std::numbers::pi / 180;
+  const double s = u * std::cos(a) + v * std::sin(a), t = -u * std::sin(a) + v * std::cos(a);
+  const double r = 1 / kappa, across = r * std::sin(s / r);
+  return {across * std::cos(a) - t * std::sin(a), across * std::sin(a) + t * std::cos(a),
+          r * (1 - std::cos(s / r))};
+}
+
+Params quadratic(int n) {
+  Params p = test::bare(n);
+  p.material.bending = BendingModel::Quadratic;
+  p.springs.bending_k.reset();
+  p.springs.bending_damping.reset();
+  p.material.bending_rigidity = kB;
+  return p;
+}
+
+}  // namespace
+
+// A grid cloth (split both ways) bent into a cylinder at any direction to its
+// rows stores B κ²/2 per unit area, the border included (its area is carried
+// by the rows inside).
+TEST(QuadraticBending, CylinderBendStoresHalfBKappaSquaredOnAGrid) {
+  const Model m = build_model(quadratic(31));
+  const double side = 0.3, kappa = 5.0;  // a 30 cm cloth, 20 cm radius
+  for (const double degrees : {0.0, 30.0, 45.0, 90.0}) {
+    Vec3Array x(m.n);
+    for (int k = 0; k < m.n; ++k) {
+      const Vec3 flat = m.rest_position[k] - m.rest_position[0];
+      x[k] = on_cylinder(flat.x(), flat.y(), kappa, degrees);
+    }
+    const double e = detail::bending_energy(m, x);
+    EXPECT_NEAR(e / (0.5 * kB * kappa * kappa * side * side), 1.0, 0.01) << degrees << "°";
+  }
+}
+
+// An irregular mesh: a grid's inner vertices moved by up to a quarter of a
+// step at random, each quad split along its Delaunay diagonal (the cotangent
+// Laplacian's error grows on long thin triangles): B κ²/2 within 1 %.
+TEST(QuadraticBending, CylinderBendStoresHalfBKappaSquaredOnAnIrregularMesh) {
+  const int n = 41;
+  const double side = 0.3, l = side / (n - 1), kappa = 5.0;
+  std::mt19937 random(7);
+  std::uniform_real_distribution<double> jitter(-0.25 * l, 0.25 * l);
+  std::vector<Vec3> rest(n * n);
+  std::vector<std::uint8_t> border(n * n);
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const bool edge = i == 0 || j == 0 || i == n - 1 || j == n - 1;
+      border[j * n + i] = edge;
+      rest[j * n + i] = Vec3(i * l, j * l, 0);
+      if (!edge) rest[j * n + i] += Vec3(jitter(random), jitter(random), 0);
+    }
+  const auto angle = [&](int at, int a, int b) {
+    const Vec3 u = rest[a] - rest[at], v = rest[b] - rest[at];
+    return std::acos(u.dot(v) / (u.norm() * v.norm()));
+  };
+  std::vector<std::array<int, 3>> triangles;
+  for (int j = 0; j + 1 < n; ++j)
+    for (int i = 0; i + 1 < n; ++i) {
+      const int a = j * n + i, b = a + 1, c = a + n + 1, d = a + n;
+      if (angle(b, a, c) + angle(d, a, c) < std::numbers::pi) {  // a-c is Delaunay
+        triangles.push_back({a, b, c});
+        triangles.push_back({a, c, d});
+      } else {
+        triangles.push_back({a, b, d});
+        triangles.push_back({b, c, d});
+      }
+    }
+  const BendingMatrix q = detail::build_bending_matrix(rest, {triangles}, border, kB);
+  for (const double degrees : {0.0, 30.0, 45.0, 90.0}) {
+    std::vector<Vec3> x(rest.size());
+    for (std::size_t k = 0; k < x.size(); ++k)
+      x[k] = on_cylinder(rest[k].x(), rest[k].y(), kappa, degrees);
+    EXPECT_NEAR(energy(q, x) / (0.5 * kB * kappa * kappa * side * side), 1.0, 0.01) << degrees;
+  }
+}
+
+// A flat cloth, moved and turned as a rigid body, feels no bending force;
+// any shape's forces sum to zero (momentum), and the matrix is symmetric.
+TEST(QuadraticBending, RigidMotionFeelsNoForceAndForcesSumToZero) {
+  Params p = quadratic(21);
+  p.cloth.tilt = 35;
+  Simulation sim(p);
+  const Model& m = sim.model();
+  State& s = detail::state(sim);
+  const Eigen::AngleAxisd turn(0.7, Vec3(0.3, -0.5, 0.8).normalized());
+  for (int k = 0; k < m.n; ++k) s.x[k] = turn * m.rest_position[k] + Vec3(12.0, -3.0, 40.0);
+  Vec3Array f(m.n);
+  detail::add_bending_forces(m, s, f);
+  double largest = 0;
+  for (int k = 0; k < m.n; ++k) largest = std::max(largest, f[k].norm());
+  EXPECT_LT(largest, 1e-12);
+  // Crumpled at random: the forces are far from zero, their sum is not.
+  std::mt19937 random(3);
+  std::normal_distribution<double> bump(0, 0.003);
+  for (int k = 0; k < m.n; ++k) s.x[k] += Vec3(bump(random), bump(random), bump(random));
+  f.assign(m.n, Vec3::Zero());
+  detail::add_bending_forces(m, s, f);
+  Vec3 sum = Vec3::Zero();
+  largest = 0;
+  for (int k = 0; k < m.n; ++k) {
+    sum += f[k];
+    largest = std::max(largest, f[k].norm());
+  }
+  EXPECT_GT(largest, 1e-4);
+  EXPECT_LT(sum.norm(), 1e-13 * largest * m.n);
+  const BendingMatrix& b = m.topology->bending;
+  for (int i = 0; i < m.n; ++i)
+    for (int c = b.start[i]; c < b.start[i + 1]; ++c) {
+      const int j = b.column[c];
+      const auto first = b.column.begin() + b.start[j], last = b.column.begin() + b.start[j + 1];
+      const auto at = std::lower_bound(first, last, i);
+      ASSERT_TRUE(at != last && *at == i);
+      EXPECT_EQ(b.value[c], b.value[at - b.column.begin()]);
+    }
+}
+
+// Provot's chord springs stay as an option; the quadratic model has no
+// bending springs, and a [springs] bending constant with it is an error.
+TEST(QuadraticBending, ProvotKeepsItsSpringsAndQuadraticHasNone) {
+  Params p = quadratic(11);
+  EXPECT_EQ(build_model(p).bending.size(), 0u);
+  EXPECT_FALSE(build_model(p).topology->bending.start.empty());
+  p.material.bending = BendingModel::Provot;
+  EXPECT_GT(build_model(p).bending.size(), 0u);
+  EXPECT_TRUE(build_model(p).topology->bending.start.empty());
+  EXPECT_THROW(load_scene("hang", {"springs.bending_k=20"}), SceneError);
+  EXPECT_NO_THROW(load_scene("hang", {"springs.bending_k=20", "material.bending=\"provot\""}));
+}

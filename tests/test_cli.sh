@@ -283,6 +283,33 @@ h = next(x for x in d if x["key"] == "cloth.humidity")
 sys.exit(0 if h["min"] == 0 and h["max"] == 1 and len(d) > 80 and any("choices" in x for x in d) else 1)' &&
   ok "params --json" || bad "params --json"
 
+# params --preset NAME: what the preset sets (key, value, unit, source); no
+# name, the presets; a name that is none, bad input that lists them.
+"$W" params --preset denim >"$T/preset.txt"; code=$?
+[ $code -eq 0 ] && [ "$(grep -c . "$T/preset.txt")" -eq 9 ] &&
+  grep -q '^# material.preset = "denim": ' "$T/preset.txt" &&
+  grep -q '^cloth.areal_density  *0.4 kg/m²  *12 oz' "$T/preset.txt" &&
+  grep -q '^material.bending_rigidity  *9.807e-05 N·m  *KES B 1 gf·cm²/cm' "$T/preset.txt" &&
+  grep -q '^air.d_delta  *0.0002 m/(s·Pa)  *20 l/m²/s at 100 Pa' "$T/preset.txt" &&
+  ok "params --preset denim" || bad "params --preset denim: exit $code, $(cat "$T/preset.txt")"
+"$W" params --preset >"$T/presets.txt"; code=$?
+[ $code -eq 0 ] && grep -q '^cotton-poplin  *cotton poplin' "$T/presets.txt" &&
+  grep -q '^terry-towel ' "$T/presets.txt" && ok "params --preset: the presets" ||
+  bad "params --preset: exit $code, $(cat "$T/presets.txt")"
+"$W" params --preset wool >/dev/null 2>"$T/err"; code=$?
+[ $code -eq 2 ] && grep -q "'wool' is not a preset" "$T/err" && grep -q '^silk ' "$T/err" &&
+  ok "params --preset wool: exits 2, lists the presets" || bad "params --preset wool: exit $code, $(cat "$T/err")"
+printf 'name = "p"\n[material]\npreset = "dennim"\n' > "$T/preset.toml"
+expect_bad preset "preset.toml:3: material.preset: 'dennim' is not one of" "$T/preset.toml"
+expect_bad preset_nearest "(did you mean denim?)" "$T/preset.toml"
+expect_bad preset_set "--set 'material.preset=wool': material.preset:" pull-straight --set material.preset=wool
+# A preset's run: its scene.toml holds the preset and its values, and reproduces it.
+pargs=(--set material.preset=silk --set friction.mu=0.6 --set cloth.resolution=[11,11] --duration 0.05 --quiet)
+"$W" run pull-straight --out "$T/ps" "${pargs[@]}" && "$W" run "$T/ps/scene.toml" --out "$T/ps2" --quiet &&
+  cmp -s "$T/ps/metrics.csv" "$T/ps2/metrics.csv" && grep -q '^preset = "silk"$' "$T/ps/scene.toml" &&
+  grep -q '^areal_density = 0.061$' "$T/ps/scene.toml" && grep -q '^mu = 0.6$' "$T/ps/scene.toml" &&
+  ok "a preset's scene.toml reproduces its run" || bad "preset scene.toml: $(grep -E '^(preset|areal_density|mu) ' "$T/ps/scene.toml")"
+
 # The user guide's parameter table is the one `wetcloth params --markdown` prints.
 "$W" params --markdown > "$T/params.md"
 # Five cells a row: a "|" inside a cell ("table | ball") is escaped.

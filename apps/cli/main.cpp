@@ -66,17 +66,41 @@ std::string params_json() {
   return all.dump(2) + "\n";
 }
 
+// `params --preset [NAME]`: what the preset sets, or (no name) the presets.
+int print_preset(const std::string& name) {
+  if (name.empty()) {
+    std::cout << presets_text();
+    return cli::kOk;
+  }
+  if (const FabricPreset* f = find_preset(name)) {
+    std::cout << preset_text(*f);
+    return cli::kOk;
+  }
+  std::fprintf(stderr, "wetcloth: error: params --preset: '%s' is not a preset; the presets:\n%s",
+               name.c_str(), presets_text().c_str());
+  return cli::kBadInput;
+}
+
 Command add_params_command(CLI::App& app) {
   struct Options {
     bool markdown = false, json = false;
+    std::string preset;
   };
   auto o = std::make_shared<Options>();
   auto* cmd =
       app.add_subcommand("params", "every scene parameter: key, unit, default, range, meaning");
-  cmd->add_flag("--markdown", o->markdown, "as the Markdown table of docs/guide.md");
-  cmd->add_flag("--json", o->json, "as JSON: key, unit, type, default, min, max, choices, meaning");
+  auto* markdown =
+      cmd->add_flag("--markdown", o->markdown, "as the Markdown table of docs/guide.md");
+  auto* json = cmd->add_flag("--json", o->json,
+                             "as JSON: key, unit, type, default, min, max, choices, meaning");
+  cmd->add_option("--preset", o->preset,
+                  "what fabric preset NAME (material.preset) sets: key, value, unit, source; "
+                  "without NAME, the presets")
+      ->expected(0, 1)
+      ->excludes(markdown, json);
   return [cmd, o]() -> int {
     if (!*cmd) return -1;
+    if (cmd->count("--preset") > 0) return print_preset(o->preset);
     std::cout << (o->markdown ? params_markdown() : o->json ? params_json() : params_text());
     return cli::kOk;
   };

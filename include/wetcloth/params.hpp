@@ -106,6 +106,10 @@ struct Params {
   // any grid. Each spring's constants follow from them and the spacing
   // (resolve_springs); a 0.3 m cloth of 51 x 51 (l = 6 mm) gets 200/20/20 N/m.
   struct Material {
+    // A fabric preset's name (material.preset, docs/model.md "Fabric
+    // presets"), "" for none. The loader sets the preset's values under the
+    // scene's own keys; here it is only the name (apply_preset sets values).
+    std::string preset;
     double stretch_stiffness = 200;  // membrane stiffness per unit width, N/m
     double stretch_damping = 0.01;   // N·s/m
     double shear_stiffness = 20;     // N/m

@@ -86,6 +86,34 @@ std::string springs_text(const Params& p);
 // SceneError naming the key: "Params: cloth.humidity: value 3.0 is out of range [0, 1]".
 void validate(const Params& p);
 
+// Fabric presets (material.preset; docs/model.md "Fabric presets"): each
+// sets the same keys, each value with its source.
+struct PresetValue {
+  std::string key;  // a ParamDef's key: a number
+  double value;
+  std::string source;
+};
+struct FabricPreset {
+  std::string name, description;
+  std::vector<PresetValue> values;
+};
+const std::vector<FabricPreset>& fabric_presets();
+const FabricPreset* find_preset(const std::string& name);  // nullptr: no such preset
+double preset_value(const FabricPreset& preset, const std::string& key);
+std::string preset_names();  // "cotton-poplin, linen, ..."
+// Sets the preset's values and its name ("": the defaults of the keys a
+// preset sets). Throws SceneError for an unknown name.
+void apply_preset(Params& p, const std::string& name);
+// A resolved scene (its to_toml) with overrides, as Python's Scene and
+// Simulation.set take them: to_toml writes the preset's values out, so a
+// material.preset among the overrides sets its values over them first (as
+// apply_preset), then every override applies.
+Params reparse_scene(const Params& base, const std::vector<std::string>& overrides);
+// `wetcloth params --preset`: the presets, a line each; and what one sets
+// (key, value, unit, source).
+std::string presets_text();
+std::string preset_text(const FabricPreset& preset);
+
 // Markdown table of every parameter (the table in docs/guide.md).
 std::string params_markdown();
 // `wetcloth params`: a line a parameter, in aligned columns.

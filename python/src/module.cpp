@@ -137,9 +137,7 @@ Params load(const py::object& scene, const std::vector<std::string>& sets,
             std::optional<long long> grid) {
   Params p;
   if (py::isinstance<Scene>(scene)) {
-    const Params& base = scene.cast<const Scene&>().params;
-    p = parse_scene(to_toml(base), base.name, sets);
-    p.scene_dir = base.scene_dir;  // where its meshes are: not a key, so not in the TOML
+    p = reparse_scene(scene.cast<const Scene&>().params, sets);
   } else if (py::isinstance<py::str>(scene) || py::hasattr(scene, "__fspath__")) {
     p = load_scene(py::str(py::module_::import("os").attr("fspath")(scene)).cast<std::string>(),
                    sets);
@@ -253,8 +251,7 @@ class PySimulation {
     Busy busy(*this);
     const std::string key = normal_key(raw);
     const Params& now = sim_.model().params;
-    Params p = parse_scene(to_toml(now), now.name, {key + "=" + toml_value(key, value)});
-    p.scene_dir = now.scene_dir;
+    const Params p = reparse_scene(now, {key + "=" + toml_value(key, value)});
     if (p.cloth.resolution != now.cloth.resolution)
       throw SceneError(key + ": the grid cannot change in a running Simulation (make a new one)");
     if (key == "cloth.humidity")

@@ -88,6 +88,23 @@ def test_obstacle_keys_get_and_set():
         "obstacle.rail.translate") == [0.0, 0.0, 0.55]
 
 
+def test_material_preset_is_a_key():
+    # By name, over a loaded Scene (whose resolved values would hide it) and
+    # set between steps: each sets the preset's values; a name that is none
+    # raises naming the key.
+    sim = wetcloth.Simulation("drop-table", {"material.preset": "silk"}, **SMALL)
+    assert sim.get("material.preset") == "silk" and sim.get("cloth.areal_density") == 0.061
+    scene = wetcloth.load_scene("drop-table", {"friction.mu": 0.9})
+    denim = wetcloth.Simulation(scene, {"material.preset": "denim", "air.d_delta": 0.002}, **SMALL)
+    assert denim.get("cloth.areal_density") == 0.4 and denim.get("air.d_delta") == 0.002
+    sim.advance_to(0.01)
+    sim.set("material.preset", "denim")
+    assert sim.get("material.preset") == "denim" and sim.get("cloth.areal_density") == 0.4
+    sim.advance_to(0.02)
+    with pytest.raises(wetcloth.SceneError, match="material.preset: 'wool' is not one of"):
+        wetcloth.Simulation("drop-table", {"material.preset": "wool"}, **SMALL)
+
+
 def test_positions_assignment():
     sim = wetcloth.Simulation("hang", **SMALL)
     x = sim.positions.copy()

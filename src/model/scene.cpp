@@ -143,6 +143,13 @@ ParamDef optional_field(std::string key, std::string unit, double lo, double hi,
 // Positions: at 1e14 m a double's step is 0.02 m, and metrics.csv got inf.
 constexpr double kFar = 1e4;
 
+// material.preset's choices: "" (none) and every preset's name.
+std::vector<std::string> preset_choices() {
+  std::vector<std::string> names{""};
+  for (const FabricPreset& f : fabric_presets()) names.push_back(f.name);
+  return names;
+}
+
 // The definitions of the scene's name, the cloth, its material and springs.
 std::vector<ParamDef> cloth_defs() {
   return {
@@ -175,6 +182,12 @@ std::vector<ParamDef> cloth_defs() {
             P(cloth.areal_density)),
       field("cloth.water_ratio", "1", 0, 100, "water held at ω = 1, per unit dry mass (r_w)",
             P(cloth.water_ratio)),
+      field("material.preset", "", 1, 0,
+            "a real fabric (\"\": none): sets cloth.areal_density, cloth.water_ratio, "
+            "material.stretch_stiffness, material.shear_stiffness, material.bending_rigidity, "
+            "friction.mu, air.d_delta and air.k_delta, but for those the scene or --set gives "
+            "(wetcloth params --preset NAME: its values and their sources)",
+            P(material.preset), preset_choices()),
       field("material.stretch_stiffness", "N/m", 0, 1e7,
             "membrane stiffness per unit width in stretch: the structural springs' constant on a "
             "square grid of any spacing",
@@ -660,6 +673,34 @@ std::array<T, N> array_of(const toml::node& n, const ParamDef& d, const std::str
   return out;
 }
 
+// Levenshtein's distance: a typo's from what was meant.
+std::size_t edit_distance(const std::string& a, const std::string& b) {
+  std::vector<std::size_t> row(b.size() + 1);
+  for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+  for (std::size_t i = 1; i <= a.size(); ++i) {
+    std::size_t diagonal = row[0];
+    row[0] = i;
+    for (std::size_t j = 1; j <= b.size(); ++j) {
+      const std::size_t up = row[j];
+      row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] != b[j - 1])});
+      diagonal = up;
+    }
+  }
+  return row[b.size()];
+}
+
+// A string that is none of a key's choices: the choices, and the nearest one
+// where one is close ("did you mean denim?").
+std::string not_a_choice(const ParamDef& d, const std::string& s) {
+  std::string best;
+  std::size_t best_distance = std::max<std::size_t>(2, s.size() / 4) + 1;
+  for (const std::string& c : d.choices)
+    if (const std::size_t dist = edit_distance(s, c); !c.empty() && dist < best_distance)
+      best_distance = dist, best = c;
+  return "'" + s + "' is not one of " + d.range_text() +
+         (best.empty() ? std::string() : " (did you mean " + best + "?)");
+}
+
 ParamValue convert(const toml::node& n, const ParamDef& d, const std::string& key) {
   return std::visit(
       [&](const auto& def) -> ParamValue {
@@ -677,7 +718,7 @@ ParamValue convert(const toml::node& n, const ParamDef& d, const std::string& ke
           std::string s = n.as_string()->get();
           if (!d.choices.empty() &&
               std::find(d.choices.begin(), d.choices.end(), s) == d.choices.end())
-            fail(n, key, "'" + s + "' is not one of " + d.range_text());
+            fail(n, key, not_a_choice(d, s));
           return s;
         } else if constexpr (std::is_same_v<T, Vec2i>) {
           return array_of<2, long long>(n, d, key);
@@ -719,20 +760,6 @@ const ParamDef* find_def(const std::string& key) {
 // "unknown key", with the nearest key by edit distance where one is close: a
 // typo names what was meant ("did you mean cloth.humidity?").
 std::string unknown_key(const std::string& key) {
-  const auto distance = [](const std::string& a, const std::string& b) {
-    std::vector<std::size_t> row(b.size() + 1);
-    for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
-    for (std::size_t i = 1; i <= a.size(); ++i) {
-      std::size_t diagonal = row[0];
-      row[0] = i;
-      for (std::size_t j = 1; j <= b.size(); ++j) {
-        const std::size_t up = row[j];
-        row[j] = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] != b[j - 1])});
-        diagonal = up;
-      }
-    }
-    return row[b.size()];
-  };
   // A handle's or obstacle's keys compare by their part after its name.
   std::string kind;  // "handle." or "obstacle.", or none
   for (const std::string k : {"handle.", "obstacle."})
@@ -746,7 +773,7 @@ std::string unknown_key(const std::string& key) {
     const bool named_key = !named_kind(d.key).empty();
     if (named_key != in_handle || (in_handle && d.key.rfind(kind + "*.", 0) != 0)) continue;
     const std::string candidate = named_key ? d.key.substr(kind.size() + 2) : d.key;
-    if (const std::size_t dist = distance(leaf, candidate); dist < best_distance)
+    if (const std::size_t dist = edit_distance(leaf, candidate); dist < best_distance)
       best_distance = dist, best = prefix + candidate;
   }
   return "unknown key" + (best.empty() ? std::string() : " (did you mean " + best + "?)") +
@@ -846,6 +873,16 @@ toml::table parse_override(const std::string& text) {
   } catch (const toml::parse_error& e) {
     throw SceneError(source + ": " + key + ": " + std::string(e.description()));
   }
+}
+
+// material.preset first, so that every key the scene or --set gives, in any
+// order, overrides the preset's: the last --set's, else the scene's.
+void apply_named_preset(const toml::table& root, const std::vector<toml::table>& sets, Params& p) {
+  const std::string key = "material.preset";
+  const toml::node* named = root.at_path(key).node();
+  for (const auto& t : sets)
+    if (const toml::node* n = t.at_path(key).node()) named = n;
+  if (named) apply_preset(p, std::get<std::string>(convert(*named, *find_def(key), key)));
 }
 
 // Checks that combine keys. An error names the scene, with the line of the
@@ -1016,7 +1053,7 @@ std::string ParamDef::default_text() const {
 std::string ParamDef::range_text() const {
   if (!choices.empty()) {
     std::string s;
-    for (const auto& c : choices) s += (s.empty() ? "" : " | ") + c;
+    for (const auto& c : choices) s += (s.empty() ? "" : " | ") + (c.empty() ? "\"\"" : c);
     return s;
   }
   if (min > max) return "";
@@ -1101,11 +1138,26 @@ Params parse_scene(const std::string& text, const std::string& source,
     throw SceneError(source + ":" + std::to_string(e.source().begin.line) + ": " +
                      std::string(e.description()));
   }
+  std::vector<toml::table> sets;
+  for (const auto& o : overrides) sets.push_back(parse_override(o));
   Params p;
+  apply_named_preset(root, sets, p);
   apply_table(root, "", p, true);
   // Overrides are applied on top, each keeping its own source for messages.
-  for (const auto& o : overrides) apply_table(parse_override(o), "", p, false);
+  for (const auto& t : sets) apply_table(t, "", p, false);
   check_consistency(p, source, overrides, root);
+  return p;
+}
+
+Params reparse_scene(const Params& base, const std::vector<std::string>& overrides) {
+  Params p = parse_scene(to_toml(base), base.name, overrides);
+  // to_toml wrote the scene's preset values out, and they would hide a new one's.
+  if (p.material.preset != base.material.preset) {
+    Params with = base;
+    apply_preset(with, p.material.preset);
+    p = parse_scene(to_toml(with), base.name, overrides);
+  }
+  p.scene_dir = base.scene_dir;
   return p;
 }
 
@@ -1136,6 +1188,22 @@ Params load_scene(const std::string& scene, const std::vector<std::string>& over
   throw SceneError(scene + ": not a file and not a built-in scene (built-in: " + names + ")");
 }
 
+namespace {
+
+// A comment under `preset = "NAME"`: the keys whose values are not the
+// preset's (the scene or --set gave them).
+std::string preset_overrides_text(const Params& p) {
+  const FabricPreset* preset = find_preset(p.material.preset);
+  if (!preset) return "";
+  std::string keys;
+  for (const PresetValue& v : preset->values)
+    if (std::get<double>(find_def(v.key)->get(p, "")) != v.value)
+      keys += (keys.empty() ? "" : ", ") + v.key;
+  return keys.empty() ? "" : "# set over the preset: " + keys + "\n";
+}
+
+}  // namespace
+
 std::string to_toml(const Params& p) {
   std::ostringstream o;
   std::string section;
@@ -1154,6 +1222,7 @@ std::string to_toml(const Params& p) {
       o << "# " << leaf << ": unset, from [material]\n";
     else
       o << leaf << " = " << format_value(v) << "\n";
+    if (d.key == "material.preset") o << preset_overrides_text(p);
   }
   for (const std::string_view kind : kNamedKinds)
     for (const auto& name : table_names(p, std::string(kind))) {
@@ -1306,7 +1375,7 @@ void check_value(const ParamDef& d, const ParamValue& value, const std::string& 
         } else if constexpr (std::is_same_v<T, std::string>) {
           if (!d.choices.empty() &&
               std::find(d.choices.begin(), d.choices.end(), v) == d.choices.end())
-            bad("'" + v + "' is not one of " + d.range_text());
+            bad(not_a_choice(d, v));
         } else if constexpr (!std::is_same_v<T, bool>) {
           for (const auto x : v) in_range(static_cast<double>(x));
         }

@@ -288,6 +288,36 @@ void project_self_collision(const Model& m, State& s, Workspace& w, double h) {
   }
 }
 
+namespace {
+
+// Whether collide may move a particle: not when there is nothing to collide
+// with, nor when the table alone is there and every particle is above it.
+bool may_collide(const Model& m, const State& s) {
+  const Params& p = m.params;
+  if (p.ball.enabled || !m.obstacles.empty()) return true;
+  if (!p.table.enabled) return false;
+  const double* z = s.x.column(2);
+  return -max_over_particles(m, [&](int i) { return -z[i]; }) < p.table.height;
+}
+
+// The positions at the substep's start taken by a swap, not a copy; then
+// x = x_prev + h v (the same sums as x += h v), the air term implicit first.
+void move_from_substep_start(const Model& m, State& s, Workspace& w, double h) {
+  correct_air_implicitly(m, s, w, h);
+  if (w.x_prev.size() != s.x.size()) w.x_prev.assign(s.x.size(), Vec3::Zero());
+  std::swap(w.x_prev, s.x);
+  for_each_particle_block(m, [&](int first, int end) {
+    for (int k = 0; k < 3; ++k) {
+      const double* __restrict p = w.x_prev.column(k), * __restrict v = s.v.column(k);
+      double* __restrict x = s.x.column(k);
+#pragma omp simd
+      for (int i = first; i < end; ++i) x[i] = p[i] + h * v[i];
+    }
+  });
+}
+
+}  // namespace
+
 // Contact with the surfaces, then Coulomb friction (eq. 14) on the velocity the
 // substep ends with. The normal load is what the surface had to push back: the
 // projection's depth, m d / h² (it holds the adhesion that pulled the particle
@@ -296,8 +326,16 @@ void project_self_collision(const Model& m, State& s, Workspace& w, double h) {
 // alone (`adhesion`, the paper's).
 void collide_with_friction(const Model& m, State& s, Workspace& w,
                            std::vector<std::uint8_t>& touched, double h) {
-  w.x_before_collide = s.x;
-  collide(m, s, &touched, nullptr, &w);
+  // Nothing to push out of, or a table that every particle is above (a
+  // hanging cloth): collide would leave every particle as it is. Friction
+  // then acts only on the contact surface, when there is one.
+  const bool reaches = may_collide(m, s);
+  const bool friction = m.params.friction.mu != 0 && (reaches || m.contact_code() != 0);
+  if (friction) w.x_before_collide = s.x;
+  if (reaches)
+    collide(m, s, &touched, nullptr, &w);
+  else
+    std::fill(touched.begin(), touched.end(), std::uint8_t{0});
   const double inv_h = 1.0 / h;
   for_each_particle_block(m, [&](int first, int end) {
     for (int k = 0; k < 3; ++k) {
@@ -307,8 +345,8 @@ void collide_with_friction(const Model& m, State& s, Workspace& w,
       for (int i = first; i < end; ++i) v[i] = (x[i] - p[i]) * inv_h;
     }
   });
+  if (!friction) return;
   const double mu = m.params.friction.mu;
-  if (mu == 0) return;
 
   const bool with_load = m.params.friction.normal == FrictionNormal::Contact;
   const std::uint8_t surface = m.contact_code();
@@ -391,15 +429,15 @@ void xpbd_step(const Model& m, State& s, Workspace& w) {
     // The external forces (MODEL.md section 8's first stage without the
     // springs and self-collision, which are constraints here).
     for_each_particle(m, [&](int i) { put(w.force[i], Vec3::Zero()); });
-    compute_normals(m, s.x.column(0), w.normal, w.normals_scratch);
+    // The normals once a step: the wind and the air push along them.
+    if (k == 0) compute_normals(m, s.x.column(0), w.normal, w.normals_scratch);
     add_gravity(m, w.force);
     add_wind(m, s, w, w.force);
     add_air_pressure(m, s, w);
     add_adhesion(m, s, w);
     add_handle_forces(m, s, w);
     add_external_velocity(m, s, w, h);
-    w.x_prev = s.x;
-    move_at_new_velocities(m, s, w, h);  // the air term implicit, then x += h v
+    move_from_substep_start(m, s, w, h);  // the air term implicit, then x += h v
     s.time = (static_cast<double>(s.steps) + static_cast<double>(k + 1) / substeps) * dt;
     apply_handle_constraints(m, s, w);
     xpbd_begin_substep(m, s, w);

@@ -294,7 +294,8 @@ namespace {
 // with, nor when the table alone is there and every particle is above it.
 bool may_collide(const Model& m, const State& s) {
   const Params& p = m.params;
-  if (p.ball.enabled || !m.obstacles.empty()) return true;
+  // On a contact surface the cloth lies on it: not worth a pass to ask.
+  if (p.ball.enabled || !m.obstacles.empty() || m.contact_surface != SurfaceKind::None) return true;
   if (!p.table.enabled) return false;
   const double* z = s.x.column(2);
   return -max_over_particles(m, [&](int i) { return -z[i]; }) < p.table.height;

@@ -87,25 +87,29 @@ void update_contact(const Model& m, State& s, Workspace& w);
 // Runs body(r) for r in [0, count) on the step's threads, in fixed static
 // chunks. Bodies write only their own rows, so the result never depends on
 // the number of threads.
-// On one thread the loop runs as it is: libgomp makes (and allocates) a team
-// even for a region its `if` turns off, about a thousand instructions a
-// region, and an xpbd step runs some 350 of them.
+// On one thread, no region: libgomp makes (and allocates) a team even for a
+// region its `if` turns off, about a thousand instructions, and an xpbd step
+// runs some 250 of them. The loop is called, not inlined, as the region's
+// outlined function is: inlined into the stage, some loops vectorised worse.
+template <class Body>
+[[gnu::noinline]] void serial_for(int count, Body& body) {
+  for (int r = 0; r < count; ++r) body(r);
+}
+
 template <class Body>
 void parallel_for(const Model& m, int count, Body&& body) {
-  if (m.threads <= 1) {
-    for (int r = 0; r < count; ++r) body(r);
-    return;
-  }
+  if (m.threads <= 1) return serial_for(count, body);
 #pragma omp parallel for schedule(static) num_threads(m.threads)
   for (int r = 0; r < count; ++r) body(r);
 }
 
 // Runs body(j0, j1, thread) on each of the step's threads, for its own block
 // of rows [j0, j1): for passes that carry something from row to row.
+// (Its region stays on one thread: run directly, the wind's loop took four
+// times the instructions.)
 template <class Body>
 void for_each_row_block(const Model& m, Body&& body) {
-  if (m.threads <= 1) return body(0, m.nv, 0);
-#pragma omp parallel num_threads(m.threads)
+#pragma omp parallel num_threads(m.threads) if (m.threads > 1)
   {
     const int t = omp_get_thread_num(), count = omp_get_num_threads();
     body(m.nv * t / count, m.nv * (t + 1) / count, t);

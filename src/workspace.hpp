@@ -139,11 +139,11 @@ struct Workspace {
   Vec3Array v_start;
   long long substeps = 0, solves = 0;
   // XPBD (integrators/xpbd.cpp): positions at the start of the substep, before contact;
-  // the inverse masses the constraints see; a class's corrections (x, y, z
-  // columns) and where along a row each class is; the particles the measured
-  // handle holds and the constraints' impulse on them over the substep.
+  // the inverse masses the constraints see; a mesh cloth's flags of the
+  // particles the measured handle holds; those particles and the
+  // constraints' impulse on them over the substep.
   Vec3Array x_prev, x_before_collide;
-  std::vector<double> free_inv_mass, correction, class_gate;
+  std::vector<double> free_inv_mass, reaction_flag;
   std::vector<int> reaction_particles;
   Vec3 reaction_impulse = Vec3::Zero();
   // The choice of the step's threads, kept by reset (Simulation::step).

@@ -258,6 +258,10 @@ done
 # The other commands.
 "$W" scenes | grep -q "^pull-straight" && ok "scenes" || bad "scenes"
 "$W" check drop-ball --humidity 0.3 | grep -q "humidity = 0.3" && ok "check" || bad "check"
+# check prints the xpbd substeps that will run: a set count, at any grid.
+"$W" check hang --grid 101 --set 'integrator.type="xpbd"' --set integrator.substeps=12 |
+  grep -q '^# xpbd: 12 substeps a step' && ok "check: xpbd's substeps" ||
+  bad "check substeps: $("$W" check hang --grid 101 --set 'integrator.type="xpbd"' --set integrator.substeps=12 | head -2)"
 # check prints the material and the springs it gives on this grid, or as a scene sets them.
 "$W" check pull-straight --grid 101 --set springs.shear_k=30 >"$T/check.txt"
 "$W" check pull-straight --grid 101 --set 'material.bending="provot"' --set material.bending_rigidity=7.2e-4 >"$T/check_provot.txt"

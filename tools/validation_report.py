@@ -597,19 +597,23 @@ def cantilever(folder):
         clamp = next(v for k, v in sorted(scene.items()) if k.startswith("handle.") and v.get("type") == '"pin"')
         edge_u = sum(float(a) for a in (clamp["at"].strip("[]").split(",")[0], clamp["span"].strip("[]").split(",")[0]))
         rigidity = float(scene["material"]["bending_rigidity"])
+        provot = scene["material"].get("bending", '"quadratic"') == '"provot"'
+        density = float(scene["cloth"].get("areal_density", 0.12))
         with open(os.path.join(case_dir, "frames", frames[-1]), encoding="utf-8") as f:
             v = [[float(x) for x in line.split()[1:4]] for line in f if line.startswith("v ")]
     except (KeyError, ValueError, StopIteration, IndexError, OSError):
         return None
     spacing = width / (nu - 1)
-    bending_k = number(scene.get("springs", {}).get("bending_k")) or rigidity / spacing ** 2
+    bending_k = (number(scene.get("springs", {}).get("bending_k")) or rigidity / spacing ** 2) if provot else None
     column = lambda i: [sum(v[j * nu + i][a] for j in range(nv)) / nv for a in range(3)]
     edge = round(edge_u * (nu - 1))
     a, b = column(edge), column(nu - 1)
     overhang = (nu - 1 - edge) * spacing
     phi = math.atan2(a[2] - b[2], b[0] - a[0])
-    return {"grid": nu, "spacing": spacing, "bending_k": bending_k, "chord": phi, "ok": c["ok"],
-            "c": bending_length(overhang, phi), "peirce": peirce(overhang, phi), "overhang": overhang}
+    c_length = bending_length(overhang, phi)
+    return {"grid": nu, "spacing": spacing, "bending_k": bending_k, "rigidity": rigidity, "chord": phi,
+            "ok": c["ok"], "c": c_length, "peirce": peirce(overhang, phi), "overhang": overhang,
+            "b_from_c": c_length ** 3 * density * 9.81}
 
 
 GRID_MEASURES = [("handle_height_m", "handle height", 1000, "mm", 1),
@@ -648,7 +652,8 @@ def grid_section(sweeps, runs):
              "(`wetcloth sweep SCENE --grid G --humidity 0.7`: a handle's patch keeps its size in metres, "
              "the explicit step shrinks with its stability limit; 51 is the sweep above), at the final frame. "
              "The material is the same at every grid (MODEL.md section 1): structural and shear springs "
-             "keep their constants, bending springs get B / l².", "",
+             "keep their constants, and the bending is a curvature energy of rigidity B (with "
+             "material.bending = \"provot\", bending springs of B / l²).", "",
              md_table(["scene", "measure"] + [f"{g} × {g}" for g in sizes] +
                       ["31 → 51", "51 → 101", "51 × 51 scatter (ω = 0.7 ± k·1e−7)"], rows), "",
              "The last column is how far the scene's own chaos spreads its result at 51 × 51: the five "
@@ -678,10 +683,13 @@ def grid_section(sweeps, runs):
               "clamp's edge; Peirce's own formula, c = L (cos(θ/2) / (8 tan θ))^(1/3), is shown beside it "
               "(it holds to about 45°).", ""]
     if bent:
-        lines += [md_table(["grid", "spacing mm", "bending springs N/m", "chord angle °", "bending length c mm",
-                            "Peirce's formula mm"],
-                           [[b["grid"], f"{b['spacing'] * 1000:.0f}", f"{b['bending_k']:.3g}",
-                             f"{math.degrees(b['chord']):.1f}", f"{b['c'] * 1000:.1f}", f"{b['peirce'] * 1000:.1f}"]
+        bending = lambda b: (f"Provot springs {b['bending_k']:.3g} N/m" if b["bending_k"] is not None
+                             else f"quadratic, B {b['rigidity']:.3g} N·m")
+        lines += [md_table(["grid", "spacing mm", "bending", "chord angle °", "bending length c mm",
+                            "Peirce's formula mm", "B = c³ ρ_A g, N·m"],
+                           [[b["grid"], f"{b['spacing'] * 1000:.0f}", bending(b),
+                             f"{math.degrees(b['chord']):.1f}", f"{b['c'] * 1000:.1f}", f"{b['peirce'] * 1000:.1f}",
+                             f"{b['b_from_c']:.3g}"]
                             for b in bent]), ""]
     if len(bent) >= 2:
         cs = [b["c"] for b in bent]

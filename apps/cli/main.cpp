@@ -45,7 +45,13 @@ Command add_check_command(CLI::App& app) {
   return [cmd, o]() -> int {
     if (!*cmd) return -1;
     const Params p = o->load();
-    std::cout << "# " << o->scene << ": ok\n" << to_toml(p);
+    std::cout << "# " << o->scene << ": ok\n";
+    // The substeps that will run (a mesh cloth counts its own particles).
+    if (p.integrator.type == IntegratorType::Xpbd)
+      std::cout << "# xpbd: "
+                << (p.cloth.mesh.empty() ? xpbd_substeps(p) : xpbd_substeps(build_model(p)))
+                << " substeps a step of " << p.integrator.dt << " s\n";
+    std::cout << to_toml(p);
     return cli::kOk;
   };
 }

@@ -237,11 +237,12 @@ void start_air(const Model& m, State& s, Workspace& w) {
 // gradient of the volume that sets the pressure: it pumps energy into lifted
 // flaps until a pulled cloth flutters and blows up (docs/model.md).
 void add_air_pressure(const Model& m, const State& s, Workspace& w) {
-  const bool off = m.params.air.model == AirModel::Off || m.contact_surface == SurfaceKind::None;
+  // No air: air_direction stays zero, as reset left it.
+  if (m.params.air.model == AirModel::Off || m.contact_surface == SurfaceKind::None) return;
   const double p_atm = m.params.air.p_atm;
   const bool along_cloth_normal = m.params.air.force_direction == AirForceDirection::Cloth;
   for_each_particle(m, [&](int i) {
-    if (off || s.contact[i] || !holds_air(m, w.distance[i])) {
+    if (s.contact[i] || !holds_air(m, w.distance[i])) {
       put(w.air_direction[i], Vec3::Zero());
       return;
     }

@@ -116,6 +116,16 @@ void update_contact(const Model& m, State& s, Workspace& w) {
       }
       return;
     }
+    if (kind == SurfaceKind::None) {  // query_surface's answer, in a loop that vectorises
+#pragma omp simd
+      for (int i = begin; i < end; ++i) {
+        distance[i] = kInf;
+        nx[i] = ny[i] = 0.0;
+        nz[i] = 1.0;
+        contact[i] = 0;
+      }
+      return;
+    }
     if (kind == SurfaceKind::Mesh) {  // within the air's band: beyond it nothing needs more
       const MeshObstacle& o = *m.obstacles[m.contact_obstacle];
       MeshQueryCache* cache = &w.mesh_cache[m.contact_obstacle];

@@ -10,8 +10,8 @@ namespace wetcloth::detail {
 // the edge part 2 √S_now ω γ sin θa, so the forces sum to eq. 13 exactly. The
 // force points along -n_s, toward the surface.
 void add_adhesion(const Model& m, const State& s, Workspace& w) {
+  if (m.contact_surface == SurfaceKind::None) return;  // w.adhesion stays zero, as reset left it
   std::fill(w.adhesion.begin(), w.adhesion.end(), 0.0);
-  if (m.contact_surface == SurfaceKind::None) return;
   const double pressure = adhesion_pressure(m.params);
   const double tension = adhesion_edge_tension(m.params);
   if (pressure == 0 && tension == 0) return;

@@ -9,10 +9,11 @@
 // positions' change over h.
 //
 // One Gauss-Seidel sweep: the springs of one stencil offset split into two
-// classes (by the parity of i, or of j for the offsets along j), and no two
-// springs of a class share a particle, so a class is projected at once:
-// every correction from the same positions, then applied. The order of the
-// classes is fixed, so the result is the same on any number of threads.
+// classes (by the parity of i, or of j for the offsets across rows), and no
+// two springs of a class share a particle, so each spring of a class is
+// projected and applied in one vectorised loop, in any order, on any thread.
+// The order of the offsets and classes is fixed, so the result is the same on
+// any number of threads.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -41,68 +42,144 @@ void xpbd_begin_substep(const Model& m, const State& s, Workspace& w) {
 
 namespace {
 
-// One row's springs of one offset: a = (i, j) for i in [lo, lo + count), b = a + off.
-struct SpringRow {
-  const double *x, *y, *z, *px, *py, *pz, *inv;
-  int off;
+// The sweep's arrays: positions (x, y, z columns, moved in place), the
+// positions at the substep's start, the inverse masses the constraints see.
+struct Sweep {
+  double *x, *y, *z;
+  const double *px, *py, *pz, *inv;
 };
 
-// Each spring's correction Δλ n, times gate[k] (1 in the class, 0 outside),
-// from the same positions. One square root and one division a spring: with
+// One stencil offset's springs a = (i, j) -> b = a + off, for i in [lo, hi)
+// and j < rows, and their constants. Two springs of an offset share a
+// particle only when one starts where the other ends, a whole offset apart;
+// so the springs split into two classes that share none: an offset across
+// rows by the row's parity (by pairs of rows for a reach of 2), one along a
+// row by i's (by pairs of columns for a reach of 2).
+struct OffsetSprings {
+  int off, lo, hi, rows, shift;
+  bool by_row;
+  double rest, max_len, alpha, gamma;
+  bool starts_in_class(int a, int nu, int c) const {
+    if (a < 0) return false;
+    const int i = a % nu, j = a / nu;
+    return i >= lo && i < hi && j < rows && (((by_row ? j : i) >> shift) & 1) == c;
+  }
+};
+
+// Spring a -> b's correction Δλ n = f (x_b - x_a), into d and f: XPBD's Δλ
+// with damping (Macklin et al. 2016, eq. 26), one iteration (λ = 0), the
+// strain limit folded in; 0 for a spring of zero length or between two
+// immovable particles. One square root and one division a spring: with
 // D = (1 + γ) w + α̃ and q = 1 / (D w |d|), 1/|d| = D w q, Δλ/|d| = -(C + γ ċ) w q
 // and the strain limit's (l_max - |d|) / (w |d|) = (l_max - |d|) D q.
 enum class Projection { Spring, SpringLimited, LimitOnly };
 
 template <Projection kind>
-void spring_corrections(const SpringRow& r, const double* __restrict gate, int count, double rest,
-                        double max_len, double alpha, double gamma, double* __restrict cx,
-                        double* __restrict cy, double* __restrict cz) {
-  const double* __restrict x = r.x, * __restrict y = r.y, * __restrict z = r.z;
-  const double* __restrict px = r.px, * __restrict py = r.py, * __restrict pz = r.pz;
-  const double* __restrict inv = r.inv;
-  const int off = r.off;
-#pragma omp simd
-  for (int k = 0; k < count; ++k) {
-    const double dx = x[k + off] - x[k], dy = y[k + off] - y[k], dz = z[k + off] - z[k];
-    const double len = std::sqrt(dx * dx + dy * dy + dz * dz);
-    const double ws = inv[k] + inv[k + off];
-    const bool on = (gate[k] != 0) & (len > 0) & (ws > 0);
-    const double d = (1 + gamma) * ws + alpha;
-    const double q = 1.0 / (on ? d * ws * len : 1.0);
-    const double inv_len = d * ws * q;
+[[gnu::always_inline]] inline double spring_factor(const Sweep& s, const OffsetSprings& o, int a,
+                                                   int b, double& dx, double& dy, double& dz) {
+  dx = s.x[b] - s.x[a], dy = s.y[b] - s.y[a], dz = s.z[b] - s.z[a];
+  const double len = std::sqrt(dx * dx + dy * dy + dz * dz);
+  const double ws = s.inv[a] + s.inv[b];
+  const bool on = (len > 0) & (ws > 0);
+  const double d = (1 + o.gamma) * ws + o.alpha;
+  const double q = 1.0 / (on ? d * ws * len : 1.0);
+  double f = 0.0;
+  if constexpr (kind != Projection::LimitOnly) {
     // The spring's change of length over the substep so far (h dC/dt).
-    const double rate = ((dx - (px[k + off] - px[k])) * dx + (dy - (py[k + off] - py[k])) * dy +
-                         (dz - (pz[k + off] - pz[k])) * dz) *
-                        inv_len;
-    // XPBD's Δλ with damping (Macklin et al. 2016, eq. 26), one iteration: λ = 0.
-    double f = kind == Projection::LimitOnly ? 0.0 : -((len - rest) + gamma * rate) * ws * q;
-    if constexpr (kind != Projection::Spring) {
-      // No longer than (1 + τ_c) l0 after the projection (MODEL.md section 2): a
-      // hard constraint, split by inverse mass as the spring's own.
-      const double limit = (max_len - len) * d * q;
-      f = f < limit ? f : limit;
-    }
-    f = on ? f : 0.0;
-    cx[k] = f * dx;
-    cy[k] = f * dy;
-    cz[k] = f * dz;
+    const double rate = ((dx - (s.px[b] - s.px[a])) * dx + (dy - (s.py[b] - s.py[a])) * dy +
+                         (dz - (s.pz[b] - s.pz[a])) * dz) *
+                        (d * ws * q);
+    f = -((len - o.rest) + o.gamma * rate) * ws * q;
   }
+  if constexpr (kind != Projection::Spring) {
+    // No longer than (1 + τ_c) l0 after the projection (MODEL.md section 2): a
+    // hard constraint, split by inverse mass as the spring's own.
+    const double limit = (o.max_len - len) * d * q;
+    f = f < limit ? f : limit;
+  }
+  return on ? f : 0.0;
 }
 
-// x += sign w c over one row's ends, component by component.
-void apply_corrections(int count, double sign, std::array<double*, 3> x,
-                       const double* __restrict inv, const double* const c[3]) {
-  for (int q = 0; q < 3; ++q) {
-    double* __restrict xq = x[q];
-    const double* __restrict cq = c[q];
+// The spring projected and applied at once: a moves by -w_a Δλ n, b by +w_b Δλ n.
+template <Projection kind>
+[[gnu::always_inline]] inline void project_spring(const Sweep& s, const OffsetSprings& o, int a,
+                                                  int b) {
+  double dx, dy, dz;
+  const double f = spring_factor<kind>(s, o, a, b, dx, dy, dz);
+  const double cx = f * dx, cy = f * dy, cz = f * dz;
+  s.x[a] -= s.inv[a] * cx;
+  s.y[a] -= s.inv[a] * cy;
+  s.z[a] -= s.inv[a] * cz;
+  s.x[b] += s.inv[b] * cx;
+  s.y[b] += s.inv[b] * cy;
+  s.z[b] += s.inv[b] * cz;
+}
+
+// A class's springs in one row, from its first spring's start a0 (the arrays
+// are taken by value: through a reference GCC reloaded them after each
+// store). No two share a particle, so each loop vectorises as it is.
+// Across rows: springs a0 + k -> a0 + k + off, k < count.
+template <Projection kind>
+void project_run(Sweep s, const OffsetSprings o, int a0, int count) {
 #pragma omp simd
-    for (int k = 0; k < count; ++k) xq[k] += sign * inv[k] * cq[k];
-  }
+  for (int k = a0; k < a0 + count; ++k) project_spring<kind>(s, o, k, k + o.off);
 }
 
-}  // namespace
+// Along a row, offset (1, 0): springs a0 + 2m -> a0 + 2m + 1, m < count.
+template <Projection kind>
+void project_pairs(Sweep s, const OffsetSprings o, int a0, int count) {
+#pragma omp simd
+  for (int m = 0; m < count; ++m) project_spring<kind>(s, o, a0 + 2 * m, a0 + 2 * m + 1);
+}
 
-namespace {
+// Along a row, offset (2, 0): springs a0 + 4m + t -> a0 + 4m + t + 2, t = 0, 1,
+// m < count, then the spring a0 + 4 count -> + 2 when `tail`.
+template <Projection kind>
+void project_quads(Sweep s, const OffsetSprings o, int a0, int count, bool tail) {
+#pragma omp simd
+  for (int m = 0; m < count; ++m) {
+    const int a = a0 + 4 * m;
+    project_spring<kind>(s, o, a, a + 2);
+    project_spring<kind>(s, o, a + 1, a + 3);
+  }
+  if (tail) project_spring<kind>(s, o, a0 + 4 * count, a0 + 4 * count + 2);
+}
+
+// Class c of one row j.
+template <Projection kind>
+void project_class_row(const Sweep& s, const OffsetSprings& o, int nu, int j, int c) {
+  const int row = j * nu;
+  if (o.by_row) return project_run<kind>(s, o, row + o.lo, o.hi - o.lo);
+  if (o.off == 1) return project_pairs<kind>(s, o, row + c, (o.hi - c + 1) / 2);
+  const int first = 2 * c, full = std::max(0, (o.hi - first + 2) / 4);
+  project_quads<kind>(s, o, row + first, full, first + 4 * full < o.hi);
+}
+
+// Both classes of an offset, one after the other; each class's rows on the
+// step's threads (a row writes only its own springs' ends). The impulses of a
+// class on the particles the measured handle holds (immovable: the class
+// does not move them) are found first, from the positions the class sees,
+// by the same arithmetic: the rig's reaction, exact.
+template <Projection kind>
+void project_offset(const Model& m, Workspace& w, const Sweep& s, const OffsetSprings& o) {
+  const int nu = m.nu;
+  for (int c = 0; c < 2; ++c) {
+    for (const int k : w.reaction_particles) {
+      double dx, dy, dz;
+      if (o.starts_in_class(k, nu, c)) {
+        const double f = spring_factor<kind>(s, o, k, k + o.off, dx, dy, dz);
+        w.reaction_impulse -= Vec3(f * dx, f * dy, f * dz);
+      }
+      if (o.starts_in_class(k - o.off, nu, c)) {
+        const double f = spring_factor<kind>(s, o, k - o.off, k, dx, dy, dz);
+        w.reaction_impulse += Vec3(f * dx, f * dy, f * dz);
+      }
+    }
+    parallel_for(m, o.rows, [&](int j) {
+      if (!o.by_row || ((j >> o.shift) & 1) == c) project_class_row<kind>(s, o, nu, j, c);
+    });
+  }
+}
 
 // A mesh cloth: the same projection, one spring at a time (Gauss-Seidel in
 // the springs' order: structural, shear, bending), on one thread.
@@ -110,8 +187,8 @@ void project_springs_mesh(const Model& m, State& s, Workspace& w, double h, bool
   const double tau = m.params.strain_limit.enabled ? m.params.strain_limit.tau : -1.0;
   const double* const inv = w.free_inv_mass.data();
   // The particles the measured handle holds, flagged (their reaction force).
-  w.class_gate.assign(m.n, 0.0);
-  for (const int k : w.reaction_particles) w.class_gate[k] = 1.0;
+  w.reaction_flag.assign(m.n, 0.0);
+  for (const int k : w.reaction_particles) w.reaction_flag[k] = 1.0;
   const SpringSet* const sets[3] = {&m.structural, &m.shear, &m.bending};
   for (int kind = 0; kind < 3; ++kind) {
     const SpringSet& set = *sets[kind];
@@ -131,8 +208,8 @@ void project_springs_mesh(const Model& m, State& s, Workspace& w, double h, bool
       double f = limit_only ? 0.0 : -((len - set.rest[e]) + gamma * rate) / (dd * len);
       if (limited) f = std::min(f, ((1.0 + tau) * set.rest[e] - len) / (ws * len));
       const Vec3 c = f * d;
-      if (w.class_gate[a] != 0) w.reaction_impulse -= c;
-      if (w.class_gate[b] != 0) w.reaction_impulse += c;
+      if (w.reaction_flag[a] != 0) w.reaction_impulse -= c;
+      if (w.reaction_flag[b] != 0) w.reaction_impulse += c;
       sub(s.x[a], inv[a] * c);
       add(s.x[b], inv[b] * c);
     }
@@ -146,71 +223,37 @@ void project_springs(const Model& m, State& s, Workspace& w, double h, bool limi
     project_springs_mesh(m, s, w, h, limit_only);
     return;
   }
-  const int nu = m.nu, nv = m.nv, n = m.n;
+  const int nu = m.nu, nv = m.nv;
   const double tau = m.params.strain_limit.enabled ? m.params.strain_limit.tau : -1.0;
-  w.correction.resize(3 * std::size_t(n));
-  double* const cx = w.correction.data();
-  double* const cy = cx + n;
-  double* const cz = cy + n;
-  double *const X = s.x.column(0), *const Y = s.x.column(1), *const Z = s.x.column(2);
-  const double *const PX = w.x_prev.column(0), *const PY = w.x_prev.column(1),
-                      *const PZ = w.x_prev.column(2);
-  const double* const inv = w.free_inv_mass.data();
-  w.class_gate.resize(5 * std::size_t(nu));
-  for (int g = 0; g < 5; ++g)
-    for (int i = 0; i < nu; ++i)
-      w.class_gate[g * nu + i] = g == 4 || ((i >> (g / 2)) & 1) == g % 2 ? 1.0 : 0.0;
+  const Sweep sweep{s.x.column(0),         s.x.column(1),      s.x.column(2),
+                    w.x_prev.column(0),    w.x_prev.column(1), w.x_prev.column(2),
+                    w.free_inv_mass.data()};
   for (int e = 0; e < 8; ++e) {
     const StencilEdge& st = m.topology->stencil[e];
     if (st.k <= 0 || (limit_only && (e >= 4 || tau < 0))) continue;
-    const int di = st.di, dj = st.dj, off = di + dj * nu;
+    const int di = st.di, dj = st.dj;
     const int lo = std::max(0, -di), hi = std::min(nu, nu - di), rows = nv - dj;
     if (rows <= 0 || hi <= lo) continue;
-    // XPBD's compliance α̃ = 1/(k h²) and damping γ = α̃ β̃ / h with β̃ = h² k_d.
-    const double alpha = 1.0 / (st.k * h * h), gamma = st.damping / (st.k * h);
-    const double rest = st.rest;
-    // The strain limit (structural and shear, the first four offsets).
-    const double max_len = e < 4 && tau >= 0 ? (1.0 + tau) * rest : 1e30;
-    // The classes: two springs of an offset share a particle only when one
-    // starts where the other ends, a whole offset apart; so an offset across
-    // rows is split by the row's parity (by pairs of rows for a reach of 2), and
-    // one along a row by i's.
+    // XPBD's compliance α̃ = 1/(k h²) and damping γ = α̃ β̃ / h with β̃ = h² k_d;
+    // the strain limit on structural and shear springs (the first four offsets).
+    const double max_len = e < 4 && tau >= 0 ? (1.0 + tau) * st.rest : 1e30;
     const bool by_row = dj != 0;
-    const int shift = (by_row ? dj : std::abs(di)) == 2 ? 1 : 0;
-    const auto in_class = [&](int j, int c) { return !by_row || ((j >> shift) & 1) == c; };
-    for (int c = 0; c < 2; ++c) {
-      // Every correction of the class, from the same positions.
-      parallel_for(m, rows, [&](int j) {
-        if (!in_class(j, c)) return;
-        const int a0 = j * nu + lo;
-        const SpringRow r{X + a0, Y + a0, Z + a0, PX + a0, PY + a0, PZ + a0, inv + a0, off};
-        // The class along the row: 1 where i's parity (after the shift) is c.
-        const double* gate = w.class_gate.data() + (by_row ? 4 : 2 * shift + c) * nu + lo;
-        (limit_only       ? spring_corrections<Projection::LimitOnly>
-         : max_len < 1e30 ? spring_corrections<Projection::SpringLimited>
-                          : spring_corrections<Projection::Spring>)(r, gate, hi - lo, rest, max_len,
-                                                                    alpha, gamma, cx + a0, cy + a0,
-                                                                    cz + a0);
-      });
-      // The impulses on the particles a handle holds (their reaction force).
-      const auto edge_at = [&](int a) {
-        return a >= 0 && a % nu >= lo && a % nu < hi && a / nu < rows && in_class(a / nu, c) &&
-               (by_row || w.class_gate[(2 * shift + c) * nu + a % nu] != 0);
-      };
-      for (const int k : w.reaction_particles) {
-        if (edge_at(k)) w.reaction_impulse -= Vec3(cx[k], cy[k], cz[k]);
-        if (edge_at(k - off)) w.reaction_impulse += Vec3(cx[k - off], cy[k - off], cz[k - off]);
-      }
-      // Applied: a moves by -w_a Δλ n, b by +w_b Δλ n.
-      parallel_for(m, rows, [&](int j) {
-        if (!in_class(j, c)) return;
-        const int a0 = j * nu + lo, count = hi - lo;
-        const double* cor[3] = {cx + a0, cy + a0, cz + a0};
-        apply_corrections(count, -1.0, {X + a0, Y + a0, Z + a0}, inv + a0, cor);
-        apply_corrections(count, 1.0, {X + a0 + off, Y + a0 + off, Z + a0 + off}, inv + a0 + off,
-                          cor);
-      });
-    }
+    const OffsetSprings o{di + dj * nu,
+                          lo,
+                          hi,
+                          rows,
+                          (by_row ? dj : std::abs(di)) == 2 ? 1 : 0,
+                          by_row,
+                          st.rest,
+                          max_len,
+                          1.0 / (st.k * h * h),
+                          st.damping / (st.k * h)};
+    if (limit_only)
+      project_offset<Projection::LimitOnly>(m, w, sweep, o);
+    else if (max_len < 1e30)
+      project_offset<Projection::SpringLimited>(m, w, sweep, o);
+    else
+      project_offset<Projection::Spring>(m, w, sweep, o);
   }
 }
 
@@ -245,6 +288,37 @@ void project_self_collision(const Model& m, State& s, Workspace& w, double h) {
   }
 }
 
+namespace {
+
+// Whether collide may move a particle: not when there is nothing to collide
+// with, nor when the table alone is there and every particle is above it.
+bool may_collide(const Model& m, const State& s) {
+  const Params& p = m.params;
+  // On a contact surface the cloth lies on it: not worth a pass to ask.
+  if (p.ball.enabled || !m.obstacles.empty() || m.contact_surface != SurfaceKind::None) return true;
+  if (!p.table.enabled) return false;
+  const double* z = s.x.column(2);
+  return -max_over_particles(m, [&](int i) { return -z[i]; }) < p.table.height;
+}
+
+// The positions at the substep's start taken by a swap, not a copy; then
+// x = x_prev + h v (the same sums as x += h v), the air term implicit first.
+void move_from_substep_start(const Model& m, State& s, Workspace& w, double h) {
+  correct_air_implicitly(m, s, w, h);
+  if (w.x_prev.size() != s.x.size()) w.x_prev.assign(s.x.size(), Vec3::Zero());
+  std::swap(w.x_prev, s.x);
+  for_each_particle_block(m, [&](int first, int end) {
+    for (int k = 0; k < 3; ++k) {
+      const double* __restrict p = w.x_prev.column(k), * __restrict v = s.v.column(k);
+      double* __restrict x = s.x.column(k);
+#pragma omp simd
+      for (int i = first; i < end; ++i) x[i] = p[i] + h * v[i];
+    }
+  });
+}
+
+}  // namespace
+
 // Contact with the surfaces, then Coulomb friction (eq. 14) on the velocity the
 // substep ends with. The normal load is what the surface had to push back: the
 // projection's depth, m d / h² (it holds the adhesion that pulled the particle
@@ -253,8 +327,16 @@ void project_self_collision(const Model& m, State& s, Workspace& w, double h) {
 // alone (`adhesion`, the paper's).
 void collide_with_friction(const Model& m, State& s, Workspace& w,
                            std::vector<std::uint8_t>& touched, double h) {
-  w.x_before_collide = s.x;
-  collide(m, s, &touched, nullptr, &w);
+  // Nothing to push out of, or a table that every particle is above (a
+  // hanging cloth): collide would leave every particle as it is. Friction
+  // then acts only on the contact surface, when there is one.
+  const bool reaches = may_collide(m, s);
+  const bool friction = m.params.friction.mu != 0 && (reaches || m.contact_code() != 0);
+  if (friction) w.x_before_collide = s.x;
+  if (reaches)
+    collide(m, s, &touched, nullptr, &w);
+  else
+    std::fill(touched.begin(), touched.end(), std::uint8_t{0});
   const double inv_h = 1.0 / h;
   for_each_particle_block(m, [&](int first, int end) {
     for (int k = 0; k < 3; ++k) {
@@ -264,8 +346,8 @@ void collide_with_friction(const Model& m, State& s, Workspace& w,
       for (int i = first; i < end; ++i) v[i] = (x[i] - p[i]) * inv_h;
     }
   });
+  if (!friction) return;
   const double mu = m.params.friction.mu;
-  if (mu == 0) return;
 
   const bool with_load = m.params.friction.normal == FrictionNormal::Contact;
   const std::uint8_t surface = m.contact_code();
@@ -364,7 +446,8 @@ void xpbd_step(const Model& m, State& s, Workspace& w) {
     // The external forces (MODEL.md section 8's first stage without the
     // springs and self-collision, which are constraints here).
     for_each_particle(m, [&](int i) { put(w.force[i], Vec3::Zero()); });
-    compute_normals(m, s.x.column(0), w.normal, w.normals_scratch);
+    // The normals once a step: the wind and the air push along them.
+    if (k == 0) compute_normals(m, s.x.column(0), w.normal, w.normals_scratch);
     add_gravity(m, w.force);
     add_wind(m, s, w, w.force);
     add_air_pressure(m, s, w);
@@ -375,8 +458,7 @@ void xpbd_step(const Model& m, State& s, Workspace& w) {
       add_bending_forces(m, s, w.bending_force);
     }
     add_external_velocity(m, s, w, h);
-    w.x_prev = s.x;
-    move_at_new_velocities(m, s, w, h);  // the air term implicit, then x += h v
+    move_from_substep_start(m, s, w, h);  // the air term implicit, then x += h v
     s.time = (static_cast<double>(s.steps) + static_cast<double>(k + 1) / substeps) * dt;
     apply_handle_constraints(m, s, w);
     xpbd_begin_substep(m, s, w);

@@ -320,7 +320,8 @@ std::vector<ParamDef> solver_defs() {
       field("integrator.substeps", "", 0, 10000,
             "xpbd: substeps a step, each one sweep of the constraints (0: 10, and one per 10 "
             "particles past 101 along the cloth's longer side; a mesh cloth has its longest "
-            "side over its mean edge, plus one)",
+            "side over its mean edge, plus one; a set count runs as set at any --grid; "
+            "`wetcloth check` prints the count)",
             P(integrator.substeps)),
       field("integrator.threads", "", 0, 1024,
             "threads of the step (0: all cores, or one where that is faster, timed as it runs; "
@@ -1283,10 +1284,8 @@ Params at_resolution(Params p, long long grid) {
   for (auto& [name, h] : p.handles) h.patch = std::llround(static_cast<double>(h.patch) * scale);
   const double limit_before = explicit_step_limit(p);
   p.cloth.resolution = {grid, height};
-  // A set number of xpbd substeps grows with the grid (0, the default, grows by itself).
-  if (p.integrator.type == IntegratorType::Xpbd && scale > 1 && p.integrator.substeps > 0)
-    p.integrator.substeps =
-        std::llround(std::ceil(static_cast<double>(p.integrator.substeps) * scale));
+  // xpbd's substeps: a set count is the count that runs; the default (0)
+  // grows with the grid by itself (xpbd_substeps).
   // The particles get lighter as the spacing squared, the springs' limit
   // falls as the spacing, the bending's (quadratic, or Provot's B / l²) faster:
   // the step falls as the spacing, or as the limit where that falls faster.

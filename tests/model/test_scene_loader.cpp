@@ -238,6 +238,11 @@ TEST(SceneLoader, AtResolutionKeepsTheClothInMetres) {
   EXPECT_EQ(coarse.integrator.dt, p.integrator.dt);  // a coarser grid is stable at the same step
   const Params implicit = parse_scene(text + "[integrator]\ntype = \"implicit-euler\"\n", "s.toml");
   EXPECT_EQ(at_resolution(implicit, 41).integrator.dt, implicit.integrator.dt);
+  // xpbd: a set count of substeps is the count that runs at any grid; the
+  // default (0) grows with the grid by itself.
+  const std::string xpbd = text + "[integrator]\ntype = \"xpbd\"\n";
+  EXPECT_EQ(xpbd_substeps(at_resolution(parse_scene(xpbd + "substeps = 12\n", "s.toml"), 401)), 12);
+  EXPECT_EQ(xpbd_substeps(at_resolution(parse_scene(xpbd, "s.toml"), 401)), 40);
   EXPECT_THROW(at_resolution(p, 1), SceneError);  // 1 x 1
   EXPECT_THROW(at_resolution(p, 2002), SceneError);
   // A mesh cloth's particles are its file's vertices: no grid to resize, and

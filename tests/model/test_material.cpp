@@ -77,6 +77,15 @@ Vec3 centre(const Simulation& sim, int i) {
   return sum / m.nv;
 }
 
+// The centre line's curvature at column c: its turn between its neighbours
+// over the arc between them.
+double curvature(const Simulation& sim, int c) {
+  const Vec3 back = centre(sim, c) - centre(sim, c - 1),
+             ahead = centre(sim, c + 1) - centre(sim, c);
+  const double turn = std::atan2(back.z(), back.x()) - std::atan2(ahead.z(), ahead.x());
+  return turn / (0.5 * (back.norm() + ahead.norm()));
+}
+
 // The column at the platform's edge (handle.clamp.span).
 int edge_column(const Model& m) { return static_cast<int>(std::lround(0.8 * (m.nu - 1))); }
 
@@ -121,10 +130,7 @@ double rigidity_at_mid_overhang(const Simulation& sim) {
     for (int j = 0; j < m.nv; ++j)
       moment +=
           m.mass[m.index(i, j)] * 9.81 * (sim.state().x[m.index(i, j)].x() - centre(sim, c).x());
-  const Vec3 back = centre(sim, c) - centre(sim, c - 1),
-             ahead = centre(sim, c + 1) - centre(sim, c);
-  const double turn = std::atan2(back.z(), back.x()) - std::atan2(ahead.z(), ahead.x());
-  const double kappa = turn / (0.5 * (back.norm() + ahead.norm()));
+  const double kappa = curvature(sim, c);
   return moment / (kappa * load_scene("cantilever").cloth.size[1]);
 }
 
@@ -216,10 +222,7 @@ TEST(Cantilever, TipLoadBendsTheStripAsEulerBernoulli) {
     const Model& m = sim.model();
     const int edge = edge_column(m), c = (edge + m.nu - 1) / 2;
     const double overhang = m.rest_position[m.nu - 1].x() - m.rest_position[edge].x();
-    const Vec3 back = centre(sim, c) - centre(sim, c - 1),
-               ahead = centre(sim, c + 1) - centre(sim, c);
-    const double turn = std::atan2(back.z(), back.x()) - std::atan2(ahead.z(), ahead.x());
-    const double kappa = turn / (0.5 * (back.norm() + ahead.norm()));
+    const double kappa = curvature(sim, c);
     const double arm = m.rest_position[m.nu - 1].x() - m.rest_position[c].x();
     EXPECT_NEAR(kappa / (load * arm / (b * w)), 1.0, grid == 51 ? 0.06 : 0.02) << grid;
     const double drop = centre(sim, edge).z() - centre(sim, m.nu - 1).z();

@@ -6,7 +6,8 @@
 // where f holds every force but the damping (spring, viscous, self-collision),
 // which D takes implicitly; K is the springs' stiffness with the compressed-spring
 // fix (the transverse term dropped when |d| < l0, so K stays positive
-// semi-definite) plus the repulsion of colliding pairs along their line. The air,
+// semi-definite), the quadratic bending's constant Q (forces/bending.cpp),
+// plus the repulsion of colliding pairs along their line. The air,
 // adhesion and friction are taken at the start of the step; collisions with
 // the surfaces after it. Pinned, driven and held particles keep their velocity,
 // and particles the forces press into the contact surface keep no normal

@@ -203,6 +203,70 @@ BendingMatrix build_bending_matrix(const std::vector<Vec3>& rest,
   return b;
 }
 
+namespace {
+
+// The rows of a grid's matrix that are its centre row's stencil, within
+// rounding (their fits differ only in the rest positions' last bits), made
+// that stencil exactly, in their columns and their transposes; then each
+// row's diagonal and bound again. Symmetry and zero row sums stay exact.
+void find_stencil(const Model& m, BendingMatrix& b) {
+  const int centre = m.index(m.nu / 2, m.nv / 2);
+  BendingMatrix::Stencil& st = b.stencil;
+  for (int e = b.start[centre]; e < b.start[centre + 1]; ++e) {
+    st.offset.push_back(b.column[e] - centre);
+    st.value.push_back(b.value[e]);
+  }
+  const std::size_t size = st.offset.size();
+  // Each offset's value as the mean of the offset's and its opposite's, so
+  // that the stencil is symmetric to the bit.
+  for (std::size_t e = 0; e < size; ++e) {
+    const std::size_t opposite = size - 1 - e;
+    if (e < opposite) st.value[e] = st.value[opposite] = 0.5 * (st.value[e] + st.value[opposite]);
+  }
+  const auto same = [&](int a) {
+    if (static_cast<std::size_t>(b.start[a + 1] - b.start[a]) != size) return false;
+    for (std::size_t e = 0; e < size; ++e) {
+      const int c = b.start[a] + static_cast<int>(e);
+      if (b.column[c] - a != st.offset[e] ||
+          std::abs(b.value[c] - st.value[e]) > 1e-9 * std::abs(st.value[e]))
+        return false;
+    }
+    return true;
+  };
+  st.first.assign(m.nv, 0);
+  st.last.assign(m.nv, 0);
+  const auto at = [&](int row, int column) {
+    const auto first = b.column.begin() + b.start[row], last = b.column.begin() + b.start[row + 1];
+    return b.start[row] + static_cast<int>(std::lower_bound(first, last, column) - first);
+  };
+  for (int j = 0; j < m.nv; ++j) {
+    // The run of stencil rows about the row's middle.
+    int lo = m.nu / 2, hi = m.nu / 2;
+    if (!same(m.index(lo, j))) continue;
+    while (lo > 0 && same(m.index(lo - 1, j))) --lo;
+    while (hi < m.nu && same(m.index(hi, j))) ++hi;
+    st.first[j] = lo;
+    st.last[j] = hi;
+    for (int i = lo; i < hi; ++i) {
+      const int a = m.index(i, j);
+      for (std::size_t e = 0; e < size; ++e) {
+        b.value[b.start[a] + static_cast<int>(e)] = st.value[e];
+        b.value[at(a + st.offset[e], a)] = st.value[e];
+      }
+    }
+  }
+  for (int j = 0; j < m.n; ++j) {
+    b.diagonal[j] = b.bound[j] = 0;
+    for (int e = b.start[j]; e < b.start[j + 1]; ++e) {
+      b.diagonal[j] -= b.value[e];
+      b.bound[j] += std::abs(b.value[e]);
+    }
+    b.bound[j] += std::abs(b.diagonal[j]);
+  }
+}
+
+}  // namespace
+
 BendingMatrix build_bending_matrix(const Model& m, double rigidity) {
   if (!m.grid) return build_bending_matrix(m.rest_position, {m.triangles}, m.on_border, rigidity);
   std::vector<std::array<int, 3>> one, other;  // each quad split along one diagonal, then the other
@@ -215,29 +279,82 @@ BendingMatrix build_bending_matrix(const Model& m, double rigidity) {
       other.push_back({a, b, d});
       other.push_back({b, c, d});
     }
-  return build_bending_matrix(m.rest_position, {one, other}, m.on_border, rigidity);
+  BendingMatrix b = build_bending_matrix(m.rest_position, {one, other}, m.on_border, rigidity);
+  if (m.nu >= 5 && m.nv >= 5) find_stencil(m, b);
+  return b;
 }
 
-// f_i -= Σ_j Q_ij (x_j - x_i): the rows sum to zero, so this is -Q x, taken
-// on differences so that a cloth far from the origin loses no precision.
-// Each particle sums its own row in order: the same bits on any threads.
-void add_bending_forces(const Model& m, const State& s, Vec3Array& f) {
+// out_i += scale Σ_j Q_ij (x_j - x_i) (Difference) or scale Σ_j Q_ij x_j over
+// j ≠ i, for the particles [a0, a1): each particle sums its own row in the
+// order of its columns, so that any thread count gives the same bits. The
+// stencil's runs of a row take that order too, offset by offset over a chunk
+// of particles, a loop that vectorises.
+// A grid's stencil: the 5 x 5 particles about one, but itself.
+constexpr int kGridStencil = 24;
+
+template <bool Difference>
+void bending_rows(const Model& m, const double* __restrict x, double* __restrict out, double scale,
+                  int a0, int a1) {
   const BendingMatrix& b = m.topology->bending;
-  if (b.start.empty()) return;
-  const int* const start = b.start.data();
-  const int* const column = b.column.data();
+  const int *const start = b.start.data(), *const column = b.column.data();
   const double* const value = b.value.data();
-  for_each_particle_block(m, [&](int first, int end) {
-    for (int k = 0; k < 3; ++k) {
-      const double* __restrict x = s.x.column(k);
-      double* __restrict out = f.column(k);
-      for (int i = first; i < end; ++i) {
-        double sum = 0;
-        for (int e = start[i]; e < start[i + 1]; ++e) sum += value[e] * (x[column[e]] - x[i]);
-        out[i] -= sum;
-      }
+  const auto rows = [&](int first, int end) {
+    for (int i = first; i < end; ++i) {
+      double sum = 0;
+      for (int e = start[i]; e < start[i + 1]; ++e)
+        sum += value[e] * (Difference ? x[column[e]] - x[i] : x[column[e]]);
+      out[i] += scale * sum;
     }
+  };
+  const BendingMatrix::Stencil& st = b.stencil;
+  if (st.first.empty()) return rows(a0, a1);
+  const int size = static_cast<int>(st.offset.size());
+  const int* const offset = st.offset.data();
+  const double* const coefficient = st.value.data();
+  for (int a = a0; a < a1;) {
+    const int j = a / m.nu, row = j * m.nu, lo = row + st.first[j], hi = row + st.last[j];
+    const int end = std::min(a1, row + m.nu);
+    if (a < lo || a >= hi) {  // the row's matrix rows up to its stencil run, or to its end
+      const int to = a < lo ? std::min(lo, end) : end;
+      rows(a, to);
+      a = to;
+      continue;
+    }
+    const int to = std::min(hi, end);
+    if (size != kGridStencil) {
+      rows(a, to);
+      a = to;
+      continue;
+    }
+    // Vectorised across the particles, each one's sum held in a register
+    // over the stencil's 24 offsets (unrolled: its size is known here).
+    int o[kGridStencil];
+    double c[kGridStencil];
+    std::copy_n(offset, kGridStencil, o);
+    std::copy_n(coefficient, kGridStencil, c);
+#pragma omp simd
+    for (int i = a; i < to; ++i) {
+      double sum = 0;
+#pragma GCC unroll 24
+      for (int e = 0; e < kGridStencil; ++e)
+        sum += c[e] * (Difference ? x[i + o[e]] - x[i] : x[i + o[e]]);
+      out[i] += scale * sum;
+    }
+    a = to;
+  }
+}
+
+// f -= Q x on differences, so that a cloth far from the origin loses no precision.
+void add_bending_forces(const Model& m, const State& s, Vec3Array& f) {
+  if (m.topology->bending.start.empty()) return;
+  for_each_particle_block(m, [&](int first, int end) {
+    for (int k = 0; k < 3; ++k) bending_rows<true>(m, s.x.column(k), f.column(k), -1.0, first, end);
   });
+}
+
+void add_bending_off_diagonal(const Model& m, const double* x, double* y, double scale, int a0,
+                              int a1) {
+  bending_rows<false>(m, x, y, scale, a0, a1);
 }
 
 // ½ xᵀ Q x = -¼ Σ_i Σ_j≠i Q_ij |x_j - x_i|² (the rows sum to zero).

@@ -104,18 +104,9 @@ void filter(const Model& m, Workspace& w, Vector v) {
 // diagonal blocks): the quadratic bending, a constant part of the matrix.
 void add_bending_product(const Model& m, Workspace& w, const Columns& x, const Columns& y, int a0,
                          int a1) {
-  const BendingMatrix& b = m.topology->bending;
-  if (b.start.empty()) return;
-  const double h2 = w.bending_h2;
-  for (int k = 0; k < 3; ++k) {
-    const double* __restrict in = x.c[k];
-    double* __restrict out = y.c[k];
-    for (int a = a0; a < a1; ++a) {
-      double sum = 0;
-      for (int e = b.start[a]; e < b.start[a + 1]; ++e) sum += b.value[e] * in[b.column[e]];
-      out[a] += h2 * sum;
-    }
-  }
+  if (m.topology->bending.start.empty()) return;
+  for (int k = 0; k < 3; ++k)
+    detail::add_bending_off_diagonal(m, x.c[k], y.c[k], w.bending_h2, a0, a1);
 }
 
 // y = A x over the free particles; fixed ones have identity rows (their x

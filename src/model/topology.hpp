@@ -25,6 +25,14 @@ struct StencilEdge {
 struct BendingMatrix {
   std::vector<int> start, column;
   std::vector<double> value, diagonal, bound;
+  // A grid's rows away from its border are all one stencil: offset[e] from
+  // the row's particle, with value[e] (ascending offsets, as the rows'
+  // columns). Grid row j's particles [first[j], last[j]) use it, in loops
+  // that vectorise; the others their row of the matrix. Empty for a mesh.
+  struct Stencil {
+    std::vector<int> offset, first, last;
+    std::vector<double> value;
+  } stencil;
 };
 
 struct Topology {

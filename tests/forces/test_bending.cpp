@@ -158,3 +158,46 @@ TEST(QuadraticBending, ProvotKeepsItsSpringsAndQuadraticHasNone) {
   EXPECT_THROW(load_scene("hang", {"springs.bending_k=20"}), SceneError);
   EXPECT_NO_THROW(load_scene("hang", {"springs.bending_k=20", "material.bending=\"provot\""}));
 }
+
+// A grid's rows away from its border run as one stencil, in loops that
+// vectorise: every particle but those within three of the border uses it,
+// and the force and implicit Euler's product are the matrix's rows, summed
+// in the same order.
+TEST(QuadraticBending, TheGridsStencilIsItsMatrixRows) {
+  Params p = quadratic(23);
+  p.cloth.resolution = {23, 17};
+  Simulation sim(p);
+  const Model& m = sim.model();
+  const BendingMatrix& b = m.topology->bending;
+  ASSERT_EQ(b.stencil.offset.size(), 24u);  // 5 x 5 about the particle
+  for (int j = 3; j + 3 < m.nv; ++j) {
+    EXPECT_LE(b.stencil.first[j], 3) << j;
+    EXPECT_GE(b.stencil.last[j], m.nu - 3) << j;
+  }
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> jitter(-0.01, 0.01);
+  State& s = detail::state(sim);
+  for (int i = 0; i < m.n; ++i) s.x[i] += Vec3(jitter(rng), jitter(rng), jitter(rng));
+  Vec3Array f(m.n);
+  detail::add_bending_forces(m, s, f);
+  std::vector<double> x(m.n), product(m.n, 0.0);
+  for (int i = 0; i < m.n; ++i) x[i] = s.x[i][2];
+  detail::add_bending_off_diagonal(m, x.data(), product.data(), 2.0, 0, m.n);
+  for (int i = 0; i < m.n; ++i) {
+    Vec3 row = Vec3::Zero();
+    double off_diagonal = 0;
+    for (int e = b.start[i]; e < b.start[i + 1]; ++e) {
+      row += b.value[e] * (s.x[b.column[e]] - s.x[i]);
+      off_diagonal += b.value[e] * x[b.column[e]];
+    }
+    for (int k = 0; k < 3; ++k) EXPECT_NEAR(f[i][k], -row[k], 1e-12 * (1 + row.norm())) << i;
+    EXPECT_NEAR(product[i], 2 * off_diagonal, 1e-12 * std::abs(off_diagonal) + 1e-15) << i;
+  }
+  // Symmetric to the bit, and each row sums to zero with its diagonal.
+  for (int i = 0; i < m.n; ++i)
+    for (int e = b.start[i]; e < b.start[i + 1]; ++e) {
+      const int k = b.column[e];
+      const auto first = b.column.begin() + b.start[k], last = b.column.begin() + b.start[k + 1];
+      EXPECT_EQ(b.value[e], b.value[std::lower_bound(first, last, i) - b.column.begin()]);
+    }
+}

@@ -25,8 +25,9 @@ inline bool overrides_key(const std::vector<std::string>& sets, const std::strin
 // wide (wetcloth::at_resolution), keeping a time step the overrides set.
 // `option` names the grid in an error.
 inline Params load_on_grid(const std::string& scene, const std::vector<std::string>& sets,
-                           std::optional<long long> grid, const std::string& option = "--grid") {
-  Params p = load_scene(scene, sets);
+                           std::optional<long long> grid, const std::string& option = "--grid",
+                           IntegratorTier tier = IntegratorTier::Accurate) {
+  Params p = load_scene(scene, sets, tier);
   if (!grid) return p;
   const double dt = p.integrator.dt;
   try {
@@ -115,6 +116,10 @@ struct SceneOptions {
   std::optional<unsigned> threads;
   std::optional<long long> grid;
   bool all_cores = false;  // with add_to: no --threads means 0, chosen as the step runs
+  // The tier a scene that names no integrator runs with, and the flag that
+  // sets the other over the scene's own (--live; the viewer's --accurate).
+  IntegratorTier tier = IntegratorTier::Accurate;
+  bool other_tier = false;
 
   void add_to(CLI::App* app, bool scene_required = true) {
     auto* s =
@@ -133,6 +138,15 @@ struct SceneOptions {
                     "timed as it runs; = --set integrator.threads=N, which comes after it)")
         ->check(in_range_of("integrator.threads"));
     add_grid_to(app);
+    if (tier == IntegratorTier::Accurate)
+      app->add_flag("--live", other_tier,
+                    "the live integrator tier, the fastest, as the viewer runs (= --set "
+                    "integrator.tier=live, before the --set options; its error against the "
+                    "reference: docs/performance.md)");
+    else
+      app->add_flag("--accurate", other_tier,
+                    "the accurate integrator tier, the default of run (= --set "
+                    "integrator.tier=accurate, before the --set options)");
     all_cores = true;
   }
 
@@ -147,13 +161,16 @@ struct SceneOptions {
     std::vector<std::string> all;
     if (threads || all_cores)
       all.push_back("integrator.threads=" + std::to_string(threads.value_or(0)));
+    if (other_tier)
+      all.push_back(std::string("integrator.tier=\"") +
+                    (tier == IntegratorTier::Accurate ? "live" : "accurate") + "\"");
     all.insert(all.end(), sets.begin(), sets.end());
     if (humidity) all.push_back("cloth.humidity=" + format_number(*humidity));
     if (duration) all.push_back("run.duration=" + format_number(*duration));
     return all;
   }
 
-  Params load() const { return load_on_grid(scene, overrides(), grid); }
+  Params load() const { return load_on_grid(scene, overrides(), grid, "--grid", tier); }
 };
 
 }  // namespace wetcloth::cli

@@ -100,6 +100,7 @@ struct Commands {
     o.params = view_scene.load();
     o.overrides = view_scene.overrides();
     o.grid = view_scene.grid;
+    o.tier = view_scene.tier;
     parse_size(view_size, o.width, o.height);
     o.color = color_by(view_color);
     if (view->count("--screenshot-after")) {
@@ -149,6 +150,7 @@ std::function<std::optional<int>()> add_commands(CLI::App& app) {
   const std::vector<std::string> colors(kColorByNames.begin(), kColorByNames.end());
 
   c->view = app.add_subcommand("view", "open a window and run a scene live (GLFW, OpenGL 3.3)");
+  c->view_scene.tier = IntegratorTier::Live;  // as fast as it can be
   c->view_scene.add_to(c->view, /*scene_required=*/false);
   c->view->add_option("--size", c->view_size, "window size")->check(kSize)->capture_default_str();
   c->view->add_option("--color", c->view_color, "colour the cloth by")

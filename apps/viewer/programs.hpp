@@ -35,6 +35,7 @@ struct ViewOptions {
   Params params;
   std::vector<std::string> overrides;  // --set etc., applied again to scenes picked in the panel
   std::optional<long long> grid;       // --grid, likewise
+  IntegratorTier tier = IntegratorTier::Live;  // of a scene that names no integrator
   int width = 1280, height = 720;
   ColorBy color = ColorBy::Fabric;
   std::optional<double> screenshot_after;  // simulated seconds

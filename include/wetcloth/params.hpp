@@ -42,6 +42,11 @@ WETCLOTH_CHOICE(IntegratorType, "symplectic-euler", "xpbd", "implicit-euler", "e
 // paper's literal model, which soften on a finer grid.
 enum class BendingModel { Quadratic, Provot };
 WETCLOTH_CHOICE(BendingModel, "quadratic", "provot")
+// The integrator settings by name (docs/model.md section 8, docs/performance.md):
+// accurate, the cheapest within 5 % of the reference on every built-in scene;
+// live, the fastest, for the viewer.
+enum class IntegratorTier { Accurate, Live };
+WETCLOTH_CHOICE(IntegratorTier, "accurate", "live")
 enum class UpAxis { Z, Y };  // of the files written: the simulation's z, or y
 WETCLOTH_CHOICE(UpAxis, "z", "y")
 #undef WETCLOTH_CHOICE
@@ -197,6 +202,8 @@ struct Params {
   } self_collision;
 
   struct Integrator {
+    // The defaults below are the accurate tier's (apply_tier).
+    IntegratorTier tier = IntegratorTier::Accurate;
     IntegratorType type = IntegratorType::SymplecticEuler;
     double dt = 5e-5;            // s (xpbd: 1/240 s in substeps)
     long long substeps = 0;      // xpbd: substeps a step (0: 10, and one per 10 particles past 101
@@ -251,5 +258,14 @@ ResolvedSprings resolve_springs(const Params& p);
 // constant or, where bending springs are stiffer than a quarter of it (fine
 // grids), (2 k_s + 4 k_b + k_s² / (4 k_b)) / 4: a chain's highest mode.
 double explicit_step_limit(const Params& p);
+
+// A step of the integrator's kind: 5e-5 s for the small-step ones (symplectic
+// and explicit Euler), 1/240 s for xpbd and implicit Euler, which take it in
+// substeps. A scene that names an integrator and no step gets this one.
+double default_step(IntegratorType t);
+
+// Sets the integrator's keys (type, dt, substeps, max_step_strain) to the
+// tier's; a key the scene or a --set gives after integrator.tier overrides it.
+void apply_tier(Params& p, IntegratorTier tier);
 
 }  // namespace wetcloth

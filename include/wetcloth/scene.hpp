@@ -45,10 +45,14 @@ struct BuiltinScene {
 const std::vector<BuiltinScene>& builtin_scenes();
 
 // SCENE is a path to a TOML file or a built-in name; overrides are KEY=VALUE
-// strings in TOML syntax (`cloth.resolution=[25,25]`). Throws SceneError.
-Params load_scene(const std::string& scene, const std::vector<std::string>& overrides = {});
+// strings in TOML syntax (`cloth.resolution=[25,25]`). `tier`: the integrator
+// settings a scene that names none runs with (the viewer's is live). Throws
+// SceneError.
+Params load_scene(const std::string& scene, const std::vector<std::string>& overrides = {},
+                  IntegratorTier tier = IntegratorTier::Accurate);
 Params parse_scene(const std::string& toml_text, const std::string& source_name,
-                   const std::vector<std::string>& overrides = {});
+                   const std::vector<std::string>& overrides = {},
+                   IntegratorTier tier = IntegratorTier::Accurate);
 
 // The same physical scene on a cloth `grid` particles wide, its height in
 // particles scaled alike: handle patches keep their size in metres, and an

@@ -119,6 +119,26 @@ double step_limit(double omega2) { return omega2 > 0 ? 2.0 / std::sqrt(omega2) :
 
 }  // namespace
 
+double default_step(IntegratorType t) {
+  return t == IntegratorType::Xpbd || t == IntegratorType::ImplicitEuler ? 1.0 / 240 : 5e-5;
+}
+
+// The tiers' settings, chosen by measurement: docs/performance.md's
+// work-precision table (tools/work_precision.py).
+void apply_tier(Params& p, IntegratorTier tier) {
+  Params::Integrator& i = p.integrator;
+  const Params::Integrator accurate;
+  i.tier = tier;
+  i.type = accurate.type;
+  i.dt = accurate.dt;
+  i.substeps = accurate.substeps;
+  i.max_step_strain = accurate.max_step_strain;
+  if (tier == IntegratorTier::Live) {
+    i.type = IntegratorType::Xpbd;
+    i.dt = default_step(i.type);
+  }
+}
+
 double explicit_step_limit(const Params& p) {
   double omega2 = spring_omega2(p);
   if (p.material.bending == BendingModel::Quadratic) {

@@ -12,6 +12,7 @@
 #include <fstream>
 #include <functional>
 #include <limits>
+#include <optional>
 #include <sstream>
 #include <string_view>
 
@@ -311,12 +312,21 @@ std::vector<ParamDef> solver_defs() {
       field("self_collision.k", "N/m", 0, 1e7, "repulsion stiffness k_t", P(self_collision.k)),
       field("self_collision.damping", "N·s/m", 0, 1e3, "damping k_f of colliding particles",
             P(self_collision.damping)),
+      field("integrator.tier", "", 1, 0,
+            "the integrator's settings by name: accurate (the cheapest within 5 % of the "
+            "reference on every built-in scene) or live (the fastest, the viewer's; its error in "
+            "docs/performance.md); sets integrator.type, dt, substeps and max_step_strain, and "
+            "any of them the scene or a later --set gives overrides it (--live sets live)",
+            P(integrator.tier)),
       field("integrator.type", "", 1, 0,
             "time integrator: symplectic-euler (small steps, the reference), xpbd (large steps "
             "in substeps: dt 1/240 s, integrator.substeps), implicit-euler (backward Euler), "
             "explicit-euler (the blog's forward Euler: it gains energy every step, for comparison)",
             P(integrator.type)),
-      field("integrator.dt", "s", 1e-9, 1, "time step", P(integrator.dt)),
+      field("integrator.dt", "s", 1e-9, 1,
+            "time step (a type named without it gets its kind's: 5e-5 s for the small-step "
+            "integrators, 1/240 s for xpbd and implicit-euler)",
+            P(integrator.dt)),
       field("integrator.substeps", "", 0, 10000,
             "xpbd: substeps a step, each one sweep of the constraints (0: 10, and one per 10 "
             "particles past 101 along the cloth's longer side; a mesh cloth has its longest "
@@ -886,6 +896,35 @@ void apply_named_preset(const toml::table& root, const std::vector<toml::table>&
   if (named) apply_preset(p, std::get<std::string>(convert(*named, *find_def(key), key)));
 }
 
+// The integrator's keys come from the scene, then from the overrides (each
+// --set in order): a source's integrator.tier sets the tier's keys before the
+// keys given after it, and a source that names an integrator.type of the
+// other kind (small or large steps) and no integrator.dt gets that kind's
+// step, not the one before.
+void apply_tier_key(const toml::table& t, Params& p) {
+  const std::string key = "integrator.tier";
+  if (const toml::node* n = t.at_path(key).node())
+    apply_tier(p, from_value<IntegratorTier>(convert(*n, *find_def(key), key)));
+}
+void apply_sources(const toml::table& root, const std::vector<toml::table>& sets, Params& p) {
+  const auto source = [&p](const std::vector<const toml::table*>& tables, bool scene) {
+    std::optional<IntegratorType> before;  // the type before the first that names one
+    bool dt = false;
+    for (const toml::table* t : tables) {
+      apply_tier_key(*t, p);
+      if (!before && t->at_path("integrator.type").node()) before = p.integrator.type;
+      dt = dt || t->at_path("integrator.dt").node() != nullptr;
+      apply_table(*t, "", p, scene);
+    }
+    if (before && !dt && default_step(*before) != default_step(p.integrator.type))
+      p.integrator.dt = default_step(p.integrator.type);
+  };
+  source({&root}, true);
+  std::vector<const toml::table*> overrides;
+  for (const auto& t : sets) overrides.push_back(&t);
+  source(overrides, false);
+}
+
 // Checks that combine keys. An error names the scene, with the line of the
 // key it reports where the scene sets it, and the overrides that may have set
 // what it says: those of the key's section (cloth, handle, ...) and those of
@@ -1130,7 +1169,7 @@ std::string format_value(const ParamValue& v) {
 }
 
 Params parse_scene(const std::string& text, const std::string& source,
-                   const std::vector<std::string>& overrides) {
+                   const std::vector<std::string>& overrides, IntegratorTier tier) {
   const std::string safe = guard_toml_text(text, source);
   toml::table root;
   try {
@@ -1142,10 +1181,10 @@ Params parse_scene(const std::string& text, const std::string& source,
   std::vector<toml::table> sets;
   for (const auto& o : overrides) sets.push_back(parse_override(o));
   Params p;
+  apply_tier(p, tier);
   apply_named_preset(root, sets, p);
-  apply_table(root, "", p, true);
   // Overrides are applied on top, each keeping its own source for messages.
-  for (const auto& t : sets) apply_table(t, "", p, false);
+  apply_sources(root, sets, p);
   check_consistency(p, source, overrides, root);
   return p;
 }
@@ -1162,13 +1201,14 @@ Params reparse_scene(const Params& base, const std::vector<std::string>& overrid
   return p;
 }
 
-Params load_scene(const std::string& scene, const std::vector<std::string>& overrides) {
+Params load_scene(const std::string& scene, const std::vector<std::string>& overrides,
+                  IntegratorTier tier) {
   // A file, not a folder: a run's output folder named after a built-in scene
   // (`--out hang`) opens as a stream too, and read as an empty scene.
   std::error_code ec;
   std::ifstream probe(scene);
   if (probe.good() && !std::filesystem::is_directory(scene, ec)) {
-    Params p = parse_scene(read_file(scene), scene, overrides);
+    Params p = parse_scene(read_file(scene), scene, overrides, tier);
     p.scene_dir = std::filesystem::absolute(scene).parent_path().lexically_normal().string();
     check_cloth_mesh(p, scene);
     check_obstacle_meshes(p, scene);
@@ -1176,7 +1216,7 @@ Params load_scene(const std::string& scene, const std::vector<std::string>& over
   }
   for (const auto& b : builtin_scenes())
     if (b.name == scene) {
-      Params p = parse_scene(b.text, "scenes/" + b.name + ".toml", overrides);
+      Params p = parse_scene(b.text, "scenes/" + b.name + ".toml", overrides, tier);
       p.scene_dir = "builtin:";
       check_cloth_mesh(p, "scenes/" + b.name + ".toml");
       check_obstacle_meshes(p, "scenes/" + b.name + ".toml");

@@ -332,3 +332,52 @@ TEST(SceneLoader, ResolvedTomlEscapesControlCharacters) {
                                        "b\x7f\n\"q\""));
   EXPECT_EQ(parse_scene(to_toml(p), "resolved.toml").description, p.description);
 }
+
+// integrator.tier sets the integrator's keys; a key given after it (in the
+// scene, or a later --set) overrides it; a type named without a step gets
+// its kind's step, not the small one of the tier before.
+TEST(SceneLoader, TiersAndAnIntegratorsOwnStep) {
+  const double large = 1.0 / 240;
+  Params p = parse_scene("", "s.toml");
+  EXPECT_EQ(p.integrator.tier, IntegratorTier::Accurate);
+  EXPECT_EQ(p.integrator.type, Params{}.integrator.type);
+  EXPECT_EQ(p.integrator.dt, Params{}.integrator.dt);
+  p = parse_scene("", "s.toml", {"integrator.tier=\"live\""});
+  EXPECT_EQ(p.integrator.type, IntegratorType::Xpbd);
+  EXPECT_EQ(p.integrator.dt, large);
+  // The live tier's default count, as xpbd_substeps gives it.
+  EXPECT_EQ(p.integrator.substeps, 0);
+  p = parse_scene("[integrator]\ntype = \"xpbd\"\n", "s.toml");
+  EXPECT_EQ(p.integrator.dt, large);
+  p = parse_scene("[integrator]\ntype = \"xpbd\"\ndt = 0.01\n", "s.toml");
+  EXPECT_EQ(p.integrator.dt, 0.01);
+  p = parse_scene("", "s.toml", {"integrator.type=\"implicit-euler\""});
+  EXPECT_EQ(p.integrator.dt, large);
+  // The command line is one source: a step set anywhere in it stands.
+  p = parse_scene("", "s.toml", {"integrator.dt=1e-3", "integrator.type=\"implicit-euler\""});
+  EXPECT_EQ(p.integrator.dt, 1e-3);
+  // The same kind keeps the scene's step.
+  p = parse_scene("[integrator]\ndt = 2e-5\n", "s.toml", {"integrator.type=\"explicit-euler\""});
+  EXPECT_EQ(p.integrator.dt, 2e-5);
+  // A later tier wins over the scene's integrator; a later key over the tier.
+  p = parse_scene("[integrator]\ntype = \"implicit-euler\"\n", "s.toml",
+                  {"integrator.tier=\"live\"", "integrator.substeps=7"});
+  EXPECT_EQ(p.integrator.type, IntegratorType::Xpbd);
+  EXPECT_EQ(p.integrator.substeps, 7);
+  p = parse_scene("[integrator]\ntier = \"live\"\ntype = \"symplectic-euler\"\n", "s.toml");
+  EXPECT_EQ(p.integrator.tier, IntegratorTier::Live);
+  EXPECT_EQ(p.integrator.type, IntegratorType::SymplecticEuler);
+  EXPECT_EQ(p.integrator.dt, Params{}.integrator.dt);
+  // A scene that names no integrator runs with the tier it is loaded with.
+  p = parse_scene("", "s.toml", {}, IntegratorTier::Live);
+  EXPECT_EQ(p.integrator.type, IntegratorType::Xpbd);
+  p = parse_scene("[integrator]\ntype = \"implicit-euler\"\n", "s.toml", {}, IntegratorTier::Live);
+  EXPECT_EQ(p.integrator.type, IntegratorType::ImplicitEuler);
+  // The resolved scene reads back as it was.
+  const Params live = parse_scene("", "s.toml", {"integrator.tier=\"live\""});
+  const Params back = parse_scene(to_toml(live), "s.toml");
+  EXPECT_EQ(back.integrator.tier, IntegratorTier::Live);
+  EXPECT_EQ(back.integrator.type, IntegratorType::Xpbd);
+  EXPECT_EQ(back.integrator.dt, large);
+  EXPECT_THROW(parse_scene("", "s.toml", {"integrator.tier=\"fast\""}), SceneError);
+}

@@ -5,7 +5,7 @@ BUILD    ?= build
 JOBS     ?= $(shell nproc)
 CMAKE_FLAGS ?= -DCMAKE_BUILD_TYPE=Release
 
-.PHONY: all deps build test test-clients test-sanitize test-sanitize-ci fuzz demo validate same-bits bench clean docs-params readme-params
+.PHONY: all deps build test test-clients test-sanitize test-sanitize-ci fuzz demo validate work-precision same-bits bench clean docs-params readme-params
 
 all: build
 
@@ -85,6 +85,13 @@ demo: build
 
 validate: build
 	tools/validate.sh $(BUILD)
+
+# Each integrator setting's cost against its error on the paper's scenes at
+# ω = 0, 0.7 and 1 (docs/performance.md; validate runs it too): about an hour
+# on two cores.
+work-precision: build
+	/usr/bin/python3 tools/work_precision.py $(BUILD) --out out/work-precision \
+	  --scenes pull-straight,pull-oblique,pull-corner,drag-corner,drape-ball,peel-rig
 
 # Whether the current build gives the numbers of REV (default HEAD~1) bit for
 # bit on every built-in scene: a refactoring must.

@@ -59,6 +59,11 @@ expect_check_bad notobj "cloth.obj: no faces" 'this is not an OBJ file\n'
 expect_check_bad index "cloth.obj: face 1 names a vertex that is not in the file" 'v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 9\n'
 expect_check_bad absent "scene.toml: cloth.mesh" ''
 expect_bad mesh_run "cloth.obj: face 1 is degenerate" "$T/mesh_degenerate/scene.toml"
+# --live: the live tier over the scene's integrator; a later --set over the tier.
+"$W" check pull-straight --live | grep -q '^type = "xpbd"$' &&
+  "$W" check pull-straight --live | grep -q '^dt = 0.004166666666666667' &&
+  "$W" check pull-straight --live --set integrator.type=implicit-euler | grep -q '^type = "implicit-euler"$' &&
+  "$W" check pull-straight | grep -q '^type = "symplectic-euler"$' && ok "--live" || bad "--live"
 "$W" check drape-disc | grep -q '^mesh = "meshes/cloth_disc.obj"$' && ok "check a mesh cloth" ||
   bad "check drape-disc: $("$W" check drape-disc 2>&1 | head -3)"
 "$W" run drape-disc --set run.duration=0.01 --out "$T/disc" --quiet --export usd,pc2,vtk &&

@@ -14,7 +14,8 @@
 #            ω = 0.7 on G = 31 and 101 particles (51 is their sweep above), and
 #            of the cantilever's bending length on 26, 51 and 101), or the run
 #            free-cloth (a law the model keeps; the other, the peel's force
-#            balance, is read from the peel-rig sweep); the report still covers
+#            balance, is read from the peel-rig sweep), or work-precision
+#            (tools/work_precision.py on the paper's scenes); the report still covers
 #            every sweep in validation/runs.
 # A scene whose `wetcloth check` fails is skipped, with a note in the report.
 # Each sweep's output goes to validation/runs/<name>.log.
@@ -26,7 +27,7 @@ GRIDS="31 101"
 CANTILEVER_GRIDS="26 51 101"
 NAMES="pull-straight pull-oblique pull-corner drag-corner drape-ball peel-rig air-models free-cloth $(for s in $AGREEMENT; do printf 'implicit-%s explicit-%s ' "$s" "$s"; done)"
 NAMES="$NAMES $(for s in $GRIDDED; do for g in $GRIDS; do printf 'grid-%s-%s ' "$s" "$g"; done; done)"
-NAMES="$NAMES $(for g in $CANTILEVER_GRIDS; do printf 'grid-cantilever-%s ' "$g"; done)"
+NAMES="$NAMES $(for g in $CANTILEVER_GRIDS; do printf 'grid-cantilever-%s ' "$g"; done) work-precision"
 COMMAND="tools/validate.sh $*"
 [ $# -ge 1 ] || { echo "usage: tools/validate.sh BUILD_DIR [NAME...]" >&2; exit 2; }
 W="$(cd "$1" 2>/dev/null && pwd)/wetcloth"
@@ -130,5 +131,19 @@ done
 for g in $CANTILEVER_GRIDS; do
   sweep "grid-cantilever-$g" cantilever --grid "$g" --humidity 0 --no-plots
 done
+
+# Work against precision (docs/performance.md): each integrator setting's
+# cost and error against the reference on the paper's scenes at ω = 0, 0.7, 1.
+if [ -z "$ONLY" ] || [[ "$ONLY" == *" work-precision "* ]]; then
+  start=$SECONDS
+  cmd=("$PYTHON" tools/work_precision.py "$(dirname "$W")" --jobs "$JOBS" --out "$RUNS/work-precision"
+       --scenes pull-straight,pull-oblique,pull-corner,drag-corner,drape-ball,peel-rig
+       --table "$RUNS/work-precision/table.md")
+  echo "work-precision: ${cmd[*]}"
+  mkdir -p "$RUNS/work-precision"
+  "${cmd[@]}" >"$RUNS/work-precision.log" 2>&1; code=$?
+  echo "work-precision: exit code $code after $((SECONDS - start)) s (log: $RUNS/work-precision.log)"
+  record work-precision "$code" "$((SECONDS - start))" "${cmd[*]}"
+fi
 
 "$PYTHON" tools/validation_report.py "$RUNS" validation/report.md --command "$COMMAND"

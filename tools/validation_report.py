@@ -819,6 +819,19 @@ def report(runs, report_path, command):
                       for l, h, m, e, v in laws]), ""]
     grid_lines, _ = grid_section(sweeps, runs)
     out += grid_lines
+    # tools/work_precision.py's table and plot, when validate.sh ran it.
+    wp = os.path.join(runs, "work-precision")
+    if os.path.exists(os.path.join(wp, "table.md")):
+        out += ["## Work against precision", "",
+                "Each integrator setting's cost (CPU s per simulated s, one thread) and its worst "
+                "error against the reference (symplectic Euler at 2.5e-5 s) over the scenes' "
+                "metrics (tools/work_precision.py says how each is read).", "",
+                open(os.path.join(wp, "table.md"), encoding="utf-8").read().rstrip(), ""]
+        plot = os.path.join(wp, "work_precision.png")
+        if os.path.exists(plot):
+            os.makedirs(os.path.join(report_dir, "figures"), exist_ok=True)
+            shutil.copyfile(plot, os.path.join(report_dir, "figures", "work_precision.png"))
+            out += ["![work against precision](figures/work_precision.png)", ""]
 
     cmd_log = os.path.join(runs, "commands.log")
     if os.path.exists(cmd_log):

@@ -42,9 +42,10 @@ WETCLOTH_CHOICE(IntegratorType, "symplectic-euler", "xpbd", "implicit-euler", "e
 // paper's literal model, which soften on a finer grid.
 enum class BendingModel { Quadratic, Provot };
 WETCLOTH_CHOICE(BendingModel, "quadratic", "provot")
-// The integrator settings by name (docs/model.md section 8, docs/performance.md):
-// accurate, the cheapest within 5 % of the reference on every built-in scene;
-// live, the fastest, for the viewer.
+// The integrator settings by name, chosen by measurement (docs/performance.md,
+// "Work against precision"): accurate, the cheapest setting near the
+// reference on the paper's scenes (no cheaper one came within 5 %); live, the
+// fastest, for the viewer.
 enum class IntegratorTier { Accurate, Live };
 WETCLOTH_CHOICE(IntegratorTier, "accurate", "live")
 enum class UpAxis { Z, Y };  // of the files written: the simulation's z, or y

@@ -85,9 +85,9 @@ double front_pull(const Model& m, const State& s, const Vec3Array& surface_norma
   if (m.contact_surface != SurfaceKind::None && !b.start.empty())
     for (int k = 0; k < m.n; ++k) {
       if (!s.contact[k]) continue;
-      for (int e = b.start[k]; e < b.start[k + 1]; ++e)
-        if (const int o = b.column[e]; !s.contact[o])
-          pull -= b.value[e] * (s.x[o] - s.x[k]).dot(surface_normal[k]);
+      b.for_each_in_row(k, [&](int o, double q) {
+        if (!s.contact[o]) pull -= q * (s.x[o] - s.x[k]).dot(surface_normal[k]);
+      });
     }
   return pull;
 }

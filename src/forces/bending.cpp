@@ -263,6 +263,20 @@ void find_stencil(const Model& m, BendingMatrix& b) {
     }
     b.bound[j] += std::abs(b.diagonal[j]);
   }
+  // The stencil's rows leave the stored matrix (about 300 bytes a particle).
+  st.nu = m.nu;
+  std::vector<int> start{0}, column;
+  std::vector<double> value;
+  for (int j = 0; j < m.n; ++j) {
+    if (!b.in_stencil(j)) {
+      column.insert(column.end(), b.column.begin() + b.start[j], b.column.begin() + b.start[j + 1]);
+      value.insert(value.end(), b.value.begin() + b.start[j], b.value.begin() + b.start[j + 1]);
+    }
+    start.push_back(static_cast<int>(column.size()));
+  }
+  b.start = std::move(start);
+  b.column = std::move(column);
+  b.value = std::move(value);
 }
 
 }  // namespace
@@ -321,8 +335,13 @@ void bending_rows(const Model& m, const double* __restrict x, double* __restrict
       continue;
     }
     const int to = std::min(hi, end);
-    if (size != kGridStencil) {
-      rows(a, to);
+    if (size != kGridStencil) {  // not a grid's 5 x 5 (none is met): a particle at a time
+      for (int i = a; i < to; ++i) {
+        double sum = 0;
+        for (int e = 0; e < size; ++e)
+          sum += coefficient[e] * (Difference ? x[i + offset[e]] - x[i] : x[i + offset[e]]);
+        out[i] += scale * sum;
+      }
       a = to;
       continue;
     }
@@ -362,8 +381,7 @@ double bending_energy(const Model& m, const Vec3Array& x) {
   const BendingMatrix& b = m.topology->bending;
   double e = 0;
   for (int i = 0; i + 1 < static_cast<int>(b.start.size()); ++i)
-    for (int c = b.start[i]; c < b.start[i + 1]; ++c)
-      e -= 0.25 * b.value[c] * (x[b.column[c]] - x[i]).squaredNorm();
+    b.for_each_in_row(i, [&](int j, double q) { e -= 0.25 * q * (x[j] - x[i]).squaredNorm(); });
   return e;
 }
 

@@ -315,8 +315,7 @@ void add_forces_at_new_velocities(const Model& m, const State& s, Workspace& w, 
   if (!b.start.empty())
     for (const int a : w.fixed_particles) {
       Vec3 qv = Vec3::Zero();
-      for (int e = b.start[a]; e < b.start[a + 1]; ++e)
-        qv += b.value[e] * (v.at(b.column[e]) - v.at(a));
+      b.for_each_in_row(a, [&](int j, double q) { qv += q * (v.at(j) - v.at(a)); });
       w.force[a] -= h * qv;
     }
 }

@@ -29,10 +29,29 @@ struct BendingMatrix {
   // the row's particle, with value[e] (ascending offsets, as the rows'
   // columns). Grid row j's particles [first[j], last[j]) use it, in loops
   // that vectorise; the others their row of the matrix. Empty for a mesh.
+  // Those rows are not stored in start, column and value (their ranges are
+  // empty): for_each_in_row gives any row's entries.
   struct Stencil {
+    int nu = 0;  // the grid's row length
     std::vector<int> offset, first, last;
     std::vector<double> value;
   } stencil;
+
+  bool in_stencil(int i) const {
+    if (stencil.first.empty()) return false;
+    const int j = i / stencil.nu, k = i % stencil.nu;
+    return k >= stencil.first[j] && k < stencil.last[j];
+  }
+  // f(j, Q_ij) for each j ≠ i of row i, in ascending j.
+  template <class F>
+  void for_each_in_row(int i, F&& f) const {
+    if (in_stencil(i)) {
+      for (std::size_t e = 0; e < stencil.offset.size(); ++e)
+        f(i + stencil.offset[e], stencil.value[e]);
+      return;
+    }
+    for (int e = start[i]; e < start[i + 1]; ++e) f(column[e], value[e]);
+  }
 };
 
 struct Topology {

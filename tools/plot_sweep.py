@@ -312,7 +312,7 @@ def make_figures(cases, models, title, made):
     for name in (f for f in made if f in series):
         ylabel, values = series[name]
         # A driven handle is a measuring rig: its force against how far it has
-        # moved (MODEL.md section 9), not against time.
+        # moved (docs/model.md section 9), not against time.
         rig = name == "handle_force"
         fig, ax = plt.subplots(figsize=(7.5, 4.5), constrained_layout=True)
         for c in cases:

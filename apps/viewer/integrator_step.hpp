@@ -10,7 +10,7 @@ inline bool takes_large_steps(IntegratorType t) {
 }
 
 // The scene's own step when it ran an integrator of the same kind, else the
-// kind's: 5e-5 s for the small-step integrators (MODEL.md section 8), 1/240 s
+// kind's: 5e-5 s for the small-step integrators (docs/model.md section 8), 1/240 s
 // for xpbd and implicit Euler, which take it in substeps. xpbd kept at 5e-5 s
 // would take ten substeps where one is too many, and run slower than the
 // explicit step instead of in real time.

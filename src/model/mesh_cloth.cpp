@@ -198,7 +198,7 @@ double constant(const std::optional<double>& set, double from_material) {
   return set.value_or(from_material);
 }
 
-// Structural and shear springs (MODEL.md section 1, "a mesh cloth"); the
+// Structural and shear springs (docs/model.md section 1, "a mesh cloth"); the
 // cloth's edges and the strain limiter's springs as pairs.
 void add_stretch_springs(Model& m, const Params& p, const ClothMesh& c, Edges& edges,
                          std::vector<std::array<int, 2>>& edge_pairs,

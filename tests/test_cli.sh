@@ -91,7 +91,7 @@ expect_bad surface    "drop-table.toml with --set 'table.enabled=false': contact
   drop-table --set table.enabled=false
 # An --out that cannot be made, or that is a file: bad input, named, the file untouched.
 "$W" run hang --out /proc/wetcloth-out --quiet 2>"$T/err"; code=$?
-[ $code -eq 2 ] && grep -qF -- "--out /proc/wetcloth-out: cannot make it" "$T/err" &&
+[ $code -eq 2 ] && grep -qF -- "--out /proc/wetcloth-out: /proc/wetcloth-out is a system folder" "$T/err" &&
   ok "--out that cannot be made: exit 2, named" || bad "--out /proc: exit $code, $(cat "$T/err")"
 # A misspelt command, an option before it, or none: exit 2, and what there is.
 "$W" runn hang 2>"$T/err"; code=$?

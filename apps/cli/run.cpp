@@ -2,6 +2,8 @@
 
 #include <fcntl.h>
 #include <sys/file.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
 #include <sys/statvfs.h>
 #include <unistd.h>
 
@@ -22,6 +24,7 @@
 #include <thread>
 
 #include "common/scene_options.hpp"
+#include "output_folder.hpp"
 #include "wetcloth/caches.hpp"
 #include "wetcloth/checkpoint.hpp"
 #include "wetcloth/output.hpp"
@@ -67,49 +70,43 @@ extern "C" void on_stop_signal(int sig) {
 }
 
 // The output folder's lock: held (flock) while a run writes into it, released
-// by the system however the process ends. The file stays.
+// by the system however the process ends, and the empty file removed when the
+// run ends. A run that locked a file another removed meanwhile takes the lock
+// again on the file now there.
 class OutputLock {
  public:
-  explicit OutputLock(const fs::path& out) {
-    const fs::path path = out / ".wetcloth.lock";
-    fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-    if (fd_ < 0) throw_output_error(path, "cannot create the lock file", errno);
-    if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
-      const int e = errno;
+  explicit OutputLock(const fs::path& out) : path_(out / ".wetcloth.lock") {
+    for (int attempt = 0;; ++attempt) {
+      fd_ = ::open(path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC | O_NOFOLLOW, 0644);
+      if (fd_ < 0) throw_output_error(path_, "cannot create the lock file", errno);
+      if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+        const int e = errno;
+        ::close(fd_);
+        if (e == EWOULDBLOCK)
+          throw SceneError("--out " + out.string() + ": another wetcloth run is writing into it (" +
+                           path_.string() + " is locked); wait for it, or choose another --out");
+        throw_output_error(path_, "cannot lock", e);
+      }
+      struct stat held {
+      }, named{};
+      if (::fstat(fd_, &held) == 0 && ::stat(path_.c_str(), &named) == 0 &&
+          held.st_ino == named.st_ino && held.st_dev == named.st_dev)
+        return;
       ::close(fd_);
-      if (e == EWOULDBLOCK)
-        throw SceneError("--out " + out.string() + ": another wetcloth run is writing into it (" +
-                         path.string() + " is locked); wait for it, or choose another --out");
-      throw_output_error(path, "cannot lock", e);
+      if (attempt == 100) throw_output_error(path_, "cannot lock", EAGAIN);
     }
   }
-  ~OutputLock() { ::close(fd_); }
+  ~OutputLock() {
+    ::unlink(path_.c_str());  // before the lock goes: no other run holds this file
+    ::close(fd_);
+  }
   OutputLock(const OutputLock&) = delete;
   OutputLock& operator=(const OutputLock&) = delete;
 
  private:
+  fs::path path_;
   int fd_ = -1;
 };
-
-// Clears what an earlier run left, so a folder never mixes two runs.
-void clear_outputs(const fs::path& out) {
-  std::error_code ec;
-  for (const char* f : {"metrics.csv", "summary.json", "scene.toml", "obstacles.obj", "cloth.usda",
-                        "cloth.pc2", "cloth_rest.obj", "cloth.pvd", "checkpoint.state"})
-    if (fs::remove(out / f, ec); ec) throw_output_error(out / f, "cannot remove", ec.value());
-  if (fs::remove_all(out / ".cloth.usda.samples", ec); ec)
-    throw_output_error(out / ".cloth.usda.samples", "cannot remove", ec.value());
-  // The frames and the VTK caches' frames.
-  for (const auto& [folder, extension] : {std::pair{"frames", ".obj"}, {"vtk", ".vtp"}}) {
-    const fs::path dir = out / folder;
-    if (!fs::is_directory(dir, ec)) continue;
-    for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec))
-      if (it->path().extension() == extension)
-        if (std::error_code rec; fs::remove(it->path(), rec), rec)
-          throw_output_error(it->path(), "cannot remove", rec.value());
-    if (ec) throw_output_error(dir, "cannot list", ec.value());
-  }
-}
 
 // Removes the frames (frames/frame_NNNNN.obj, vtk/cloth_NNNNN.vtp) from
 // `first` on: a resumed run writes them again.
@@ -184,6 +181,72 @@ Params with_output_meshes(const Params& p,
   place("cloth.mesh", q.cloth.mesh);
   for (auto& [name, o] : q.obstacles) place("obstacle." + name + ".mesh", o.mesh);
   return q;
+}
+
+std::string frame_file(const char* folder, const char* prefix, long long f, const char* extension) {
+  char name[64];
+  std::snprintf(name, sizeof name, "%s/%s%05lld%s", folder, prefix, f, extension);
+  return name;
+}
+
+// Every file (and, ending in '/', folder) a run of P may write in its folder,
+// relative to it: its manifest. Its frames are known from the start.
+std::vector<std::string> run_outputs(const Params& p) {
+  std::vector<std::string> files = {"metrics.csv", "summary.json", "scene.toml", "obstacles.obj",
+                                    "checkpoint.state"};
+  const Params q = with_output_meshes(p);
+  std::vector<std::string> meshes;
+  if (!q.cloth.mesh.empty()) meshes.push_back(q.cloth.mesh);
+  for (const auto& [name, o] : q.obstacles)
+    if (std::find(meshes.begin(), meshes.end(), o.mesh) == meshes.end()) meshes.push_back(o.mesh);
+  if (!meshes.empty()) files.push_back("meshes/");
+  files.insert(files.end(), meshes.begin(), meshes.end());
+  const long long last = last_frame_index(p.run.duration, p.run.fps);
+  if (p.run.meshes) {
+    files.push_back("frames/");
+    for (long long f = 0; f <= last; ++f)
+      files.push_back(frame_file("frames", "frame_", f, ".obj"));
+  }
+  const ExportFormats formats = parse_export_formats(p.run.exports);
+  if (formats.pc2) files.insert(files.end(), {"cloth.pc2", "cloth_rest.obj"});
+  if (formats.vtk) {
+    files.insert(files.end(), {"cloth.pvd", "vtk/", "vtk/obstacles.vtp"});
+    for (long long f = 0; f <= last; ++f) files.push_back(frame_file("vtk", "cloth_", f, ".vtp"));
+  }
+  if (formats.usd) {
+    files.insert(files.end(), {"cloth.usda", ".cloth.usda.samples/"});
+    for (const char* a :
+         {"points", "normals", "extent", "contact", "pressure", "adhesion", "humidity"})
+      files.push_back(std::string(".cloth.usda.samples/") + a);
+  }
+  return files;
+}
+
+// Throws SceneError naming the first output that the checkpoint of a resumed
+// run says was written and that is not there (as a file: no link).
+void check_resume_outputs(const Params& p, const fs::path& out, long long frames,
+                          const fs::path& checkpoint) {
+  std::vector<std::string> files = {"scene.toml", "obstacles.obj"};
+  const Params q = with_output_meshes(p);
+  if (!q.cloth.mesh.empty()) files.push_back(q.cloth.mesh);
+  for (const auto& [name, o] : q.obstacles) files.push_back(o.mesh);
+  const ExportFormats formats = parse_export_formats(p.run.exports);
+  if (formats.pc2) files.push_back("cloth_rest.obj");
+  if (formats.vtk) files.push_back("vtk/obstacles.vtp");
+  for (long long f = 0; f < frames; ++f) {
+    if (p.run.meshes) files.push_back(frame_file("frames", "frame_", f, ".obj"));
+    if (formats.vtk) files.push_back(frame_file("vtk", "cloth_", f, ".vtp"));
+  }
+  for (const std::string& rel : files) {
+    struct stat st {};
+    if (::lstat((out / rel).c_str(), &st) != 0 || !S_ISREG(st.st_mode))
+      throw SceneError((out / rel).string() + ": " +
+                       (::lstat((out / rel).c_str(), &st) != 0 ? "missing" : "not a file") +
+                       ", where " + checkpoint.string() + " continues a run that wrote it (" +
+                       std::to_string(frames) +
+                       " frames): the outputs are not whole; run the scene again (wetcloth run " +
+                       (out / "scene.toml").string() + " --out " + out.string() + ")");
+  }
 }
 
 }  // namespace
@@ -445,13 +508,19 @@ void open_outputs(const Params& p, const fs::path& out, const Simulation& sim,
   auto& caches = o.caches;
   auto& metrics = o.metrics;
   auto& at = o.at;
+  // Nothing is written through a link; what the run before wrote goes, and
+  // only that; the manifest lists this run's files before they are written.
+  const std::vector<std::string> files = run_outputs(p);
+  refuse_links(out, files);
   if (!resume) {
-    clear_outputs(out);
+    // The meshes read first: a run of DIR/scene.toml into DIR reads its own.
+    std::vector<std::pair<std::string, std::string>> meshes;
+    const Params written = with_output_meshes(p, &meshes);
+    remove_outputs(out, earlier_outputs(out));
+    write_manifest(out, files);
     if (p.run.meshes)
       if (std::error_code ec; fs::create_directories(out / "frames", ec), ec)
         throw_output_error(out / "frames", "cannot make the folder", ec.value());
-    std::vector<std::pair<std::string, std::string>> meshes;
-    const Params written = with_output_meshes(p, &meshes);
     if (!meshes.empty())
       if (std::error_code ec; fs::create_directories(out / "meshes", ec), ec)
         throw_output_error(out / "meshes", "cannot make the folder", ec.value());
@@ -466,6 +535,7 @@ void open_outputs(const Params& p, const fs::path& out, const Simulation& sim,
     if (caches) at.cache = caches->position(false);
   } else {
     at = record_outputs(*resume, o.substeps_before, o.wall_before);
+    check_resume_outputs(p, out, at.next_frame, resume->file);
     const std::vector<double> times =
         kept_row_times(out / "metrics.csv", at.metrics_bytes, at.next_frame, resume->file);
     if (formats.any()) {
@@ -477,6 +547,7 @@ void open_outputs(const Params& p, const fs::path& out, const Simulation& sim,
     if (std::error_code ec; fs::remove(out / "summary.json", ec), ec)
       throw_output_error(out / "summary.json", "cannot remove", ec.value());
     remove_frames_from(out, at.next_frame);
+    write_manifest(out, files);  // a run of a wetcloth that wrote none has one now
     if (p.run.meshes)
       if (std::error_code ec; fs::create_directories(out / "frames", ec), ec)
         throw_output_error(out / "frames", "cannot make the folder", ec.value());

@@ -2,7 +2,13 @@
 // --duration, --threads, --grid.
 #pragma once
 
+#include <unistd.h>
+
 #include <CLI/CLI.hpp>
+#include <algorithm>
+#include <cerrno>
+#include <charconv>
+#include <cstring>
 #include <filesystem>
 #include <optional>
 #include <stdexcept>
@@ -98,14 +104,48 @@ inline void check_output_folder(const std::filesystem::path& out,
   }
 }
 
+// Throws SceneError (bad input) where OUT is the filesystem's root or a
+// system folder (/etc, /proc, /usr, ...), however it is spelt (`..`, a link):
+// no command writes there, --force or not.
+inline void refuse_system_folder(const std::filesystem::path& out,
+                                 const std::string& option = "--out") {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  fs::path real = fs::absolute(out, ec);
+  if (!ec) {
+    const fs::path through_links = fs::weakly_canonical(real, ec);
+    real = ec ? real.lexically_normal() : through_links;
+  }
+  std::string at = real.lexically_normal().generic_string();
+  while (at.size() > 1 && at.back() == '/') at.pop_back();
+  // Folders of the system and of everyone, whose files are not a run's...
+  static const char* const kExactly[] = {"/",    "/home", "/media", "/mnt", "/opt", "/root",
+                                         "/run", "/snap", "/srv",   "/tmp", "/var"};
+  // ... and those of the system all the way down.
+  static const char* const kUnder[] = {"/bin",   "/boot",   "/dev",  "/etc",  "/lib", "/lib32",
+                                       "/lib64", "/libx32", "/proc", "/sbin", "/sys", "/usr"};
+  bool system = std::find(std::begin(kExactly), std::end(kExactly), at) != std::end(kExactly);
+  for (const std::string u : kUnder) system = system || at == u || at.rfind(u + "/", 0) == 0;
+  if (system)
+    throw SceneError(
+        option + " " + out.string() + ": " +
+        (at == "/" ? std::string("the filesystem's root") : at + " is a system folder") +
+        ": wetcloth writes no outputs there (choose a folder of your own, e.g. out/NAME)");
+}
+
 // check_output_folder, then makes the folder: one that cannot be made (no
-// permission, a read-only place) is bad input too.
+// permission, a read-only place) or written into is bad input too, as is a
+// system folder.
 inline void make_output_folder(const std::filesystem::path& out,
                                const std::string& option = "--out") {
   check_output_folder(out, option);
+  refuse_system_folder(out, option);
   std::error_code ec;
   std::filesystem::create_directories(out, ec);
   if (ec) throw SceneError(option + " " + out.string() + ": cannot make it (" + ec.message() + ")");
+  if (::access(out.c_str(), W_OK | X_OK) != 0)
+    throw SceneError(option + " " + out.string() + ": cannot write into it (" +
+                     std::strerror(errno) + ")");
 }
 
 struct SceneOptions {

@@ -219,6 +219,7 @@ void CacheWriter::open_usd_samples(const CachePosition* at) {
       fs::resize_file(spool->path, static_cast<std::uintmax_t>(at->samples_bytes[a]), ec);
       if (ec) throw_output_error(spool->path, "cannot cut back", ec.value());
     }
+    if (!at) ::unlink(spool->path.c_str());  // a new file, not one a link names
     spool->file = std::fopen(spool->path.c_str(), at ? "ab+" : "wb+");
     if (!spool->file || std::fseek(spool->file, 0, SEEK_END) != 0)
       throw_output_error(spool->path, "cannot open", errno);
@@ -232,12 +233,14 @@ CacheWriter::CacheWriter(const fs::path& dir, const Simulation& sim, ExportForma
   const Model& m = model_;
   if (formats.pc2) {
     write_file_atomic(dir / "cloth_rest.obj", cloth_obj(m, sim.state(), up));
+    ::unlink((dir / "cloth.pc2").c_str());  // a new file, not one a link names
     pc2_.open(dir / "cloth.pc2", std::ios::binary | std::ios::in | std::ios::out | std::ios::trunc);
     if (!pc2_) throw_output_error(dir / "cloth.pc2", "cannot write", errno);
     write_pc2_header(pc2_, m.n, 0);
   }
   if (formats.vtk) {
-    fs::create_directories(dir / "vtk");
+    if (std::error_code ec; fs::create_directories(dir / "vtk", ec), ec)
+      throw_output_error(dir / "vtk", "cannot make the folder", ec.value());
     std::vector<Vec3> points;
     std::vector<std::array<int, 3>> tris;
     for (const NamedMesh& mesh : obstacle_meshes(m)) {

@@ -259,17 +259,11 @@ ResourceEstimate estimate_resources(const Params& p) {
   const double n = grid ? static_cast<double>(p.cloth.resolution[0]) * p.cloth.resolution[1]
                         : static_cast<double>(mesh.vertices);
   const double triangles = grid ? 2 * n : static_cast<double>(mesh.triangles);
-  // Measured (peak RSS of pull-straight at 101 x 101 and 301 x 301, 1.5 kB a
-  // particle; the 2001 x 2001 hang, 0.9 kB): about
-  // kBytesPerParticle a particle, and self-collision's pair lists, which grow
-  // with the particles within its distance (a disc of (distance / spacing)²).
-  const double spacing = grid ? std::min(p.cloth.size[0] / (p.cloth.resolution[0] - 1),
-                                         p.cloth.size[1] / (p.cloth.resolution[1] - 1))
-                              : mesh.mean_edge;
-  const double near = p.self_collision.enabled && spacing > 0
-                          ? std::min(n, 3.15 * std::pow(p.self_collision.distance / spacing, 2))
-                          : 0;
-  e.memory_bytes = 64e6 + n * (kBytesPerParticle + 16 * near);
+  // Measured: peak RSS 8 MB + 1.5 kB a particle (hang, one thread, at 201 x
+  // 201 and 401 x 401: 67 and 245 MB), 1.5 to 1.7 kB over whole runs at 401 x
+  // 401 and 1001 x 1001, self-collision's pair lists included (they hold the
+  // pairs near now, not every pair within reach).
+  e.memory_bytes = kBaseBytes + n * kBytesPerParticle;
   const double frames = static_cast<double>(last_frame_index(p.run.duration, p.run.fps)) + 1;
   // An OBJ frame: a position and a normal a particle (70 bytes), a triangle 35.
   e.disk_bytes = frames * (300 + (p.run.meshes ? 70 * n + 35 * triangles : 0)) + 1e5;
@@ -285,7 +279,8 @@ std::string gigabytes(double bytes) {
   return b;
 }
 
-// MemAvailable, or the cgroup's limit where it is lower; < 0: unknown.
+// MemAvailable, or the cgroup's limit, or what the address space limit
+// (ulimit -v) leaves, where lower; < 0: unknown.
 double available_memory() {
   double avail = -1;
   std::FILE* f = std::fopen("/proc/meminfo", "r");
@@ -308,6 +303,16 @@ double available_memory() {
     }
     std::fclose(g);
   }
+  if (rlimit r{}; ::getrlimit(RLIMIT_AS, &r) == 0 && r.rlim_cur != RLIM_INFINITY) {
+    double used = 0;  // the address space this process already takes
+    if (std::FILE* f = std::fopen("/proc/self/statm", "r")) {
+      if (unsigned long long pages; std::fscanf(f, "%llu", &pages) == 1)
+        used = static_cast<double>(pages) * static_cast<double>(::sysconf(_SC_PAGESIZE));
+      std::fclose(f);
+    }
+    const double left = static_cast<double>(r.rlim_cur) - used;
+    if (avail < 0 || left < avail) avail = left;
+  }
   return avail;
 }
 
@@ -318,14 +323,15 @@ void check_resources(const Params& p, const fs::path& out, const std::string& so
   const double mem = available_memory();
   const std::string force = "; --force runs it all the same";
   if (mem >= 0 && e.memory_bytes > mem)
-    throw SceneError(source + ": " +
-                     (p.cloth.mesh.empty()
-                          ? "cloth.resolution = [" + std::to_string(p.cloth.resolution[0]) + ", " +
-                                std::to_string(p.cloth.resolution[1]) + "]"
-                          : "cloth.mesh = \"" + p.cloth.mesh + "\" (" +
-                                std::to_string(cloth_mesh_size(p).vertices) + " vertices)") +
-                     " needs about " + gigabytes(e.memory_bytes) + " of memory, more than the " +
-                     gigabytes(mem) + " available" + force);
+    throw SceneError(
+        source + ": " +
+        (p.cloth.mesh.empty() ? "cloth.resolution = [" + std::to_string(p.cloth.resolution[0]) +
+                                    ", " + std::to_string(p.cloth.resolution[1]) + "]"
+                              : "cloth.mesh = \"" + p.cloth.mesh + "\" (" +
+                                    std::to_string(cloth_mesh_size(p).vertices) + " vertices)") +
+        " needs about " + gigabytes(e.memory_bytes) +
+        " of memory (an estimate: " + format_number(kBytesPerParticle / 1000) +
+        " kB a particle, as measured), more than the " + gigabytes(mem) + " available" + force);
   fs::path at = fs::absolute(out);
   std::error_code ec;
   while (!fs::exists(at, ec) && at.has_parent_path() && at != at.parent_path())

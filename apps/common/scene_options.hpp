@@ -83,6 +83,20 @@ inline std::string folder_name(const std::string& name) {
   return f.empty() ? "scene" : f;
 }
 
+// A count such as --grid: digits that fit a long long, nothing else (CLI11
+// reads '' as no value, and an overflow as its largest value).
+inline CLI::Validator a_whole_number() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        long long v = 0;
+        const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), v);
+        if (text.empty() || error != std::errc() || end != text.data() + text.size() || v < 1)
+          return "'" + text + "' is not a whole number of particles (e.g. 101)";
+        return {};
+      },
+      "G");
+}
+
 // An --out that is empty (an unset shell variable) is a mistake, not "the default".
 inline CLI::Validator a_path() {
   return CLI::Validator(
@@ -180,7 +194,8 @@ struct SceneOptions {
     app->add_option("--grid", grid,
                     "the same scene on a cloth G particles wide: handle patches keep their size "
                     "in metres, and an explicit time step shrinks with the spacing unless --set "
-                    "integrator.dt is given");
+                    "integrator.dt is given")
+        ->check(a_whole_number());
   }
 
   std::vector<std::string> overrides() const {
@@ -193,7 +208,17 @@ struct SceneOptions {
     return all;
   }
 
-  Params load() const { return load_on_grid(scene, overrides(), grid); }
+  // The step's threads change no result and no check: set once the scene is
+  // loaded, so that no message names a --set the user did not give.
+  Params load() const {
+    std::vector<std::string> given = overrides();
+    const bool threads_set = threads || all_cores;
+    if (threads_set) given.erase(given.begin());
+    Params p = load_on_grid(scene, given, grid);
+    if (threads_set && !overrides_key(given, "integrator.threads"))
+      p.integrator.threads = threads.value_or(0);
+    return p;
+  }
 };
 
 }  // namespace wetcloth::cli

@@ -256,6 +256,9 @@ done
 
 # The other commands.
 "$W" scenes | grep -q "^pull-straight" && ok "scenes" || bad "scenes"
+# Every description starts in one column, after the longest name.
+[ "$("$W" scenes | awk '{ match($0, /^[^ ]+ +/); print RLENGTH }' | sort -u | wc -l)" = 1 ] &&
+  ok "scenes: the descriptions aligned" || bad "scenes misaligned: $("$W" scenes)"
 "$W" check drop-ball --humidity 0.3 | grep -q "humidity = 0.3" && ok "check" || bad "check"
 # check prints the xpbd substeps that will run: a set count, at any grid.
 "$W" check hang --grid 101 --set 'integrator.type="xpbd"' --set integrator.substeps=12 |

@@ -206,6 +206,23 @@ ls "$T/e" "$T/e/vtk" "$T/e/frames" | grep -q '\.tmp$' && bad "--export left temp
 "$W" run pull-straight --out "$T/e" --set cloth.resolution=[9,9] --duration 0.05 --quiet
 [ ! -e "$T/e/cloth.usda" ] && [ ! -e "$T/e/cloth.pc2" ] && [ ! -e "$T/e/vtk/cloth_00003.vtp" ] &&
   ok "a run without --export clears the caches of the run before" || bad "old caches left beside a new run"
+# USD read back: a frame's time code is its number exactly (the state's time,
+# whole steps, is 0.03335 s at frame 1), the last one between two frames its
+# time x fps; velocities, and the pressure deficit with its unit in its doc.
+"$W" run hang --grid 9 --duration 0.05 --export usd --out "$T/usd" --quiet &&
+  /usr/bin/python3 - "$T/usd/cloth.usda" <<'PY' && ok "USD: time codes 0, 1, 1.5; velocities; the deficit in Pa" || bad "USD read back"
+import re, sys
+text = open(sys.argv[1]).read()
+def samples(name):
+    block = text[text.index(name + ".timeSamples = {"):]
+    block = block[:block.index("        }")]
+    return re.findall(r"^ +([0-9.e+-]+): ", block, re.M)
+assert samples("point3f[] points") == ["0", "1", "1.5"], samples("point3f[] points")
+assert samples("vector3f[] velocities") == ["0", "1", "1.5"]
+assert samples("float[] primvars:pressure_deficit") == ["0", "1", "1.5"]
+assert re.search(r'primvars:pressure_deficit \(\n +doc = "[^"]*Pa"', text)
+assert "endTimeCode = 1.5" in text
+PY
 expect_bad export "run.export" pull-straight --export usd,alembic
 expect_bad up_axis "--up" pull-straight --up x
 

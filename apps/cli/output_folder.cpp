@@ -64,8 +64,8 @@ std::vector<std::string> older_run_outputs(const fs::path& out) {
                                     "cloth_rest.obj",      "cloth.pvd",    "checkpoint.state",
                                     "vtk/obstacles.vtp",   "frames/",      "vtk/",
                                     ".cloth.usda.samples/"};
-  for (const char* a :
-       {"points", "normals", "extent", "contact", "pressure", "adhesion", "humidity"})
+  for (const char* a : {"points", "normals", "extent", "contact", "pressure", "adhesion",
+                        "humidity", "velocities", "deficit"})
     files.push_back(std::string(".cloth.usda.samples/") + a);
   for (const auto& [folder, prefix, extension] :
        {std::tuple{"frames", "frame_", ".obj"}, {"vtk", "cloth_", ".vtp"}}) {

@@ -215,8 +215,8 @@ std::vector<std::string> run_outputs(const Params& p) {
   }
   if (formats.usd) {
     files.insert(files.end(), {"cloth.usda", ".cloth.usda.samples/"});
-    for (const char* a :
-         {"points", "normals", "extent", "contact", "pressure", "adhesion", "humidity"})
+    for (const char* a : {"points", "normals", "extent", "contact", "pressure", "adhesion",
+                          "humidity", "velocities", "deficit"})
       files.push_back(std::string(".cloth.usda.samples/") + a);
   }
   return files;
@@ -580,7 +580,11 @@ void write_frame(const Params& p, const fs::path& out, const Simulation& sim, co
     std::snprintf(name, sizeof name, "frame_%05lld.obj", f);
     write_file_atomic(out / "frames" / name, cloth_obj(sim.model(), sim.state(), p.run.up));
   }
-  if (o.caches) o.caches->add_frame(sim);
+  // A frame on the frame rate has its number as its USD time code; the last
+  // one, where the duration falls between two, its time × fps.
+  const bool between =
+      frame_time(f, p.run.duration, p.run.fps) < static_cast<double>(f) / p.run.fps;
+  if (o.caches) o.caches->add_frame(sim, between ? -1 : static_cast<double>(f));
   // Time to 5 cm is a pulled handle's: a pin (measured when there are only
   // pins) sits at its height from the start.
   const bool pulled = sim.model().measures_a_pull();

@@ -46,6 +46,7 @@ CacheFrame cache_frame(const Simulation& sim, UpAxis up) {
   f.humidity = m.params.cloth.humidity;
   f.points.resize(m.n);
   f.normals.resize(m.n);
+  f.velocities.resize(m.n);
   f.contact.resize(m.n);
   f.pressure.assign(m.n, static_cast<float>(m.params.air.p_atm));
   f.adhesion.assign(m.n, 0.0f);
@@ -54,6 +55,7 @@ CacheFrame cache_frame(const Simulation& sim, UpAxis up) {
   for (int i = 0; i < m.n; ++i) {
     f.points[i] = to_up(s.x[i], up);
     f.normals[i] = to_up(normal[i], up);
+    f.velocities[i] = to_up(s.v[i], up);
     f.contact[i] = s.contact[i] ? 1.0f : 0.0f;
     if (pressure) f.pressure[i] = static_cast<float>(s.pocket_pressure[i]);
     if (adhesion) f.adhesion[i] = static_cast<float>(sim.adhesion()[i]);
@@ -195,7 +197,9 @@ constexpr const char* kAttributes[][2] = {{"point3f[] points", "points"},
                                           {"float[] primvars:contact", "contact"},
                                           {"float[] primvars:pressure", "pressure"},
                                           {"float[] primvars:adhesion", "adhesion"},
-                                          {"float primvars:humidity", "humidity"}};
+                                          {"float primvars:humidity", "humidity"},
+                                          {"vector3f[] velocities", "velocities"},
+                                          {"float[] primvars:pressure_deficit", "deficit"}};
 
 }  // namespace
 
@@ -317,7 +321,7 @@ void CacheWriter::write_pvd() {
 
 CacheWriter::~CacheWriter() = default;
 
-void CacheWriter::add_frame(const Simulation& sim) {
+void CacheWriter::add_frame(const Simulation& sim, double frame_code) {
   if (finished_) throw std::logic_error("CacheWriter: a frame after finish()");
   const CacheFrame f = cache_frame(sim, up_);
   const long long k = frames_++;
@@ -354,7 +358,7 @@ void CacheWriter::add_frame(const Simulation& sim) {
       lo = lo.cwiseMin(x);
       hi = hi.cwiseMax(x);
     }
-    const double code = f.time * fps_;
+    const double code = frame_code >= 0 ? frame_code : f.time * fps_;
     last_code_ = code;
     spools_[0]->add(code, "[" + tuples(f.points) + "]");
     spools_[1]->add(code, "[" + tuples(f.normals) + "]");
@@ -365,6 +369,11 @@ void CacheWriter::add_frame(const Simulation& sim) {
     std::string h;
     put(h, f.humidity);
     spools_[6]->add(code, h);
+    spools_[7]->add(code, "[" + tuples(f.velocities) + "]");
+    std::vector<float> deficit(f.pressure.size());
+    for (std::size_t i = 0; i < deficit.size(); ++i)
+      deficit[i] = static_cast<float>(model_.params.air.p_atm - f.pressure[i]);
+    spools_[8]->add(code, "[" + join(deficit, ", ") + "]");
   }
 }
 
@@ -398,9 +407,15 @@ void CacheWriter::finish() {
   o += "        texCoord2f[] primvars:st = [" + st +
        "] (\n            interpolation = \"vertex\"\n        )\n";
   o += "        normal3f[] normals (\n            interpolation = \"vertex\"\n        )\n";
-  for (const char* name : {"contact", "pressure", "adhesion"})
-    o += std::string("        float[] primvars:") + name +
-         " (\n            interpolation = \"vertex\"\n        )\n";
+  // Each field's unit in its doc, as USD tools show it.
+  for (const auto& [name, doc] :
+       {std::pair{"contact", "1 where the vertex is within the liquid bridge of the surface"},
+        {"pressure", "the trapped air's pressure under the vertex, Pa (p_atm where none)"},
+        {"pressure_deficit", "p_atm - pressure: the suction under the vertex, Pa"},
+        {"adhesion", "the liquid bridge's adhesion force on the vertex, N"}})
+    o += std::string("        float[] primvars:") + name + " (\n            doc = \"" + doc +
+         "\"\n            interpolation = \"vertex\"\n        )\n";
+  o += "        vector3f[] velocities (\n            doc = \"m/s\"\n        )\n";
   o += "        float primvars:humidity (\n            interpolation = \"constant\"\n        )\n";
   const fs::path path = dir_ / "cloth.usda", tmp = path.string() + ".tmp";
   const TemporaryFile record(tmp.string());  // a second signal removes it

@@ -2,13 +2,9 @@
 // --duration, --threads, --grid.
 #pragma once
 
-#include <unistd.h>
-
 #include <CLI/CLI.hpp>
 #include <algorithm>
-#include <cerrno>
 #include <charconv>
-#include <cstring>
 #include <filesystem>
 #include <optional>
 #include <stdexcept>
@@ -148,8 +144,9 @@ inline void refuse_system_folder(const std::filesystem::path& out,
 }
 
 // check_output_folder, then makes the folder: one that cannot be made (no
-// permission, a read-only place) or written into is bad input too, as is a
-// system folder.
+// permission, a read-only place) is bad input too, as is a system folder. (An
+// existing folder that cannot be written into fails as the first file does:
+// exit 4, an output that cannot be written.)
 inline void make_output_folder(const std::filesystem::path& out,
                                const std::string& option = "--out") {
   check_output_folder(out, option);
@@ -157,9 +154,6 @@ inline void make_output_folder(const std::filesystem::path& out,
   std::error_code ec;
   std::filesystem::create_directories(out, ec);
   if (ec) throw SceneError(option + " " + out.string() + ": cannot make it (" + ec.message() + ")");
-  if (::access(out.c_str(), W_OK | X_OK) != 0)
-    throw SceneError(option + " " + out.string() + ": cannot write into it (" +
-                     std::strerror(errno) + ")");
 }
 
 struct SceneOptions {

@@ -82,7 +82,9 @@ void check_obj_numbers(const std::string& text, const std::string& source) {
         if (word.size() > 1 && word[0] == '+') word.remove_prefix(1);
         double v = 0;
         const auto [ptr, error] = std::from_chars(word.data(), word.data() + word.size(), v);
-        if (error != std::errc() || ptr != word.data() + word.size()) fail(words[w], "a number");
+        if (ptr != word.data() + word.size() || (error != std::errc() && ptr == word.data()))
+          fail(words[w], "a number");
+        if (error != std::errc()) fail(words[w], "a finite number");  // 1e999
       }
     } else if (words[0] == "f") {
       for (std::size_t w = 1; w < words.size(); ++w) {

@@ -6,7 +6,8 @@
 #include <algorithm>
 #include <cerrno>
 #include <fstream>
-#include <sstream>
+#include <iterator>
+#include <tuple>
 
 #include "wetcloth/output.hpp"
 #include "wetcloth/scene.hpp"

@@ -16,7 +16,8 @@
 //   cloth.pc2, cloth_rest.obj Blender's Mesh Cache modifier, Houdini; one sample a
 //                             frame. The header's count follows every frame, so
 //                             a run cut short leaves a readable cache.
-//   vtk/cloth_NNNNN.vtp       a PolyData a frame (ParaView); vtk/obstacles.vtp;
+//   vtk/cloth_NNNNN.vtp       a PolyData a frame (ParaView), its arrays binary,
+//                             zlib-compressed and appended; vtk/obstacles.vtp;
 //                             cloth.pvd the collection with each frame's time,
 //                             rewritten as frames come.
 #pragma once

@@ -82,6 +82,9 @@ fuzz:
 demo: build
 	$(BUILD)/wetcloth run pull-straight --humidity 0.7 --out out/demo
 	@echo "results: out/demo (metrics.csv, frames/*.obj, summary.json, scene.toml)"
+	@if [ -x $(BUILD)/python/python ]; then \
+	  echo "from Python: $(BUILD)/python/python (the interpreter the module was built for, $$(sed -n 's/^PYTHON = \"\(.*\)\"/\1/p' $(BUILD)/python/wetcloth/_build.py), with PYTHONPATH=$(BUILD)/python)"; \
+	fi
 
 validate: build
 	tools/validate.sh $(BUILD)

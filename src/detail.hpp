@@ -1,4 +1,4 @@
-// Internal: the stages of one step (MODEL.md section 8), one file each.
+// Internal: the stages of one step (docs/model.md section 8), one file each.
 #pragma once
 
 #include <omp.h>

@@ -1,4 +1,4 @@
-// The measurements of MODEL.md section 10: one row of metrics.csv.
+// The measurements of docs/model.md section 10: one row of metrics.csv.
 #include <algorithm>
 #include <cmath>
 #include <numbers>

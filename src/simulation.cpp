@@ -1,4 +1,4 @@
-// The Simulation: its state made and restored, and the step of MODEL.md
+// The Simulation: its state made and restored, and the step of docs/model.md
 // section 8 as named stages.
 #include "wetcloth/simulation.hpp"
 
@@ -162,7 +162,7 @@ void Simulation::release() { ws_->grab_particle = grab_particle_ = -1; }
 
 namespace {
 
-// The stages of one step, in MODEL.md section 8's order: accumulate forces,
+// The stages of one step, in docs/model.md section 8's order: accumulate forces,
 // integrate, collide with surfaces, friction on contact particles, strain
 // limiting, update contact state and air. Each integrator's step below runs
 // them around its own integration; XPBD's substeps run their own order

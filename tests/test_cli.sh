@@ -96,7 +96,7 @@ expect_bad surface    "drop-table.toml with --set 'table.enabled=false': contact
   drop-table --set table.enabled=false
 # An --out that cannot be made, or that is a file: bad input, named, the file untouched.
 "$W" run hang --out /proc/wetcloth-out --quiet 2>"$T/err"; code=$?
-[ $code -eq 2 ] && grep -qF -- "--out /proc/wetcloth-out: cannot make it" "$T/err" &&
+[ $code -eq 2 ] && grep -qF -- "--out /proc/wetcloth-out: /proc/wetcloth-out is a system folder" "$T/err" &&
   ok "--out that cannot be made: exit 2, named" || bad "--out /proc: exit $code, $(cat "$T/err")"
 # A misspelt command, an option before it, or none: exit 2, and what there is.
 "$W" runn hang 2>"$T/err"; code=$?
@@ -155,8 +155,7 @@ expect_bad subtable   "subtable.toml:1: cloth.foo: unknown table" "$T/subtable.t
 expect_bad dtlong     "integrator.dt: = 0.01 s is longer than run.duration = 0.001 s" \
   hang --set integrator.type=implicit-euler --set integrator.dt=0.01 --set run.fps=10 --duration 0.001
 expect_bad fpshigh    "run.fps: = 1e+05 frames/s is above the step rate" hang --set run.fps=1e5
-expect_bad memory     "of memory, more than the" pull-straight --set 'cloth.resolution=[2001,2001]' \
-  --set self_collision.enabled=true --set self_collision.distance=1
+# (The memory guard: below, under ulimit -v.)
 expect_bad disk       "with run.meshes) need about" hang --set run.fps=1000 --set integrator.dt=1e-3 \
   --set integrator.type=implicit-euler --duration 1e6
 # Positions so far out that they lose the springs' precision (1e14 m wrote inf).
@@ -212,6 +211,23 @@ ls "$T/e" "$T/e/vtk" "$T/e/frames" | grep -q '\.tmp$' && bad "--export left temp
 "$W" run pull-straight --out "$T/e" --set cloth.resolution=[9,9] --duration 0.05 --quiet
 [ ! -e "$T/e/cloth.usda" ] && [ ! -e "$T/e/cloth.pc2" ] && [ ! -e "$T/e/vtk/cloth_00003.vtp" ] &&
   ok "a run without --export clears the caches of the run before" || bad "old caches left beside a new run"
+# USD read back: a frame's time code is its number exactly (the state's time,
+# whole steps, is 0.03335 s at frame 1), the last one between two frames its
+# time x fps; velocities, and the pressure deficit with its unit in its doc.
+"$W" run hang --grid 9 --duration 0.05 --export usd --out "$T/usd" --quiet &&
+  /usr/bin/python3 - "$T/usd/cloth.usda" <<'PY' && ok "USD: time codes 0, 1, 1.5; velocities; the deficit in Pa" || bad "USD read back"
+import re, sys
+text = open(sys.argv[1]).read()
+def samples(name):
+    block = text[text.index(name + ".timeSamples = {"):]
+    block = block[:block.index("        }")]
+    return re.findall(r"^ +([0-9.e+-]+): ", block, re.M)
+assert samples("point3f[] points") == ["0", "1", "1.5"], samples("point3f[] points")
+assert samples("vector3f[] velocities") == ["0", "1", "1.5"]
+assert samples("float[] primvars:pressure_deficit") == ["0", "1", "1.5"]
+assert re.search(r'primvars:pressure_deficit \(\n +doc = "[^"]*Pa"', text)
+assert "endTimeCode = 1.5" in text
+PY
 expect_bad export "run.export" pull-straight --export usd,alembic
 expect_bad up_axis "--up" pull-straight --up x
 
@@ -262,6 +278,9 @@ done
 
 # The other commands.
 "$W" scenes | grep -q "^pull-straight" && ok "scenes" || bad "scenes"
+# Every description starts in one column, after the longest name.
+[ "$("$W" scenes | awk '{ match($0, /^[^ ]+ +/); print RLENGTH }' | sort -u | wc -l)" = 1 ] &&
+  ok "scenes: the descriptions aligned" || bad "scenes misaligned: $("$W" scenes)"
 "$W" check drop-ball --humidity 0.3 | grep -q "humidity = 0.3" && ok "check" || bad "check"
 # check prints the xpbd substeps that will run: a set count, at any grid.
 "$W" check hang --grid 101 --set 'integrator.type="xpbd"' --set integrator.substeps=12 |
@@ -404,6 +423,53 @@ grep -q "^final values at t = 0.03 s;" "$T/conv3.txt" && ok "converge: the time 
 "$W" converge pull-straight --dt 5e-5,-1 --out "$T/conv4" >/dev/null 2>"$T/err"; code=$?
 [ $code -eq 2 ] && [ ! -e "$T/conv4" ] && grep -qF -- "--dt: value -1 is out of range [1e-09, 1]" "$T/err" &&
   ok "converge: a negative step exits 2, named" || bad "converge negative: exit $code, $(cat "$T/err")"
+
+# Input read whole or refused (exit 2, the file, line or option, and the key named).
+check_bad() {  # check_bad NAME TEXT ARGS...: `wetcloth check ARGS` exits 2 naming TEXT
+  local name="$1" text="$2"; shift 2
+  "$W" check "$@" >/dev/null 2>"$T/err"; local code=$?
+  [ $code -eq 2 ] && grep -qF -- "$text" "$T/err" && ok "$name: exit 2, $(head -1 "$T/err")" ||
+    bad "$name: exit $code (want 2 and '$text'): $(cat "$T/err")"
+}
+check_bad "--set with a second key" "cloth.humidity: the value goes on past one TOML value" \
+  hang --set $'cloth.humidity=0.3\nname="x"'
+check_bad "--set with a second key of the section" "past one TOML value" hang --set $'cloth.humidity=0.3\ncloth.tilt=5'
+"$W" check hang --set 'handle.pull.force={}' >/dev/null 2>&1; [ $? -ne 1 ] && ok "--set an inline table: one value" ||
+  bad "--set inline table"
+check_bad "--grid ''" "--grid: '' is not a whole number" hang --grid ''
+check_bad "--grid overflowing" "--grid: '999999999999999999999' is not a whole number" hang --grid 999999999999999999999
+check_bad "--grid 1.5" "--grid: '1.5' is not a whole number" hang --grid 1.5
+printf '[run]\nduration = 1e-9\n' >"$T/short.toml"
+"$W" check "$T/short.toml" >/dev/null 2>"$T/err"; code=$?
+[ $code -eq 2 ] && ! grep -q -- "--set" "$T/err" && grep -qF "short.toml: integrator.dt" "$T/err" &&
+  ok "a short duration: no --set nobody gave is named ($(cat "$T/err"))" || bad "short duration: exit $code, $(cat "$T/err")"
+check_bad "--duration 1e-300" "run.duration = 0 writes the start alone" hang --duration 1e-300
+"$W" run hang --duration 0 --out "$T/zero" --quiet && [ "$(wc -l <"$T/zero/metrics.csv")" = 2 ] &&
+  [ "$(ls "$T/zero/frames")" = frame_00000.obj ] && ok "--duration 0: the start alone, one row and frame" ||
+  bad "--duration 0: $(ls "$T/zero" 2>&1)"
+# OBJ numbers read whole: a comma, a fractional or overflowing index is refused, by line.
+expect_check_bad comma "cloth.obj:1: \`1,5\` is not a number" 'v 1,5 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n'
+expect_check_bad fraction "cloth.obj:4: \`1.5\` is not a face corner" 'v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1.5 2 3\n'
+expect_check_bad wrap "cloth.obj:4: \`4294967297\` is not a face corner" 'v 0 0 0\nv 1 0 0\nv 0 1 0\nf 4294967297 2 3\n'
+expect_check_bad isolated "scene.toml: cloth.mesh: $T/mesh_isolated/cloth.obj: vertex 4 is in no face" \
+  'v 0 0 0\nv 1 0 0\nv 0 1 0\nv 5 5 5\nf 1 2 3\n'
+expect_check_bad scenenamed "mesh_scenenamed/scene.toml: cloth.mesh: " 'v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n'
+# A FIFO as the scene, a link that loops as the mesh: exit 2 at once, named.
+mkfifo "$T/fifo.toml"
+timeout 20 "$W" check "$T/fifo.toml" >/dev/null 2>"$T/err"; code=$?
+[ $code -eq 2 ] && grep -qF "$T/fifo.toml: not a regular file" "$T/err" && ok "a FIFO scene: exit 2, named" ||
+  bad "FIFO scene: exit $code, $(cat "$T/err")"
+mkdir -p "$T/loop"; ln -s loop.obj "$T/loop/loop.obj"; printf '[cloth]\nmesh = "loop.obj"\n' >"$T/loop/scene.toml"
+check_bad "a mesh link that loops" "$T/loop/scene.toml: cloth.mesh: \"loop.obj\" cannot be followed" "$T/loop/scene.toml"
+# The memory guard is an estimate from the measured cost a particle (1.7 kB),
+# and says so: 1401 x 1401 passes it (the disk's guard, after it, refuses a
+# 1000 s run of meshes), and is refused under a 2.5 GB address space.
+"$W" run hang --grid 1401 --duration 1000 --out "$T/m1401" --quiet 2>"$T/err"; code=$?
+[ $code -eq 2 ] && grep -q "the outputs (.*need about" "$T/err" && ! grep -q "of memory" "$T/err" &&
+  ok "1401 x 1401: memory enough by the estimate" || bad "1401 x 1401: exit $code, $(cat "$T/err")"
+(ulimit -v 2500000; "$W" run hang --grid 1401 --duration 1 --out "$T/m1401" --quiet 2>"$T/err"); code=$?
+[ $code -eq 2 ] && grep -qF "needs about 3.4 GB of memory (an estimate: 1.7 kB a particle, as measured)" "$T/err" &&
+  [ ! -e "$T/m1401" ] && ok "under ulimit -v: refused, the estimate said" || bad "ulimit -v: exit $code, $(cat "$T/err")"
 
 echo "$passes passed, $fails failed"
 [ $fails -eq 0 ]

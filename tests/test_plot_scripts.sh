@@ -143,6 +143,11 @@ for f in fig7 pressure contact_area handle_height; do
   else bad "$f.png/.svg missing or empty"; fi
 done
 if [ ! -e "$ONE/fig8.png" ]; then ok "no fig8 with one air model"; else bad "fig8 with one air model"; fi
+# Each figure says what the cases ran: duration, grid, force (from their scene.toml).
+for f in fig7 pressure; do
+  if grep -q '1 s, 5 × 5, handle pull \[0, 0, 1\] N' "$ONE/$f.svg"; then ok "$f says the duration, grid and force"
+  else bad "$f: no duration, grid and force: $(grep -o '<!-- self-test[^>]*-->' "$ONE/$f.svg" | head -2)"; fi
+done
 if [ -z "$(find "$ONE" -name '*.tmp')" ]; then ok "no temporaries left"; else bad "temporaries left"; fi
 
 # plot_sweep.py: two air models give fig8 too.

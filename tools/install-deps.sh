@@ -4,7 +4,7 @@ set -euo pipefail
 pkgs=(
   cmake g++ make pkg-config clang-format
   libeigen3-dev libtomlplusplus-dev libcli11-dev nlohmann-json3-dev libstb-dev
-  libtinyobjloader-dev libcgal-dev
+  libtinyobjloader-dev libcgal-dev zlib1g-dev
   libgtest-dev libgmock-dev libbenchmark-dev libbullet-dev
   python3 python3-matplotlib
   pybind11-dev python3-dev python3-numpy python3-pytest python3-distributed python3-venv python3-wheel

@@ -143,13 +143,13 @@ def describe(case_dir, metrics):
         nonzero = lambda name: any(r[name] != 0 for r in metrics if isinstance(r.get(name), float))
         return {"p_atm": P_ATM, "handle": "force" if nonzero("handle_height_m") else None, "path": None,
                 "surface": nonzero("contact_area_m2") or nonzero("base_diagonal_m"),
-                "air": any(r["inner_pressure_pa"] != P_ATM for r in metrics)}
+                "air": any(r["inner_pressure_pa"] != P_ATM for r in metrics), "setup": None}
     path = os.path.join(case_dir, "scene.toml")
     get = lambda section, key, default, kind=str: scene_value(scene, path, section, key, default, kind)
     surface = get("contact", "surface", "table")
     surface = ((surface == "table" and get("table", "enabled", True, bool)) or
                (surface == "ball" and get("ball", "enabled", False, bool)))
-    handle, handle_path = None, None
+    handle, handle_path, force = None, None, None
     for section in sorted(f"handle.{h}" for h in scene.get("handle", {})):  # the metrics' order
         kind = get(section, "type", "force")
         if kind not in ("force", "move", "pin"):
@@ -163,9 +163,18 @@ def describe(case_dir, metrics):
                     raise InputError(f"{path}: [{section}] velocity is not three numbers")
                 handle_path = ([float(v) for v in velocity], get(section, "start", 0.0, float),
                                get(section, "max_travel", 0.0, float))
+            else:
+                force = (section.split(".", 1)[1], get(section, "force", [0.0, 0.0, 0.0], list))
             break
+    mesh = get("cloth", "mesh", "")
+    grid = (f"mesh {mesh}" if mesh else
+            " × ".join(f"{v:g}" for v in get("cloth", "resolution", [31, 31], list)))
+    setup = {"duration": f"{get('run', 'duration', 2.0, float):g} s", "grid": grid,
+             "force": (f"handle {force[0]} {'[' + ', '.join(f'{v:g}' for v in force[1]) + ']'} N"
+                       if force else "no force handle")}
     return {"p_atm": get("air", "p_atm", P_ATM, float), "handle": handle, "path": handle_path,
-            "surface": surface, "air": surface and get("air", "model", "exchange") != "off"}
+            "surface": surface, "air": surface and get("air", "model", "exchange") != "off",
+            "setup": setup}
 
 
 def load(sweep_dir):
@@ -200,6 +209,19 @@ def default_title(sweep_dir, cases):
         except (OSError, ValueError, KeyError, TypeError):
             pass
     return os.path.basename(os.path.abspath(sweep_dir))
+
+
+def setup_caption(cases):
+    """The duration, grid and force the cases ran with (from their scene.toml),
+    each once where the cases share it, else "varied"; '' without scene.toml."""
+    setups = [c["setup"] for c in cases if c.get("setup")]
+    if not setups:
+        return ""
+    shown = []
+    for key in ("duration", "grid", "force"):
+        values = sorted({s[key] for s in setups})
+        shown.append(values[0] if len(values) == 1 else f"{key} varied")
+    return "\n" + ", ".join(shown)
 
 
 def column(case, name, scale=1.0):
@@ -280,6 +302,7 @@ def make_figures(cases, models, title, made):
     hue = lambda c: cmap(0.85 * min(max(c["humidity"], 0.0), 1.0))
     style = lambda c: MODEL_STYLES[models.index(c["air_model"]) % len(MODEL_STYLES)] if c["ok"] else "--"
     figs = {}
+    caption = setup_caption(cases)  # under each title: what the cases ran
 
     # Fig. 7: final values against humidity, one line per air model.
     if "fig7" in made:
@@ -300,7 +323,7 @@ def make_figures(cases, models, title, made):
             ax.grid(alpha=0.3)
             if ax.get_legend_handles_labels()[0]:
                 ax.legend(fontsize=8)
-        fig.suptitle(f"{title}: Fig. 7")
+        fig.suptitle(f"{title}: Fig. 7{caption}")
         figs["fig7"] = fig
 
     # One curve per case: against time, the handle's force against its displacement.
@@ -312,7 +335,7 @@ def make_figures(cases, models, title, made):
     for name in (f for f in made if f in series):
         ylabel, values = series[name]
         # A driven handle is a measuring rig: its force against how far it has
-        # moved (MODEL.md section 9), not against time.
+        # moved (docs/model.md section 9), not against time.
         rig = name == "handle_force"
         fig, ax = plt.subplots(figsize=(7.5, 4.5), constrained_layout=True)
         for c in cases:
@@ -324,7 +347,7 @@ def make_figures(cases, models, title, made):
                       if vertical_path(cases[0]) else
                       "handle displacement along its path, |velocity| × time on it (mm)")
         what = ylabel.split(" (")[0] + (" against displacement" if rig else "")
-        ax.set(xlabel=xlabel, ylabel=ylabel, title=f"{title}: {what}")
+        ax.set(xlabel=xlabel, ylabel=ylabel, title=f"{title}: {what}{caption}")
         ax.grid(alpha=0.3)
         ax.legend(fontsize=8, ncol=2 if len(cases) > 6 else 1)
         figs[name] = fig
@@ -351,7 +374,7 @@ def make_figures(cases, models, title, made):
                 ax.legend(fontsize=8)
         for ax in axes[-1]:
             ax.set_xlabel("time (s)")
-        fig.suptitle(f"{title}: Fig. 8, air models")
+        fig.suptitle(f"{title}: Fig. 8, air models{caption}")
         figs["fig8"] = fig
     return figs
 

@@ -41,7 +41,7 @@ EXPERIMENTS = ["pull-straight", "pull-oblique", "pull-corner", "drag-corner", "d
                "peel-rig", "air-models"] + [f"{i}-{s}" for s in AGREEMENT for i in ("explicit", "implicit")]
 FIGURES = ["fig7", "fig8", "handle_height", "handle_force", "pressure", "contact_area"]
 TREND = [0.3, 0.5, 0.7, 1.0]  # the humidities the trend claims are tested over
-# The material does not change with the grid (MODEL.md section 1): these scenes
+# The material does not change with the grid (docs/model.md section 1): these scenes
 # at ω = 0.7 on grid-<scene>-<G> (51: their sweeps above), and the cantilever's
 # bending length on grid-cantilever-<G>.
 GRIDDED = ["pull-straight", "pull-oblique", "drape-ball"]
@@ -651,7 +651,7 @@ def grid_section(sweeps, runs):
              "The same cloth on grids of " + ", ".join(f"{g} × {g}" for g in sizes) + " particles "
              "(`wetcloth sweep SCENE --grid G --humidity 0.7`: a handle's patch keeps its size in metres, "
              "the explicit step shrinks with its stability limit; 51 is the sweep above), at the final frame. "
-             "The material is the same at every grid (MODEL.md section 1): structural and shear springs "
+             "The material is the same at every grid (docs/model.md section 1): structural and shear springs "
              "keep their constants, and the bending is a curvature energy of rigidity B (with "
              "material.bending = \"provot\", bending springs of B / l²).", "",
              md_table(["scene", "measure"] + [f"{g} × {g}" for g in sizes] +

@@ -1,6 +1,7 @@
 // wetcloth: the command-line program. Thin: it parses options, loads scenes and
 // calls the library.
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <cstdio>
 #include <functional>
 #include <iostream>
@@ -32,8 +33,10 @@ Command add_scenes_command(CLI::App& app) {
   auto* cmd = app.add_subcommand("scenes", "list the built-in scenes");
   return [cmd]() -> int {
     if (!*cmd) return -1;
+    int width = 0;  // the longest name's: every description starts in one column
+    for (const auto& s : builtin_scenes()) width = std::max(width, static_cast<int>(s.name.size()));
     for (const auto& s : builtin_scenes())
-      std::printf("%-14s %s\n", s.name.c_str(), s.description.c_str());
+      std::printf("%-*s  %s\n", width, s.name.c_str(), s.description.c_str());
     return cli::kOk;
   };
 }

@@ -2,6 +2,8 @@
 
 #include <fcntl.h>
 #include <sys/file.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
 #include <sys/statvfs.h>
 #include <unistd.h>
 
@@ -22,6 +24,7 @@
 #include <thread>
 
 #include "common/scene_options.hpp"
+#include "output_folder.hpp"
 #include "wetcloth/caches.hpp"
 #include "wetcloth/checkpoint.hpp"
 #include "wetcloth/output.hpp"
@@ -67,49 +70,43 @@ extern "C" void on_stop_signal(int sig) {
 }
 
 // The output folder's lock: held (flock) while a run writes into it, released
-// by the system however the process ends. The file stays.
+// by the system however the process ends, and the empty file removed when the
+// run ends. A run that locked a file another removed meanwhile takes the lock
+// again on the file now there.
 class OutputLock {
  public:
-  explicit OutputLock(const fs::path& out) {
-    const fs::path path = out / ".wetcloth.lock";
-    fd_ = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-    if (fd_ < 0) throw_output_error(path, "cannot create the lock file", errno);
-    if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
-      const int e = errno;
+  explicit OutputLock(const fs::path& out) : path_(out / ".wetcloth.lock") {
+    for (int attempt = 0;; ++attempt) {
+      fd_ = ::open(path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC | O_NOFOLLOW, 0644);
+      if (fd_ < 0) throw_output_error(path_, "cannot create the lock file", errno);
+      if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
+        const int e = errno;
+        ::close(fd_);
+        if (e == EWOULDBLOCK)
+          throw SceneError("--out " + out.string() + ": another wetcloth run is writing into it (" +
+                           path_.string() + " is locked); wait for it, or choose another --out");
+        throw_output_error(path_, "cannot lock", e);
+      }
+      struct stat held {
+      }, named{};
+      if (::fstat(fd_, &held) == 0 && ::stat(path_.c_str(), &named) == 0 &&
+          held.st_ino == named.st_ino && held.st_dev == named.st_dev)
+        return;
       ::close(fd_);
-      if (e == EWOULDBLOCK)
-        throw SceneError("--out " + out.string() + ": another wetcloth run is writing into it (" +
-                         path.string() + " is locked); wait for it, or choose another --out");
-      throw_output_error(path, "cannot lock", e);
+      if (attempt == 100) throw_output_error(path_, "cannot lock", EAGAIN);
     }
   }
-  ~OutputLock() { ::close(fd_); }
+  ~OutputLock() {
+    ::unlink(path_.c_str());  // before the lock goes: no other run holds this file
+    ::close(fd_);
+  }
   OutputLock(const OutputLock&) = delete;
   OutputLock& operator=(const OutputLock&) = delete;
 
  private:
+  fs::path path_;
   int fd_ = -1;
 };
-
-// Clears what an earlier run left, so a folder never mixes two runs.
-void clear_outputs(const fs::path& out) {
-  std::error_code ec;
-  for (const char* f : {"metrics.csv", "summary.json", "scene.toml", "obstacles.obj", "cloth.usda",
-                        "cloth.pc2", "cloth_rest.obj", "cloth.pvd", "checkpoint.state"})
-    if (fs::remove(out / f, ec); ec) throw_output_error(out / f, "cannot remove", ec.value());
-  if (fs::remove_all(out / ".cloth.usda.samples", ec); ec)
-    throw_output_error(out / ".cloth.usda.samples", "cannot remove", ec.value());
-  // The frames and the VTK caches' frames.
-  for (const auto& [folder, extension] : {std::pair{"frames", ".obj"}, {"vtk", ".vtp"}}) {
-    const fs::path dir = out / folder;
-    if (!fs::is_directory(dir, ec)) continue;
-    for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec))
-      if (it->path().extension() == extension)
-        if (std::error_code rec; fs::remove(it->path(), rec), rec)
-          throw_output_error(it->path(), "cannot remove", rec.value());
-    if (ec) throw_output_error(dir, "cannot list", ec.value());
-  }
-}
 
 // Removes the frames (frames/frame_NNNNN.obj, vtk/cloth_NNNNN.vtp) from
 // `first` on: a resumed run writes them again.
@@ -186,6 +183,72 @@ Params with_output_meshes(const Params& p,
   return q;
 }
 
+std::string frame_file(const char* folder, const char* prefix, long long f, const char* extension) {
+  char name[64];
+  std::snprintf(name, sizeof name, "%s/%s%05lld%s", folder, prefix, f, extension);
+  return name;
+}
+
+// Every file (and, ending in '/', folder) a run of P may write in its folder,
+// relative to it: its manifest. Its frames are known from the start.
+std::vector<std::string> run_outputs(const Params& p) {
+  std::vector<std::string> files = {"metrics.csv", "summary.json", "scene.toml", "obstacles.obj",
+                                    "checkpoint.state"};
+  const Params q = with_output_meshes(p);
+  std::vector<std::string> meshes;
+  if (!q.cloth.mesh.empty()) meshes.push_back(q.cloth.mesh);
+  for (const auto& [name, o] : q.obstacles)
+    if (std::find(meshes.begin(), meshes.end(), o.mesh) == meshes.end()) meshes.push_back(o.mesh);
+  if (!meshes.empty()) files.push_back("meshes/");
+  files.insert(files.end(), meshes.begin(), meshes.end());
+  const long long last = last_frame_index(p.run.duration, p.run.fps);
+  if (p.run.meshes) {
+    files.push_back("frames/");
+    for (long long f = 0; f <= last; ++f)
+      files.push_back(frame_file("frames", "frame_", f, ".obj"));
+  }
+  const ExportFormats formats = parse_export_formats(p.run.exports);
+  if (formats.pc2) files.insert(files.end(), {"cloth.pc2", "cloth_rest.obj"});
+  if (formats.vtk) {
+    files.insert(files.end(), {"cloth.pvd", "vtk/", "vtk/obstacles.vtp"});
+    for (long long f = 0; f <= last; ++f) files.push_back(frame_file("vtk", "cloth_", f, ".vtp"));
+  }
+  if (formats.usd) {
+    files.insert(files.end(), {"cloth.usda", ".cloth.usda.samples/"});
+    for (const char* a : {"points", "normals", "extent", "contact", "pressure", "adhesion",
+                          "humidity", "velocities", "deficit"})
+      files.push_back(std::string(".cloth.usda.samples/") + a);
+  }
+  return files;
+}
+
+// Throws SceneError naming the first output that the checkpoint of a resumed
+// run says was written and that is not there (as a file: no link).
+void check_resume_outputs(const Params& p, const fs::path& out, long long frames,
+                          const fs::path& checkpoint) {
+  std::vector<std::string> files = {"scene.toml", "obstacles.obj"};
+  const Params q = with_output_meshes(p);
+  if (!q.cloth.mesh.empty()) files.push_back(q.cloth.mesh);
+  for (const auto& [name, o] : q.obstacles) files.push_back(o.mesh);
+  const ExportFormats formats = parse_export_formats(p.run.exports);
+  if (formats.pc2) files.push_back("cloth_rest.obj");
+  if (formats.vtk) files.push_back("vtk/obstacles.vtp");
+  for (long long f = 0; f < frames; ++f) {
+    if (p.run.meshes) files.push_back(frame_file("frames", "frame_", f, ".obj"));
+    if (formats.vtk) files.push_back(frame_file("vtk", "cloth_", f, ".vtp"));
+  }
+  for (const std::string& rel : files) {
+    struct stat st {};
+    if (::lstat((out / rel).c_str(), &st) != 0 || !S_ISREG(st.st_mode))
+      throw SceneError((out / rel).string() + ": " +
+                       (::lstat((out / rel).c_str(), &st) != 0 ? "missing" : "not a file") +
+                       ", where " + checkpoint.string() + " continues a run that wrote it (" +
+                       std::to_string(frames) +
+                       " frames): the outputs are not whole; run the scene again (wetcloth run " +
+                       (out / "scene.toml").string() + " --out " + out.string() + ")");
+  }
+}
+
 }  // namespace
 
 ResourceEstimate estimate_resources(const Params& p) {
@@ -196,17 +259,11 @@ ResourceEstimate estimate_resources(const Params& p) {
   const double n = grid ? static_cast<double>(p.cloth.resolution[0]) * p.cloth.resolution[1]
                         : static_cast<double>(mesh.vertices);
   const double triangles = grid ? 2 * n : static_cast<double>(mesh.triangles);
-  // Measured (peak RSS of pull-straight at 101 x 101 and 301 x 301, 1.5 kB a
-  // particle; the 2001 x 2001 hang, 0.9 kB): about
-  // kBytesPerParticle a particle, and self-collision's pair lists, which grow
-  // with the particles within its distance (a disc of (distance / spacing)²).
-  const double spacing = grid ? std::min(p.cloth.size[0] / (p.cloth.resolution[0] - 1),
-                                         p.cloth.size[1] / (p.cloth.resolution[1] - 1))
-                              : mesh.mean_edge;
-  const double near = p.self_collision.enabled && spacing > 0
-                          ? std::min(n, 3.15 * std::pow(p.self_collision.distance / spacing, 2))
-                          : 0;
-  e.memory_bytes = 64e6 + n * (kBytesPerParticle + 16 * near);
+  // Measured: peak RSS 8 MB + 1.5 kB a particle (hang, one thread, at 201 x
+  // 201 and 401 x 401: 67 and 245 MB), 1.5 to 1.7 kB over whole runs at 401 x
+  // 401 and 1001 x 1001, self-collision's pair lists included (they hold the
+  // pairs near now, not every pair within reach).
+  e.memory_bytes = kBaseBytes + n * kBytesPerParticle;
   const double frames = static_cast<double>(last_frame_index(p.run.duration, p.run.fps)) + 1;
   // An OBJ frame: a position and a normal a particle (70 bytes), a triangle 35.
   e.disk_bytes = frames * (300 + (p.run.meshes ? 70 * n + 35 * triangles : 0)) + 1e5;
@@ -222,7 +279,8 @@ std::string gigabytes(double bytes) {
   return b;
 }
 
-// MemAvailable, or the cgroup's limit where it is lower; < 0: unknown.
+// MemAvailable, or the cgroup's limit, or what the address space limit
+// (ulimit -v) leaves, where lower; < 0: unknown.
 double available_memory() {
   double avail = -1;
   std::FILE* f = std::fopen("/proc/meminfo", "r");
@@ -245,6 +303,16 @@ double available_memory() {
     }
     std::fclose(g);
   }
+  if (rlimit r{}; ::getrlimit(RLIMIT_AS, &r) == 0 && r.rlim_cur != RLIM_INFINITY) {
+    double used = 0;  // the address space this process already takes
+    if (std::FILE* f = std::fopen("/proc/self/statm", "r")) {
+      if (unsigned long long pages; std::fscanf(f, "%llu", &pages) == 1)
+        used = static_cast<double>(pages) * static_cast<double>(::sysconf(_SC_PAGESIZE));
+      std::fclose(f);
+    }
+    const double left = static_cast<double>(r.rlim_cur) - used;
+    if (avail < 0 || left < avail) avail = left;
+  }
   return avail;
 }
 
@@ -255,14 +323,15 @@ void check_resources(const Params& p, const fs::path& out, const std::string& so
   const double mem = available_memory();
   const std::string force = "; --force runs it all the same";
   if (mem >= 0 && e.memory_bytes > mem)
-    throw SceneError(source + ": " +
-                     (p.cloth.mesh.empty()
-                          ? "cloth.resolution = [" + std::to_string(p.cloth.resolution[0]) + ", " +
-                                std::to_string(p.cloth.resolution[1]) + "]"
-                          : "cloth.mesh = \"" + p.cloth.mesh + "\" (" +
-                                std::to_string(cloth_mesh_size(p).vertices) + " vertices)") +
-                     " needs about " + gigabytes(e.memory_bytes) + " of memory, more than the " +
-                     gigabytes(mem) + " available" + force);
+    throw SceneError(
+        source + ": " +
+        (p.cloth.mesh.empty() ? "cloth.resolution = [" + std::to_string(p.cloth.resolution[0]) +
+                                    ", " + std::to_string(p.cloth.resolution[1]) + "]"
+                              : "cloth.mesh = \"" + p.cloth.mesh + "\" (" +
+                                    std::to_string(cloth_mesh_size(p).vertices) + " vertices)") +
+        " needs about " + gigabytes(e.memory_bytes) +
+        " of memory (an estimate: " + format_number(kBytesPerParticle / 1000) +
+        " kB a particle, as measured), more than the " + gigabytes(mem) + " available" + force);
   fs::path at = fs::absolute(out);
   std::error_code ec;
   while (!fs::exists(at, ec) && at.has_parent_path() && at != at.parent_path())
@@ -445,13 +514,19 @@ void open_outputs(const Params& p, const fs::path& out, const Simulation& sim,
   auto& caches = o.caches;
   auto& metrics = o.metrics;
   auto& at = o.at;
+  // Nothing is written through a link; what the run before wrote goes, and
+  // only that; the manifest lists this run's files before they are written.
+  const std::vector<std::string> files = run_outputs(p);
+  refuse_links(out, files);
   if (!resume) {
-    clear_outputs(out);
+    // The meshes read first: a run of DIR/scene.toml into DIR reads its own.
+    std::vector<std::pair<std::string, std::string>> meshes;
+    const Params written = with_output_meshes(p, &meshes);
+    remove_outputs(out, earlier_outputs(out));
+    write_manifest(out, files);
     if (p.run.meshes)
       if (std::error_code ec; fs::create_directories(out / "frames", ec), ec)
         throw_output_error(out / "frames", "cannot make the folder", ec.value());
-    std::vector<std::pair<std::string, std::string>> meshes;
-    const Params written = with_output_meshes(p, &meshes);
     if (!meshes.empty())
       if (std::error_code ec; fs::create_directories(out / "meshes", ec), ec)
         throw_output_error(out / "meshes", "cannot make the folder", ec.value());
@@ -466,6 +541,7 @@ void open_outputs(const Params& p, const fs::path& out, const Simulation& sim,
     if (caches) at.cache = caches->position(false);
   } else {
     at = record_outputs(*resume, o.substeps_before, o.wall_before);
+    check_resume_outputs(p, out, at.next_frame, resume->file);
     const std::vector<double> times =
         kept_row_times(out / "metrics.csv", at.metrics_bytes, at.next_frame, resume->file);
     if (formats.any()) {
@@ -477,6 +553,7 @@ void open_outputs(const Params& p, const fs::path& out, const Simulation& sim,
     if (std::error_code ec; fs::remove(out / "summary.json", ec), ec)
       throw_output_error(out / "summary.json", "cannot remove", ec.value());
     remove_frames_from(out, at.next_frame);
+    write_manifest(out, files);  // a run of a wetcloth that wrote none has one now
     if (p.run.meshes)
       if (std::error_code ec; fs::create_directories(out / "frames", ec), ec)
         throw_output_error(out / "frames", "cannot make the folder", ec.value());
@@ -503,7 +580,11 @@ void write_frame(const Params& p, const fs::path& out, const Simulation& sim, co
     std::snprintf(name, sizeof name, "frame_%05lld.obj", f);
     write_file_atomic(out / "frames" / name, cloth_obj(sim.model(), sim.state(), p.run.up));
   }
-  if (o.caches) o.caches->add_frame(sim);
+  // A frame on the frame rate has its number as its USD time code; the last
+  // one, where the duration falls between two, its time × fps.
+  const bool between =
+      frame_time(f, p.run.duration, p.run.fps) < static_cast<double>(f) / p.run.fps;
+  if (o.caches) o.caches->add_frame(sim, between ? -1 : static_cast<double>(f));
   // Time to 5 cm is a pulled handle's: a pin (measured when there are only
   // pins) sits at its height from the start.
   const bool pulled = sim.model().measures_a_pull();

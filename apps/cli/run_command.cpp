@@ -9,6 +9,7 @@
 #include <string>
 
 #include "common/scene_options.hpp"
+#include "output_folder.hpp"
 #include "run.hpp"
 #include "wetcloth/output.hpp"
 #include "wetcloth/scene.hpp"
@@ -48,11 +49,13 @@ void add_run_options(CLI::App* run, RunOptions& o) {
       ->check(CLI::IsMember({"z", "y"}));
   run->add_flag("--force", o.force,
                 "run even where the memory or disk the run needs (estimated) is more than the "
-                "machine has");
+                "machine has, or into a folder that holds files no wetcloth run wrote (they stay)");
   run->footer(
       "Writes DIR/metrics.csv (one row per frame, SI units in the header), DIR/frames/*.obj,\n"
-      "DIR/obstacles.obj, DIR/scene.toml (every parameter, resolved) and DIR/summary.json.\n"
-      "Exit codes: 0 ok, 2 bad input (nothing written; or DIR is in use by another run),\n"
+      "DIR/obstacles.obj, DIR/scene.toml (every parameter, resolved) and DIR/summary.json,\n"
+      "listed in DIR/.wetcloth.manifest: a run into DIR removes only what the last run listed.\n"
+      "Exit codes: 0 ok, 2 bad input (nothing written; or DIR is in use by another run, a\n"
+      "system folder, or holds files of no wetcloth run and --force is not given),\n"
       "3 the simulation blew up (outputs so far kept), 4 an output could not be written\n"
       "(full disk, read-only folder: the file and the reason named), 130 / 143 stopped by\n"
       "SIGINT / SIGTERM at the end of a step (outputs whole, summary.json \"interrupted\",\n"
@@ -116,6 +119,9 @@ void new_run(RunOptions o, Params& p, fs::path& out) {
   p = o.scene.load();
   out = o.out_dir.empty() ? fs::path("out") / folder_name(p.name) : fs::path(o.out_dir);
   if (!o.force) check_resources(p, out, o.scene.scene);
+  check_output_folder(out);
+  refuse_system_folder(out);
+  if (!o.force) refuse_foreign_folder(out);
   make_output_folder(out);
 }
 

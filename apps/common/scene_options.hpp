@@ -3,6 +3,8 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
+#include <charconv>
 #include <filesystem>
 #include <optional>
 #include <stdexcept>
@@ -78,6 +80,20 @@ inline std::string folder_name(const std::string& name) {
   return f.empty() ? "scene" : f;
 }
 
+// A count such as --grid: digits that fit a long long, nothing else (CLI11
+// reads '' as no value, and an overflow as its largest value).
+inline CLI::Validator a_whole_number() {
+  return CLI::Validator(
+      [](std::string& text) -> std::string {
+        long long v = 0;
+        const auto [end, error] = std::from_chars(text.data(), text.data() + text.size(), v);
+        if (text.empty() || error != std::errc() || end != text.data() + text.size() || v < 1)
+          return "'" + text + "' is not a whole number of particles (e.g. 101)";
+        return {};
+      },
+      "G");
+}
+
 // An --out that is empty (an unset shell variable) is a mistake, not "the default".
 inline CLI::Validator a_path() {
   return CLI::Validator(
@@ -99,11 +115,43 @@ inline void check_output_folder(const std::filesystem::path& out,
   }
 }
 
+// Throws SceneError (bad input) where OUT is the filesystem's root or a
+// system folder (/etc, /proc, /usr, ...), however it is spelt (`..`, a link):
+// no command writes there, --force or not.
+inline void refuse_system_folder(const std::filesystem::path& out,
+                                 const std::string& option = "--out") {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  fs::path real = fs::absolute(out, ec);
+  if (!ec) {
+    const fs::path through_links = fs::weakly_canonical(real, ec);
+    real = ec ? real.lexically_normal() : through_links;
+  }
+  std::string at = real.lexically_normal().generic_string();
+  while (at.size() > 1 && at.back() == '/') at.pop_back();
+  // Folders of the system and of everyone, whose files are not a run's...
+  static const char* const kExactly[] = {"/",    "/home", "/media", "/mnt", "/opt", "/root",
+                                         "/run", "/snap", "/srv",   "/tmp", "/var"};
+  // ... and those of the system all the way down.
+  static const char* const kUnder[] = {"/bin",   "/boot",   "/dev",  "/etc",  "/lib", "/lib32",
+                                       "/lib64", "/libx32", "/proc", "/sbin", "/sys", "/usr"};
+  bool system = std::find(std::begin(kExactly), std::end(kExactly), at) != std::end(kExactly);
+  for (const std::string u : kUnder) system = system || at == u || at.rfind(u + "/", 0) == 0;
+  if (system)
+    throw SceneError(
+        option + " " + out.string() + ": " +
+        (at == "/" ? std::string("the filesystem's root") : at + " is a system folder") +
+        ": wetcloth writes no outputs there (choose a folder of your own, e.g. out/NAME)");
+}
+
 // check_output_folder, then makes the folder: one that cannot be made (no
-// permission, a read-only place) is bad input too.
+// permission, a read-only place) is bad input too, as is a system folder. (An
+// existing folder that cannot be written into fails as the first file does:
+// exit 4, an output that cannot be written.)
 inline void make_output_folder(const std::filesystem::path& out,
                                const std::string& option = "--out") {
   check_output_folder(out, option);
+  refuse_system_folder(out, option);
   std::error_code ec;
   std::filesystem::create_directories(out, ec);
   if (ec) throw SceneError(option + " " + out.string() + ": cannot make it (" + ec.message() + ")");
@@ -154,7 +202,8 @@ struct SceneOptions {
     app->add_option("--grid", grid,
                     "the same scene on a cloth G particles wide: handle patches keep their size "
                     "in metres, and an explicit time step shrinks with the spacing unless --set "
-                    "integrator.dt is given");
+                    "integrator.dt is given")
+        ->check(a_whole_number());
   }
 
   std::vector<std::string> overrides() const {
@@ -170,7 +219,17 @@ struct SceneOptions {
     return all;
   }
 
-  Params load() const { return load_on_grid(scene, overrides(), grid, "--grid", tier); }
+  // The step's threads change no result and no check: set once the scene is
+  // loaded, so that no message names a --set the user did not give.
+  Params load() const {
+    std::vector<std::string> given = overrides();
+    const bool threads_set = threads || all_cores;
+    if (threads_set) given.erase(given.begin());
+    Params p = load_on_grid(scene, given, grid, "--grid", tier);
+    if (threads_set && !overrides_key(given, "integrator.threads"))
+      p.integrator.threads = threads.value_or(0);
+    return p;
+  }
 };
 
 }  // namespace wetcloth::cli

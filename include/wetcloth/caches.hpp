@@ -2,10 +2,11 @@
 // cache with its rest OBJ, VTK PolyData. Each carries the cloth's points and
 // normals per output frame and the wet model's fields per vertex: contact (1
 // within h_th of the contact surface), pressure (the trapped air's P_in under
-// the vertex, Pa; p_atm where none is trapped), adhesion (|F_adh|, N) and
-// humidity (ω).
+// the vertex, Pa; p_atm where none is trapped; in USD also as
+// primvars:pressure_deficit, p_atm - P_in, Pa), adhesion (|F_adh|, N) and
+// humidity (ω); USD has the velocities too (m/s).
 //
-//   cloth.usda                one Mesh, time-sampled points, normals, extent and
+//   cloth.usda                one Mesh, time-sampled points, normals, velocities, extent and
 //                             primvars, UVs (primvars:st), the obstacles as static
 //                             meshes; up axis, metres and frames per second in the
 //                             stage's metadata. Written when the run ends (the
@@ -15,7 +16,8 @@
 //   cloth.pc2, cloth_rest.obj Blender's Mesh Cache modifier, Houdini; one sample a
 //                             frame. The header's count follows every frame, so
 //                             a run cut short leaves a readable cache.
-//   vtk/cloth_NNNNN.vtp       a PolyData a frame (ParaView); vtk/obstacles.vtp;
+//   vtk/cloth_NNNNN.vtp       a PolyData a frame (ParaView), its arrays binary,
+//                             zlib-compressed and appended; vtk/obstacles.vtp;
 //                             cloth.pvd the collection with each frame's time,
 //                             rewritten as frames come.
 #pragma once
@@ -43,7 +45,7 @@ ExportFormats parse_export_formats(const std::string& list);
 // The fields of one frame, in the file's up axis.
 struct CacheFrame {
   double time = 0;
-  std::vector<Vec3> points, normals;
+  std::vector<Vec3> points, normals, velocities;
   std::vector<float> contact, pressure, adhesion;
   double humidity = 0;
 };
@@ -74,7 +76,10 @@ class CacheWriter {
   CacheWriter(const CacheWriter&) = delete;
   CacheWriter& operator=(const CacheWriter&) = delete;
 
-  void add_frame(const Simulation& sim);
+  // The simulation's state as the next frame; `code`, its USD time code: the
+  // frame's number for a frame on the frame rate (a state's time, a whole
+  // number of steps, is a little off f / fps), else (< 0) time × fps.
+  void add_frame(const Simulation& sim, double code = -1);
   // The frames so far, flushed (and with `durable`, on the disk).
   CachePosition position(bool durable);
   // Writes what is written at the end (cloth.usda); further frames are refused.

@@ -37,7 +37,7 @@ enum class AirForceDirection { Surface, Cloth };  // n_s; the cloth normal
 WETCLOTH_CHOICE(AirForceDirection, "surface", "cloth")
 enum class IntegratorType { SymplecticEuler, Xpbd, ImplicitEuler, ExplicitEuler };
 WETCLOTH_CHOICE(IntegratorType, "symplectic-euler", "xpbd", "implicit-euler", "explicit-euler")
-// Bending (MODEL.md section 1): the quadratic curvature energy (Bergou et al.
+// Bending (docs/model.md section 1): the quadratic curvature energy (Bergou et al.
 // 2006), the same fabric at any grid; Provot's chord springs (i±2), the
 // paper's literal model, which soften on a finer grid.
 enum class BendingModel { Quadratic, Provot };
@@ -60,7 +60,7 @@ std::string to_string(E e) {
   return k < ChoiceNames<E>::names.size() ? ChoiceNames<E>::names[k] : "?";
 }
 
-// How a scene pulls on the cloth (MODEL.md section 9).
+// How a scene pulls on the cloth (docs/model.md section 9).
 struct HandleParams {
   HandleType type = HandleType::Force;
   Vec2d at{0.5, 0.5};       // position on the cloth, (u, v) in [0, 1]
@@ -108,7 +108,7 @@ struct Params {
     double water_ratio = 1.0;     // water held at ω = 1 per unit dry mass r_w
   } cloth;
 
-  // The fabric (MODEL.md section 1): constants of the material, the same at
+  // The fabric (docs/model.md section 1): constants of the material, the same at
   // any grid. Each spring's constants follow from them and the spacing
   // (resolve_springs); a 0.3 m cloth of 51 x 51 (l = 6 mm) gets 200/20/20 N/m.
   struct Material {
@@ -229,14 +229,14 @@ struct Params {
   std::map<std::string, ObstacleParams> obstacles;  // [obstacle.NAME]
 };
 
-// Humidity-dependent quantities (MODEL.md sections 1, 4, 6).
+// Humidity-dependent quantities (docs/model.md sections 1, 4, 6).
 double particle_areal_mass(const Params& p);  // ρ_A (1 + r_w ω), kg/m²
 double permeability(const Params& p);         // δ(ω), eq. 5, m/(s·Pa)
 double adhesion_pressure(const Params& p);  // ω γ (cos θa + cos θb) / h, Pa (eq. 13, area part)
 double adhesion_edge_tension(const Params& p);  // ω γ sin θa, N/m (eq. 13, edge part per √S)
 double adhesion_total(const Params& p, double contact_area);  // eq. 13, N
 
-// The constants of every spring of the grid (MODEL.md section 1), from the
+// The constants of every spring of the grid (docs/model.md section 1), from the
 // material and the spacing du x dv, or from [springs] where a scene sets them.
 // On a square grid (l = du = dv): structural and shear springs get the
 // membrane stiffnesses as they are, bending springs B / l², each damping as

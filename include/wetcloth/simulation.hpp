@@ -1,7 +1,7 @@
 // The wet cloth: a read-only Model (grid, springs, areas, parameters), a
 // copyable State (positions, velocities, trapped air, contact flags), and a
 // Workspace of scratch arrays. Simulation ties them together and runs the
-// step of MODEL.md section 8.
+// step of docs/model.md section 8.
 #pragma once
 
 #include <Eigen/Core>
@@ -200,7 +200,7 @@ struct State {
   std::vector<double> air_share;        // vented: V_atm carried by each particle, m³
   std::vector<double> air_gap;          // vented: each particle's part of V_sum, m³
   std::vector<double> pocket_pressure;  // P_in under each particle, Pa
-  // Strain limiting's adaptive order (MODEL.md section 2).
+  // Strain limiting's adaptive order (docs/model.md section 2).
   std::vector<int> source_distance;  // grid steps from the first-moving particles
   bool sources_found = false;
   // What a step hands to the next beside the particles. The air: each
@@ -233,7 +233,7 @@ struct StepStats {
   long long steps_on_one = 0, steps_on_most = 0;
 };
 
-// One row of metrics.csv (MODEL.md section 10).
+// One row of metrics.csv (docs/model.md section 10).
 struct Metrics {
   double time_s = 0, handle_height_m = 0, handle_force_n = 0, max_height_m = 0;
   double contact_area_m2 = 0, lifted_area_m2 = 0, base_diagonal_m = 0, outer_diagonal_m = 0;
@@ -257,7 +257,7 @@ class Simulation {
   Simulation& operator=(Simulation&&) noexcept;
   ~Simulation();
 
-  // One time step of MODEL.md section 8. XPBD takes it in substeps
+  // One time step of docs/model.md section 8. XPBD takes it in substeps
   // (xpbd_substeps); implicit Euler may take it in substeps of dt / 2^k
   // (Baraff & Witkin's step control).
   void step();

@@ -9,6 +9,7 @@
 #include <charconv>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <optional>
 #include <string>
 #include <vector>
@@ -33,6 +34,8 @@ std::string clean_message(std::string m) {
   if (m.rfind("--set '", 0) == 0)
     if (const auto end = m.find("': "); end != std::string::npos) m = m.substr(end + 3);
   if (m.rfind("Params: ", 0) == 0) m = m.substr(8);
+  // Python's exception takes a C string: a NUL in a path would end it.
+  for (std::size_t at; (at = m.find('\0')) != std::string::npos;) m.replace(at, 1, "\\x00");
   return m;
 }
 
@@ -111,7 +114,12 @@ std::vector<std::string> override_texts(const py::object& overrides, const py::d
     if (raw == "grid" && grid) {
       if (!PyLong_Check(v.ptr()) || py::isinstance<py::bool_>(v))
         throw py::type_error("grid: expected an int");
-      *grid = v.cast<long long>();
+      try {
+        *grid = v.cast<long long>();
+      } catch (const py::cast_error&) {
+        throw SceneError("grid: " + py::repr(v).cast<std::string>() +
+                         " is not a cloth's width in particles (2 to 2001)");
+      }
       return;
     }
     const std::string key = normal_key(raw);
@@ -139,8 +147,12 @@ Params load(const py::object& scene, const std::vector<std::string>& sets,
   if (py::isinstance<Scene>(scene)) {
     p = reparse_scene(scene.cast<const Scene&>().params, sets);
   } else if (py::isinstance<py::str>(scene) || py::hasattr(scene, "__fspath__")) {
-    p = load_scene(py::str(py::module_::import("os").attr("fspath")(scene)).cast<std::string>(),
-                   sets);
+    const std::string name =
+        py::str(py::module_::import("os").attr("fspath")(scene)).cast<std::string>();
+    if (name.find('\0') != std::string::npos)
+      throw SceneError("scene: " + py::repr(scene).cast<std::string>() +
+                       " holds a NUL character: no file or built-in scene is named so");
+    p = load_scene(name, sets);
   } else {
     throw py::type_error("scene: expected a built-in scene's name, a path or a wetcloth.Scene");
   }
@@ -228,6 +240,11 @@ class PySimulation {
                        " s is not a time to reach (finite, >= 0)");
     check_blow_up();
     const auto target = static_cast<long long>(std::llround(t / dt));
+    // Backwards is no direction a simulation goes: doing nothing would hide it.
+    if (target < sim_.state().steps)
+      throw SceneError("advance_to: t = " + shortest(t) + " s is before the simulation's time, " +
+                       shortest(sim_.state().time) +
+                       " s (a Simulation goes forward only: make a new one, or load a saved one)");
     while (sim_.state().steps < target) {
       bool blew = false;
       {
@@ -494,6 +511,40 @@ void bind_simulation_arrays(SimulationClass& cls) {
           },
           "m x 3 particle indices (int32), a copy.")
       .def_property_readonly(
+          "normals",
+          [](const PySimulation& s) {
+            const Model& m = s.sim_.model();
+            Vec3Array normal(m.n);
+            compute_normals(m, s.sim_.state().x, normal);
+            py::array_t<double> out({static_cast<py::ssize_t>(m.n), py::ssize_t{3}});
+            for (int i = 0; i < m.n; ++i)
+              for (int k = 0; k < 3; ++k) out.mutable_data()[3 * i + k] = normal[i][k];
+            return out;
+          },
+          "n x 3 unit normals at the particles (as the OBJ frames have them), a C-contiguous "
+          "copy.")
+      .def_property_readonly(
+          "uvs",
+          [](const PySimulation& s) {
+            const auto& uv = s.sim_.model().uv;
+            py::array_t<double> out({static_cast<py::ssize_t>(uv.size()), py::ssize_t{2}});
+            for (std::size_t i = 0; i < uv.size(); ++i)
+              for (int k = 0; k < 2; ++k) out.mutable_data()[2 * i + k] = uv[i][k];
+            return out;
+          },
+          "n x 2 texture coordinates (u, v): the grid's (i, j) / (nu - 1, nv - 1), a mesh "
+          "cloth's from its file; a C-contiguous copy.")
+      .def_property_readonly(
+          "rest_positions",
+          [](const PySimulation& s) {
+            const auto& x = s.sim_.model().rest_position;
+            py::array_t<double> out({static_cast<py::ssize_t>(x.size()), py::ssize_t{3}});
+            for (std::size_t i = 0; i < x.size(); ++i)
+              for (int k = 0; k < 3; ++k) out.mutable_data()[3 * i + k] = x[i][k];
+            return out;
+          },
+          "n x 3 rest positions, m (the cloth as it starts, unstretched), a C-contiguous copy.")
+      .def_property_readonly(
           "in_contact",
           [](const PySimulation& s) {
             const auto& c = s.sim_.state().contact;
@@ -516,6 +567,12 @@ void bind_simulation_files(SimulationClass& cls) {
   cls.def(
          "save",
          [](const PySimulation& s, const std::string& path) {
+           // It replaces a file, and nothing else (a link, a device, a folder).
+           std::error_code ec;
+           const auto st = std::filesystem::symlink_status(path, ec);
+           if (std::filesystem::exists(st) && !std::filesystem::is_regular_file(st))
+             throw SceneError("save: " + path +
+                              ": not a regular file: save writes a new file or replaces one");
            save_checkpoint(path, s.sim_.model().params, s.sim_.state());
          },
          py::arg("path"),

@@ -1,5 +1,8 @@
 """The module's API: scenes, parameters, a Simulation, its arrays, and bad
 input raising Python exceptions (never a crash)."""
+import os
+import subprocess
+import sys
 import threading
 
 import numpy as np
@@ -105,6 +108,19 @@ def test_material_preset_is_a_key():
         wetcloth.Simulation("drop-table", {"material.preset": "wool"}, **SMALL)
 
 
+def test_normals_uvs_and_rest_positions():
+    sim = wetcloth.Simulation("hang", **SMALL)
+    for name, columns in (("normals", 3), ("uvs", 2), ("rest_positions", 3)):
+        a = getattr(sim, name)
+        assert a.shape == (81, columns) and a.dtype == np.float64 and a.flags["C_CONTIGUOUS"], name
+    assert np.allclose(np.linalg.norm(sim.normals, axis=1), 1)
+    assert np.allclose(sim.uvs[[0, 8, 80]], [[0, 0], [1, 0], [1, 1]])
+    start = sim.positions.copy()
+    assert np.allclose(sim.rest_positions, start)
+    sim.advance_to(0.05)
+    assert np.allclose(sim.rest_positions, start) and not np.allclose(sim.positions, start)
+
+
 def test_positions_assignment():
     sim = wetcloth.Simulation("hang", **SMALL)
     x = sim.positions.copy()
@@ -178,6 +194,54 @@ def test_save_and_load_continue_with_the_same_bits(tmp_path):
     assert np.array_equal(again.positions, sim.positions)
     assert np.array_equal(again.velocities, sim.velocities)
     assert again.metrics() == sim.metrics()
+
+
+def test_save_replaces_a_file_and_nothing_else(tmp_path):
+    sim = wetcloth.Simulation("hang", **SMALL)
+    (tmp_path / "old.state").write_text("an older file")
+    sim.save(str(tmp_path / "old.state"))  # a file: replaced
+    assert wetcloth.Simulation.load(str(tmp_path / "old.state")).steps == 0
+    (tmp_path / "folder").mkdir()
+    (tmp_path / "kept").write_text("kept")
+    (tmp_path / "link").symlink_to(tmp_path / "kept")
+    os.mkfifo(tmp_path / "fifo")
+    for name in ("folder", "link", "fifo"):
+        with pytest.raises(wetcloth.SceneError, match="not a regular file"):
+            sim.save(str(tmp_path / name))
+    assert (tmp_path / "kept").read_text() == "kept" and (tmp_path / "link").is_symlink()
+
+
+def test_odd_arguments_raise_scene_error():
+    with pytest.raises(wetcloth.SceneError, match="grid: 18446744073709551616 is not"):
+        wetcloth.Simulation("hang", grid=2**64)
+    with pytest.raises(wetcloth.SceneError, match=r"holds a NUL character"):
+        wetcloth.load_scene("\x00")
+    with pytest.raises(wetcloth.SceneError, match=r".+"):
+        wetcloth.Simulation("a\x00b.toml")
+    sim = wetcloth.Simulation("hang", **SMALL)
+    sim.advance_to(0.01)
+    with pytest.raises(wetcloth.SceneError, match="advance_to: t = 0.005 s is before"):
+        sim.advance_to(0.005)
+    sim.advance_to(0.01)  # where it is: nothing to do
+    assert sim.time == pytest.approx(0.01)
+
+
+def test_an_interpreter_without_numpy_is_told_which_one(tmp_path):
+    """Another python3 first on the PATH (pyenv's, without NumPy) fails at the
+    import naming the interpreter the module was built for."""
+    (tmp_path / "numpy").mkdir()
+    (tmp_path / "numpy" / "__init__.py").write_text("raise ImportError(\"No module named 'numpy'\")\n")
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([str(tmp_path), os.environ["PYTHONPATH"]]))
+    r = subprocess.run([sys.executable, "-c", "import wetcloth"], env=env, capture_output=True,
+                       text=True)
+    assert r.returncode != 0
+    assert "wetcloth was built for " in r.stderr and "No module named 'numpy'" in r.stderr, r.stderr
+    assert "build/python/python" in r.stderr
+    wrapper = os.path.join(os.environ["PYTHONPATH"].split(os.pathsep)[0], "python")
+    if os.access(wrapper, os.X_OK):  # a build's, not an installed module
+        out = subprocess.run([wrapper, "-c", "import wetcloth; print(wetcloth.__version__)"],
+                             capture_output=True, text=True, check=True).stdout
+        assert out.strip() == wetcloth.__version__
 
 
 def test_blow_up_names_the_parameter():

@@ -15,14 +15,39 @@ Overrides are given by dotted key ({"cloth.humidity": 0.7}) or keyword
 the same cloth G particles wide. A bad key or value raises SceneError (a
 ValueError) naming the key; a blow-up raises BlowUp naming the parameter to
 look at. Arrays: positions and velocities are views without a copy (strides
-(8, 8 n): the library holds x, y, z in columns); triangles, in_contact,
-pressure and adhesion are copies. advance_to releases the GIL while it steps.
+(8, 8 n): the library holds x, y, z in columns; np.ascontiguousarray gives
+C order); normals, uvs, rest_positions, triangles, in_contact, pressure and
+adhesion are C-contiguous copies. advance_to releases the GIL while it steps.
+
+A build's module runs in the interpreter it was built for (with its NumPy):
+build/python/python, or PYTHONPATH=build/python with the interpreter that
+the build printed. Another one fails at import, naming both.
 
 sim.save(path) writes the whole state with its scene; Simulation.load(path)
 continues it with the same bits as the run it came from.
 """
-from ._wetcloth import (BlowUp, Scene, SceneError, Simulation, __version__, load_scene, params,
-                        scenes)
+import sys
+
+
+def _wrong_interpreter(error):
+    """Why the module does not load here: the interpreter it was built for, if known."""
+    try:
+        from ._build import PYTHON
+    except ImportError:
+        PYTHON = None
+    here = f"{sys.executable} (Python {sys.version.split()[0]})"
+    if PYTHON is None:
+        return f"wetcloth cannot load in {here}: {error}"
+    return (f"wetcloth was built for {PYTHON}, and this is {here}: {error}. Run it with "
+            f"that interpreter (PYTHONPATH=build/python {PYTHON}, or build/python/python)")
+
+
+try:
+    import numpy  # noqa: F401  (the module's arrays are NumPy's)
+    from ._wetcloth import (BlowUp, Scene, SceneError, Simulation, __version__, load_scene,
+                            params, scenes)
+except ImportError as _error:
+    raise ImportError(_wrong_interpreter(_error)) from _error
 from ._sweep import sweep
 
 __all__ = ["BlowUp", "Scene", "SceneError", "Simulation", "load_scene", "params", "scenes", "sweep",

@@ -1,4 +1,4 @@
-// Air trapped between cloth and contact surface (MODEL.md section 6, eqs. 2-5).
+// Air trapped between cloth and contact surface (docs/model.md section 6, eqs. 2-5).
 #include <algorithm>
 #include <cmath>
 

@@ -1,4 +1,4 @@
-// Friction (MODEL.md section 5; paper eq. 14, after Bridson et al. 2002).
+// Friction (docs/model.md section 5; paper eq. 14, after Bridson et al. 2002).
 #include <algorithm>
 #include <cmath>
 

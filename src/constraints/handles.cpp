@@ -1,4 +1,4 @@
-// Handles (MODEL.md section 9): how scenes pull, drive and pin the cloth.
+// Handles (docs/model.md section 9): how scenes pull, drive and pin the cloth.
 #include <algorithm>
 #include <cmath>
 
@@ -105,7 +105,7 @@ void apply_handle_constraints(const Model& m, State& s, Workspace& w) {
 }
 
 // The measured handle's force also holds its particles against the strain
-// limiter's corrections (MODEL.md section 2): limit_strain recorded, for each
+// limiter's corrections (docs/model.md section 2): limit_strain recorded, for each
 // pinned, driven or held particle, minus the momentum its corrections gave the
 // free particles, over dt².
 void add_strain_limit_reaction(const Model& m, const State& s, Workspace& w) {

@@ -1,4 +1,4 @@
-// Strain limiting (MODEL.md section 2; Provot 1995, adaptive order after Dochev &
+// Strain limiting (docs/model.md section 2; Provot 1995, adaptive order after Dochev &
 // Vassilev 2003): over-stretched structural and shear springs are shortened back
 // to (1 + τ_c) l0, visited outwards from the particles that move first. Each
 // correction is an internal force: it is split between the spring's ends in

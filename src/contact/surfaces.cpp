@@ -1,4 +1,4 @@
-// Contact surfaces and obstacles (MODEL.md section 3): the table plane, the
+// Contact surfaces and obstacles (docs/model.md section 3): the table plane, the
 // ball and the mesh obstacles (mesh_obstacle.cpp).
 #include "detail.hpp"
 

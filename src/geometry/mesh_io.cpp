@@ -3,10 +3,12 @@
 #include <tiny_obj_loader.h>
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <fstream>
 #include <map>
 #include <sstream>
+#include <string_view>
 
 #include "wetcloth/scene.hpp"
 
@@ -45,6 +47,65 @@ void check_manifold(const TriangleMesh& m) {
     }
 }
 
+// tinyobjloader reads `v 1,5 0 0` as 1, a face index `1.5` as 1 and
+// 4294967297 as 1: every number of the v, vt, vn and f lines is read whole
+// here first, and one that is not a number (or an index past an int) refused,
+// named by its line.
+void check_obj_numbers(const std::string& text, const std::string& source) {
+  std::size_t line = 0;
+  for (std::size_t at = 0; at < text.size();) {
+    std::size_t end = text.find('\n', at);
+    if (end == std::string::npos) end = text.size();
+    std::string_view rest(text.data() + at, end - at);
+    at = end + 1;
+    ++line;
+    rest = rest.substr(0, rest.find('#'));
+    std::vector<std::string_view> words;
+    for (std::size_t i = 0; i < rest.size();) {
+      if (rest[i] == ' ' || rest[i] == '\t' || rest[i] == '\r') {
+        ++i;
+        continue;
+      }
+      std::size_t j = i;
+      while (j < rest.size() && rest[j] != ' ' && rest[j] != '\t' && rest[j] != '\r') ++j;
+      words.push_back(rest.substr(i, j - i));
+      i = j;
+    }
+    if (words.empty()) continue;
+    const auto fail = [&](std::string_view word, const char* what) {
+      throw SceneError(source + ":" + std::to_string(line) + ": `" + std::string(word) +
+                       "` is not " + what);
+    };
+    if (words[0] == "v" || words[0] == "vt" || words[0] == "vn") {
+      for (std::size_t w = 1; w < words.size(); ++w) {
+        std::string_view word = words[w];
+        if (word.size() > 1 && word[0] == '+') word.remove_prefix(1);
+        double v = 0;
+        const auto [ptr, error] = std::from_chars(word.data(), word.data() + word.size(), v);
+        if (ptr != word.data() + word.size() || (error != std::errc() && ptr == word.data()))
+          fail(words[w], "a number");
+        if (error != std::errc()) fail(words[w], "a finite number");  // 1e999
+      }
+    } else if (words[0] == "f") {
+      for (std::size_t w = 1; w < words.size(); ++w) {
+        std::string_view corner = words[w];
+        for (int part = 0; !corner.empty() || part == 0; ++part) {
+          const std::size_t slash = corner.find('/');
+          const std::string_view index = corner.substr(0, slash);
+          corner = slash == std::string_view::npos ? std::string_view() : corner.substr(slash + 1);
+          if (part > 2) fail(words[w], "a face corner (v, v/vt, v//vn or v/vt/vn)");
+          if (index.empty() && part == 1) continue;  // v//vn
+          int v = 0;
+          const auto [ptr, error] = std::from_chars(index.data(), index.data() + index.size(), v);
+          if (index.empty() || error != std::errc() || ptr != index.data() + index.size() || v == 0)
+            fail(words[w], "a face corner of whole 1-based indices (v, v/vt, v//vn or v/vt/vn)");
+          if (slash == std::string_view::npos) break;
+        }
+      }
+    }
+  }
+}
+
 }  // namespace
 
 TriangleMesh read_obj(const std::string& text, const std::string& source, const MeshRules& rules) {
@@ -52,6 +113,7 @@ TriangleMesh read_obj(const std::string& text, const std::string& source, const 
   config.triangulate = false;  // quads are kept, for their diagonals' shear springs
   config.vertex_color = false;
   tinyobj::ObjReader reader;
+  check_obj_numbers(text, source);
   if (!reader.ParseFromString(text, "", config))
     throw SceneError(source + ": not an OBJ file: " + reader.Error());
   const auto& attrib = reader.GetAttrib();
@@ -132,8 +194,12 @@ fs::path resolve_scene_path(const Params& p, const std::string& key, const std::
   if (!normal.empty() && *normal.begin() == "..")
     fail("leaves the scene file's folder: a scene may only name files in its folder or below");
   if (p.scene_dir == "builtin:") return fs::path("builtin:") / normal;
-  const fs::path dir = fs::weakly_canonical(fs::path(p.scene_dir));
-  const fs::path full = fs::weakly_canonical(dir / normal);
+  // A link that loops (or a path too long) is the path's fault, named as such.
+  std::error_code ec;
+  const fs::path dir = fs::weakly_canonical(fs::path(p.scene_dir), ec);
+  if (ec) fail("cannot be followed from the scene's folder (" + ec.message() + ")");
+  const fs::path full = fs::weakly_canonical(dir / normal, ec);
+  if (ec) fail("cannot be followed (" + ec.message() + ")");
   // Through a symbolic link out of the folder is leaving it too.
   const auto [d, f] = std::mismatch(dir.begin(), dir.end(), full.begin(), full.end());
   if (d != dir.end()) fail("leads out of the scene file's folder " + dir.string());
@@ -149,8 +215,11 @@ std::string scene_file_text(const Params& p, const std::string& key, const std::
     throw SceneError("Params: " + key + ": \"" + path + "\" is not a built-in mesh");
   }
   std::error_code ec;
-  if (!fs::is_regular_file(where, ec))
-    throw SceneError("Params: " + key + ": " + where.string() + ": no such file");
+  if (const auto st = fs::status(where, ec); !fs::is_regular_file(st))
+    throw SceneError("Params: " + key + ": " + where.string() + ": " +
+                     (fs::exists(st) ? "not a regular file (a folder, FIFO or device)"
+                      : ec && ec != std::errc::no_such_file_or_directory ? ec.message()
+                                                                         : "no such file"));
   if (fs::file_size(where, ec) > kMaxMeshBytes)
     throw SceneError("Params: " + key + ": " + where.string() + ": larger than " +
                      std::to_string(kMaxMeshBytes >> 20) + " MB: not a cloth scene's mesh");

@@ -1,5 +1,5 @@
 // Obstacles made of triangle meshes: read, transformed, checked, and queried
-// for the signed distance through a CGAL AABB tree (MODEL.md section 3).
+// for the signed distance through a CGAL AABB tree (docs/model.md section 3).
 #include "geometry/mesh_obstacle.hpp"
 
 #include <CGAL/AABB_traits.h>

@@ -1,4 +1,4 @@
-// Obstacles made of triangle meshes ([obstacle.NAME], MODEL.md section 3):
+// Obstacles made of triangle meshes ([obstacle.NAME], docs/model.md section 3):
 // the signed distance, closest point and outward normal of a particle, from a
 // CGAL AABB tree (docs/performance.md, "Mesh obstacles", for the choice).
 #pragma once

@@ -1,6 +1,7 @@
 #include "wetcloth/caches.hpp"
 
 #include <unistd.h>
+#include <zlib.h>
 
 #include <algorithm>
 #include <array>
@@ -46,6 +47,7 @@ CacheFrame cache_frame(const Simulation& sim, UpAxis up) {
   f.humidity = m.params.cloth.humidity;
   f.points.resize(m.n);
   f.normals.resize(m.n);
+  f.velocities.resize(m.n);
   f.contact.resize(m.n);
   f.pressure.assign(m.n, static_cast<float>(m.params.air.p_atm));
   f.adhesion.assign(m.n, 0.0f);
@@ -54,6 +56,7 @@ CacheFrame cache_frame(const Simulation& sim, UpAxis up) {
   for (int i = 0; i < m.n; ++i) {
     f.points[i] = to_up(s.x[i], up);
     f.normals[i] = to_up(normal[i], up);
+    f.velocities[i] = to_up(s.v[i], up);
     f.contact[i] = s.contact[i] ? 1.0f : 0.0f;
     if (pressure) f.pressure[i] = static_cast<float>(s.pocket_pressure[i]);
     if (adhesion) f.adhesion[i] = static_cast<float>(sim.adhesion()[i]);
@@ -96,20 +99,6 @@ std::string tuples(const std::vector<Vec3>& v) {  // USD: (x, y, z), ...
   return o;
 }
 
-std::string flat(const std::vector<Vec3>& v) {  // VTK: x y z x y z ...
-  std::string o;
-  o.reserve(v.size() * 36);
-  for (std::size_t i = 0; i < v.size(); ++i) {
-    if (i) o += " ";
-    put(o, v[i].x());
-    o += " ";
-    put(o, v[i].y());
-    o += " ";
-    put(o, v[i].z());
-  }
-  return o;
-}
-
 std::vector<Vec3> uvs(const Model& m) {  // (u, v, 0): the grid's own coordinates, or the mesh's
   std::vector<Vec3> uv;
   uv.reserve(m.n);
@@ -117,30 +106,68 @@ std::vector<Vec3> uvs(const Model& m) {  // (u, v, 0): the grid's own coordinate
   return uv;
 }
 
-std::string polydata(const std::vector<Vec3>& points, const std::vector<std::array<int, 3>>& tris,
-                     const std::string& point_data) {
-  std::string o =
-      "<?xml version=\"1.0\"?>\n"
-      "<VTKFile type=\"PolyData\" version=\"0.1\" byte_order=\"LittleEndian\">\n"
-      "<PolyData>\n<Piece NumberOfPoints=\"" +
-      std::to_string(points.size()) + "\" NumberOfPolys=\"" + std::to_string(tris.size()) +
-      "\">\n" + point_data +
-      "<Points>\n<DataArray type=\"Float64\" NumberOfComponents=\"3\" "
-      "format=\"ascii\">\n" +
-      flat(points) + "\n</DataArray>\n</Points>\n<Polys>\n" +
-      "<DataArray type=\"Int32\" Name=\"connectivity\" format=\"ascii\">\n";
-  for (std::size_t k = 0; k < tris.size(); ++k)
-    o += (k ? " " : "") + std::to_string(tris[k][0]) + " " + std::to_string(tris[k][1]) + " " +
-         std::to_string(tris[k][2]);
-  o += "\n</DataArray>\n<DataArray type=\"Int32\" Name=\"offsets\" format=\"ascii\">\n";
-  for (std::size_t k = 0; k < tris.size(); ++k) o += (k ? " " : "") + std::to_string(3 * (k + 1));
-  return o + "\n</DataArray>\n</Polys>\n</Piece>\n</PolyData>\n</VTKFile>\n";
+// A VTK XML file's arrays in binary, zlib-compressed and appended after the
+// XML (a frame at 31 x 31 was 94 kB of ASCII, 92 kB raw): each array's tag
+// gives its offset into the appended block, where VTK's compression header
+// (UInt64: blocks, block size, last block's size, each block's compressed
+// size) and the compressed little-endian values follow, in one block.
+class VtkArrays {
+ public:
+  template <class T>
+  std::string add(const char* type, const char* name, int components, const std::vector<T>& v) {
+    std::string tag = std::string("<DataArray type=\"") + type + "\"" +
+                      (name ? std::string(" Name=\"") + name + "\"" : std::string()) +
+                      " NumberOfComponents=\"" + std::to_string(components) +
+                      "\" format=\"appended\" offset=\"" + std::to_string(blob_.size()) + "\"/>\n";
+    const auto raw = static_cast<uLong>(v.size() * sizeof(T));
+    uLongf packed = compressBound(raw);
+    std::string data(packed, '\0');
+    if (compress2(reinterpret_cast<Bytef*>(data.data()), &packed,
+                  reinterpret_cast<const Bytef*>(v.data()), raw, 6) != Z_OK)
+      throw std::runtime_error("zlib: cannot compress a VTK array");
+    data.resize(packed);
+    const std::uint64_t header[4] = {1, raw, raw, packed};
+    blob_.append(reinterpret_cast<const char*>(header), sizeof header);
+    blob_ += data;
+    return tag;
+  }
+  std::string appended() const {
+    return "<AppendedData encoding=\"raw\">\n_" + blob_ + "\n</AppendedData>\n";
+  }
+
+ private:
+  std::string blob_;
+};
+
+template <class T>
+std::vector<T> components(const std::vector<Vec3>& v) {  // x y z x y z ...
+  std::vector<T> o;
+  o.reserve(3 * v.size());
+  for (const Vec3& x : v)
+    for (int q = 0; q < 3; ++q) o.push_back(static_cast<T>(x[q]));
+  return o;
 }
 
-std::string data_array(const char* type, const char* name, int components, const std::string& v) {
-  return std::string("<DataArray type=\"") + type + "\" Name=\"" + name +
-         "\" NumberOfComponents=\"" + std::to_string(components) + "\" format=\"ascii\">\n" + v +
-         "\n</DataArray>\n";
+// A PolyData of `points` and `tris`; `point_data` the <PointData> element,
+// its arrays already in `arrays`.
+std::string polydata(const std::vector<Vec3>& points, const std::vector<std::array<int, 3>>& tris,
+                     const std::string& point_data, VtkArrays& arrays) {
+  std::vector<std::int32_t> connectivity, offsets;
+  for (std::size_t k = 0; k < tris.size(); ++k) {
+    connectivity.insert(connectivity.end(), tris[k].begin(), tris[k].end());
+    offsets.push_back(static_cast<std::int32_t>(3 * (k + 1)));
+  }
+  std::string o =
+      "<?xml version=\"1.0\"?>\n"
+      "<VTKFile type=\"PolyData\" version=\"1.0\" byte_order=\"LittleEndian\" "
+      "header_type=\"UInt64\" compressor=\"vtkZLibDataCompressor\">\n<PolyData>\n<Piece "
+      "NumberOfPoints=\"" +
+      std::to_string(points.size()) + "\" NumberOfPolys=\"" + std::to_string(tris.size()) +
+      "\">\n" + point_data + "<Points>\n" +
+      arrays.add("Float64", nullptr, 3, components<double>(points)) + "</Points>\n<Polys>\n" +
+      arrays.add("Int32", "connectivity", 1, connectivity) +
+      arrays.add("Int32", "offsets", 1, offsets) + "</Polys>\n</Piece>\n</PolyData>\n";
+  return o + arrays.appended() + "</VTKFile>\n";
 }
 
 std::string mesh_topology(const std::vector<std::array<int, 3>>& tris, const std::string& indent) {
@@ -195,7 +222,9 @@ constexpr const char* kAttributes[][2] = {{"point3f[] points", "points"},
                                           {"float[] primvars:contact", "contact"},
                                           {"float[] primvars:pressure", "pressure"},
                                           {"float[] primvars:adhesion", "adhesion"},
-                                          {"float primvars:humidity", "humidity"}};
+                                          {"float primvars:humidity", "humidity"},
+                                          {"vector3f[] velocities", "velocities"},
+                                          {"float[] primvars:pressure_deficit", "deficit"}};
 
 }  // namespace
 
@@ -219,6 +248,7 @@ void CacheWriter::open_usd_samples(const CachePosition* at) {
       fs::resize_file(spool->path, static_cast<std::uintmax_t>(at->samples_bytes[a]), ec);
       if (ec) throw_output_error(spool->path, "cannot cut back", ec.value());
     }
+    if (!at) ::unlink(spool->path.c_str());  // a new file, not one a link names
     spool->file = std::fopen(spool->path.c_str(), at ? "ab+" : "wb+");
     if (!spool->file || std::fseek(spool->file, 0, SEEK_END) != 0)
       throw_output_error(spool->path, "cannot open", errno);
@@ -232,12 +262,14 @@ CacheWriter::CacheWriter(const fs::path& dir, const Simulation& sim, ExportForma
   const Model& m = model_;
   if (formats.pc2) {
     write_file_atomic(dir / "cloth_rest.obj", cloth_obj(m, sim.state(), up));
+    ::unlink((dir / "cloth.pc2").c_str());  // a new file, not one a link names
     pc2_.open(dir / "cloth.pc2", std::ios::binary | std::ios::in | std::ios::out | std::ios::trunc);
     if (!pc2_) throw_output_error(dir / "cloth.pc2", "cannot write", errno);
     write_pc2_header(pc2_, m.n, 0);
   }
   if (formats.vtk) {
-    fs::create_directories(dir / "vtk");
+    if (std::error_code ec; fs::create_directories(dir / "vtk", ec), ec)
+      throw_output_error(dir / "vtk", "cannot make the folder", ec.value());
     std::vector<Vec3> points;
     std::vector<std::array<int, 3>> tris;
     for (const NamedMesh& mesh : obstacle_meshes(m)) {
@@ -245,7 +277,8 @@ CacheWriter::CacheWriter(const fs::path& dir, const Simulation& sim, ExportForma
       for (const Vec3& x : mesh.points) points.push_back(to_up(x, up));
       for (const auto& t : mesh.triangles) tris.push_back({base + t[0], base + t[1], base + t[2]});
     }
-    write_file_atomic(dir / "vtk" / "obstacles.vtp", polydata(points, tris, ""));
+    VtkArrays arrays;
+    write_file_atomic(dir / "vtk" / "obstacles.vtp", polydata(points, tris, "", arrays));
   }
   if (formats.usd) open_usd_samples(nullptr);
 }
@@ -314,7 +347,7 @@ void CacheWriter::write_pvd() {
 
 CacheWriter::~CacheWriter() = default;
 
-void CacheWriter::add_frame(const Simulation& sim) {
+void CacheWriter::add_frame(const Simulation& sim, double frame_code) {
   if (finished_) throw std::logic_error("CacheWriter: a frame after finish()");
   const CacheFrame f = cache_frame(sim, up_);
   const long long k = frames_++;
@@ -331,17 +364,18 @@ void CacheWriter::add_frame(const Simulation& sim) {
   if (formats_.vtk) {
     char name[32];
     std::snprintf(name, sizeof name, "cloth_%05lld.vtp", k);
+    VtkArrays arrays;
     const std::string fields =
         "<PointData Scalars=\"contact\" Normals=\"normals\" TCoords=\"uv\">\n" +
-        data_array("Float32", "normals", 3, flat(f.normals)) +
-        data_array("Float32", "uv", 3, flat(uvs(model_))) +
-        data_array("Float32", "contact", 1, join(f.contact)) +
-        data_array("Float32", "pressure_pa", 1, join(f.pressure)) +
-        data_array("Float32", "adhesion_n", 1, join(f.adhesion)) +
-        data_array("Float32", "humidity", 1,
-                   join(std::vector<float>(f.points.size(), static_cast<float>(f.humidity)))) +
+        arrays.add("Float32", "normals", 3, components<float>(f.normals)) +
+        arrays.add("Float32", "uv", 3, components<float>(uvs(model_))) +
+        arrays.add("Float32", "contact", 1, f.contact) +
+        arrays.add("Float32", "pressure_pa", 1, f.pressure) +
+        arrays.add("Float32", "adhesion_n", 1, f.adhesion) +
+        arrays.add("Float32", "humidity", 1,
+                   std::vector<float>(f.points.size(), static_cast<float>(f.humidity))) +
         "</PointData>\n";
-    write_file_atomic(dir_ / "vtk" / name, polydata(f.points, model_.triangles, fields));
+    write_file_atomic(dir_ / "vtk" / name, polydata(f.points, model_.triangles, fields, arrays));
     vtk_times_.push_back(f.time);
     write_pvd();
   }
@@ -351,7 +385,7 @@ void CacheWriter::add_frame(const Simulation& sim) {
       lo = lo.cwiseMin(x);
       hi = hi.cwiseMax(x);
     }
-    const double code = f.time * fps_;
+    const double code = frame_code >= 0 ? frame_code : f.time * fps_;
     last_code_ = code;
     spools_[0]->add(code, "[" + tuples(f.points) + "]");
     spools_[1]->add(code, "[" + tuples(f.normals) + "]");
@@ -362,6 +396,11 @@ void CacheWriter::add_frame(const Simulation& sim) {
     std::string h;
     put(h, f.humidity);
     spools_[6]->add(code, h);
+    spools_[7]->add(code, "[" + tuples(f.velocities) + "]");
+    std::vector<float> deficit(f.pressure.size());
+    for (std::size_t i = 0; i < deficit.size(); ++i)
+      deficit[i] = static_cast<float>(model_.params.air.p_atm - f.pressure[i]);
+    spools_[8]->add(code, "[" + join(deficit, ", ") + "]");
   }
 }
 
@@ -395,9 +434,15 @@ void CacheWriter::finish() {
   o += "        texCoord2f[] primvars:st = [" + st +
        "] (\n            interpolation = \"vertex\"\n        )\n";
   o += "        normal3f[] normals (\n            interpolation = \"vertex\"\n        )\n";
-  for (const char* name : {"contact", "pressure", "adhesion"})
-    o += std::string("        float[] primvars:") + name +
-         " (\n            interpolation = \"vertex\"\n        )\n";
+  // Each field's unit in its doc, as USD tools show it.
+  for (const auto& [name, doc] :
+       {std::pair{"contact", "1 where the vertex is within the liquid bridge of the surface"},
+        {"pressure", "the trapped air's pressure under the vertex, Pa (p_atm where none)"},
+        {"pressure_deficit", "p_atm - pressure: the suction under the vertex, Pa"},
+        {"adhesion", "the liquid bridge's adhesion force on the vertex, N"}})
+    o += std::string("        float[] primvars:") + name + " (\n            doc = \"" + doc +
+         "\"\n            interpolation = \"vertex\"\n        )\n";
+  o += "        vector3f[] velocities (\n            doc = \"m/s\"\n        )\n";
   o += "        float primvars:humidity (\n            interpolation = \"constant\"\n        )\n";
   const fs::path path = dir_ / "cloth.usda", tmp = path.string() + ".tmp";
   const TemporaryFile record(tmp.string());  // a second signal removes it

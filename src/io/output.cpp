@@ -132,7 +132,10 @@ void write_file_atomic(const std::filesystem::path& path, const std::string& con
                        Durability durability) {
   const std::string tmp = path.string() + ".tmp";
   TemporaryFile record(tmp);
-  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  // A new file, never one a link points to: whatever is at PATH.tmp goes first
+  // (a link itself, not what it names).
+  ::unlink(tmp.c_str());
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_NOFOLLOW | O_CLOEXEC, 0644);
   if (fd < 0) throw_output_error(tmp, "cannot create", errno);
   if (!write_all(fd, contents.data(), contents.size())) {
     const int e = errno;
@@ -176,13 +179,13 @@ std::string metrics_csv_row(const Metrics& m) {
 MetricsFile::MetricsFile(const std::filesystem::path& path) : path_(path) {
   const std::string header = metrics_csv_header();
   write_file_atomic(path, header);
-  fd_ = ::open(path.c_str(), O_WRONLY | O_APPEND | O_CLOEXEC);
+  fd_ = ::open(path.c_str(), O_WRONLY | O_APPEND | O_NOFOLLOW | O_CLOEXEC);
   if (fd_ < 0) throw_output_error(path, "cannot open", errno);
   size_ = static_cast<long long>(header.size());
 }
 
 MetricsFile::MetricsFile(const std::filesystem::path& path, long long keep_bytes) : path_(path) {
-  fd_ = ::open(path.c_str(), O_WRONLY | O_APPEND | O_CLOEXEC);
+  fd_ = ::open(path.c_str(), O_WRONLY | O_APPEND | O_NOFOLLOW | O_CLOEXEC);
   if (fd_ < 0) throw_output_error(path, "cannot open", errno);
   if (::ftruncate(fd_, static_cast<off_t>(keep_bytes)) != 0) {
     const int e = errno;

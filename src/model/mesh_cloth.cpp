@@ -198,7 +198,7 @@ double constant(const std::optional<double>& set, double from_material) {
   return set.value_or(from_material);
 }
 
-// Structural and shear springs (MODEL.md section 1, "a mesh cloth"); the
+// Structural and shear springs (docs/model.md section 1, "a mesh cloth"); the
 // cloth's edges and the strain limiter's springs as pairs.
 void add_stretch_springs(Model& m, const Params& p, const ClothMesh& c, Edges& edges,
                          std::vector<std::array<int, 2>>& edge_pairs,
@@ -424,8 +424,17 @@ void check_cloth_mesh(const Params& p, const std::string& source) {
     // here the scene file is known.
     const std::string what = e.what(), lead = "Params: ";
     throw SceneError(what.rfind(lead, 0) == 0 ? source + ": " + what.substr(lead.size())
-                                              : "cloth.mesh: " + what);
+                                              : source + ": cloth.mesh: " + what);
   }
+  // A vertex in no face has no spring and no area: its mass is zero, and the
+  // first step divides by it.
+  std::vector<char> used(mesh.position.size(), 0);
+  for (const auto& t : mesh.triangles)
+    for (const int v : t) used[v] = 1;
+  if (const auto it = std::find(used.begin(), used.end(), 0); it != used.end())
+    throw SceneError(source + ": cloth.mesh: " + mesh.source + ": vertex " +
+                     std::to_string(it - used.begin() + 1) +
+                     " is in no face: a cloth's every vertex must be (remove it from the file)");
   const std::vector<Vec3> x = mesh_cloth_positions(p, mesh);
   for (const auto& [kind, name, on] : {std::tuple{SurfaceKind::Table, "table", p.table.enabled},
                                        std::tuple{SurfaceKind::Ball, "ball", p.ball.enabled}}) {

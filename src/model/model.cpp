@@ -1,4 +1,4 @@
-// The cloth grid of MODEL.md section 1: particles, areas, masses, springs.
+// The cloth grid of docs/model.md section 1: particles, areas, masses, springs.
 #include <omp.h>
 
 #include <algorithm>

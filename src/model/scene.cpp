@@ -857,6 +857,24 @@ void apply_table(const toml::table& t, const std::string& prefix, Params& p, boo
   }
 }
 
+// The values a parsed `KEY = VALUE` holds: one, unless VALUE went on to set
+// more keys (a newline, then `name = "x"`). An inline table is one value.
+int count_values(const toml::table& t) {
+  int n = 0;
+  for (const auto& [k, v] : t)
+    n += v.is_table() && !v.as_table()->is_inline() ? count_values(*v.as_table()) : 1;
+  return n;
+}
+
+// One KEY=VALUE: VALUE is one TOML value and sets KEY alone.
+toml::table one_value(toml::table t, const std::string& source, const std::string& key) {
+  if (count_values(t) != 1)
+    throw SceneError(source + ": " + key +
+                     ": the value goes on past one TOML value (a newline, then another key?): "
+                     "a --set sets one key; give another --set for another");
+  return t;
+}
+
 toml::table parse_override(const std::string& text) {
   const auto eq = text.find('=');
   if (eq == std::string::npos || eq == 0)
@@ -876,12 +894,13 @@ toml::table parse_override(const std::string& text) {
       });
   const std::string text_safe = guard_toml_text(key + " = " + value, source);
   try {
-    return toml::parse(text_safe, source);
+    return one_value(toml::parse(text_safe, source), source, key);
   } catch (const toml::parse_error& e) {
     if (!bare_word) throw SceneError(source + ": " + key + ": " + std::string(e.description()));
   }
   try {
-    return toml::parse(guard_toml_text(key + " = \"" + value + "\"", source), source);
+    return one_value(toml::parse(guard_toml_text(key + " = \"" + value + "\"", source), source),
+                     source, key);
   } catch (const toml::parse_error& e) {
     throw SceneError(source + ": " + key + ": " + std::string(e.description()));
   }
@@ -990,7 +1009,8 @@ void check_run_timing(const Params& p, const Complain& bad) {
   if (p.run.duration > 0 && p.integrator.dt > p.run.duration * (1 + 1e-9))
     bad("integrator.dt", "= " + shortest(p.integrator.dt) +
                              " s is longer than run.duration = " + shortest(p.run.duration) +
-                             " s: the run would take no step (lower integrator.dt)");
+                             " s: the run would take no step (lower integrator.dt; "
+                             "run.duration = 0 writes the start alone)");
   if (p.run.fps * p.integrator.dt > 1 + 1e-9)
     bad("run.fps", "= " + shortest(p.run.fps) + " frames/s is above the step rate, 1 / " +
                        "integrator.dt = " + shortest(1 / p.integrator.dt) +
@@ -1207,8 +1227,16 @@ Params load_scene(const std::string& scene, const std::vector<std::string>& over
   // A file, not a folder: a run's output folder named after a built-in scene
   // (`--out hang`) opens as a stream too, and read as an empty scene.
   std::error_code ec;
-  std::ifstream probe(scene);
-  if (probe.good() && !std::filesystem::is_directory(scene, ec)) {
+  // Opening a FIFO waits for a writer: only a regular file is opened.
+  const auto st = std::filesystem::status(scene, ec);
+  if (std::filesystem::exists(st) && !std::filesystem::is_regular_file(st) &&
+      !std::filesystem::is_directory(st))
+    throw SceneError(scene +
+                     ": not a regular file (a FIFO, device or socket): a scene is a TOML file");
+  if (ec && ec != std::errc::no_such_file_or_directory)
+    throw SceneError(scene + ": cannot read the file (" + ec.message() + ")");
+  std::ifstream probe(std::filesystem::is_regular_file(st) ? scene : std::string());
+  if (probe.good()) {
     Params p = parse_scene(read_file(scene), scene, overrides, tier);
     p.scene_dir = std::filesystem::absolute(scene).parent_path().lexically_normal().string();
     check_cloth_mesh(p, scene);

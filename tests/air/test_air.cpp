@@ -1,4 +1,5 @@
-// Trapped air (eqs. 3-5, MODEL.md section 5): permeability, the pocket's pressure and its force.
+// Trapped air (eqs. 3-5, docs/model.md section 5): permeability, the pocket's pressure and
+// its force.
 #include <gtest/gtest.h>
 
 #include <algorithm>

@@ -1,4 +1,4 @@
-// Friction (eq. 14, MODEL.md section 6): Coulomb's law with the adhesion in the normal load.
+// Friction (eq. 14, docs/model.md section 6): Coulomb's law with the adhesion in the normal load.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -113,7 +113,7 @@ TEST(Friction, HoldsBelowTheLimitAndSlidesAboveIt) {
 }
 
 // The paper's friction uses adhesion alone: a dry cloth would never stop.
-// MODEL.md's default adds the contact load, so its weight holds it.
+// docs/model.md's default adds the contact load, so its weight holds it.
 TEST(Friction, DryClothStillHasFrictionFromItsWeight) {
   for (const char* normal : {"contact", "adhesion"}) {
     Simulation sim =

@@ -10,7 +10,7 @@
 
 using namespace wetcloth;
 
-// MODEL.md sections 2 and 9: a move handle records everything the rest of the
+// docs/model.md sections 2 and 9: a move handle records everything the rest of the
 // cloth does to its patch, the strain limiter's corrections included, so that
 // on a slow peel it balances the load of what it lifts: the lifted cloth's
 // weight, the suction on it (deficit × lifted area, along the table's normal

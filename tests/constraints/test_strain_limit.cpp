@@ -56,7 +56,7 @@ TEST(StrainLimit, AdaptiveOrderStartsAtTheHandle) {
 }
 
 namespace {
-// The plain form of MODEL.md section 2: every pass looks at every spring, level
+// The plain form of docs/model.md section 2: every pass looks at every spring, level
 // by level. A level's corrections are all found from the same positions, each
 // split between its ends by inverse mass (a pinned, driven or held end takes
 // none) and scaled by 1 / (the most corrections that move either of its ends),
@@ -188,7 +188,7 @@ Vec3 first_moment(const Model& m, const State& s) {  // Σ m x
 }
 }  // namespace
 
-// MODEL.md section 2: a correction is an internal force. One call on a free,
+// docs/model.md section 2: a correction is an internal force. One call on a free,
 // over-stretched cloth moves no centre of mass and changes no momentum (to
 // rounding); the farther end alone moving (Provot's rule, before) changed both.
 TEST(StrainLimit, ConservesMomentum) {
@@ -237,7 +237,7 @@ TEST(StrainLimit, PinnedParticlesTakeTheReaction) {
 
 // A free cloth (no table, gravity or damping) pulled by a force on its
 // midpoint accelerates its centre of mass at F/M, strain limiting or not
-// (MODEL.md section 2). Soft springs (20 N/m) let the 1 N pull stretch the
+// (docs/model.md section 2). Soft springs (20 N/m) let the 1 N pull stretch the
 // 51 x 51 cloth past τ_c every step; with the farther end alone moving, the
 // limiter pushed the cloth towards the pull, and it accelerated 54 % faster
 // (24 % with the springs' default damping). The quadratic bending is on.

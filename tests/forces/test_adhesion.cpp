@@ -1,4 +1,4 @@
-// Liquid-bridge adhesion (eq. 13, MODEL.md sections 3-4) on the contact region
+// Liquid-bridge adhesion (eq. 13, docs/model.md sections 3-4) on the contact region
 // (whose border tests/contact/test_surfaces.cpp checks).
 #include <gtest/gtest.h>
 
@@ -18,7 +18,7 @@ TEST(Adhesion, Equation13AtFullHumidity) {
   p.cloth.humidity = 1.0;
   EXPECT_NEAR(adhesion_total(p, 0.09), 4.653, 1e-3);  // laminate table, θb = 58°
   p.adhesion.theta_b_deg = 14;                        // glass
-  // γ (S/h (cos 80° + cos 14°) + 2 √S sin 80°) = 7.538 N. (MODEL.md rounds it as 7.549.)
+  // γ (S/h (cos 80° + cos 14°) + 2 √S sin 80°) = 7.538 N. (docs/model.md rounds it as 7.549.)
   EXPECT_NEAR(adhesion_total(p, 0.09), 7.538, 1e-3);
   p.adhesion.theta_b_deg = 58;
   p.cloth.humidity = 0.5;

@@ -1,4 +1,4 @@
-// The quadratic bending (MODEL.md section 1, forces/bending.cpp) against the
+// The quadratic bending (docs/model.md section 1, forces/bending.cpp) against the
 // laws it must meet exactly: a cylinder bend stores B κ²/2 per unit area on a
 // grid and on an irregular mesh, a flat or rigidly moved cloth feels nothing,
 // the forces sum to zero.

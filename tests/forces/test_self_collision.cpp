@@ -1,4 +1,4 @@
-// Self-collision (eq. 15, MODEL.md section 7): the candidates, the layers kept
+// Self-collision (eq. 15, docs/model.md section 7): the candidates, the layers kept
 // apart. (The spatial hash it searches with: geometry/test_spatial_hash.cpp.)
 #include <gtest/gtest.h>
 
@@ -92,7 +92,7 @@ TEST(SelfCollision, MoversMeetingEachOtherArePaired) {
 // A cloth folded onto itself on the table: the top layer rests on the bottom one.
 TEST(SelfCollision, KeepsTwoFoldedLayersApart) {
   for (bool enabled : {true, false}) {
-    // l = 6 mm: d_t = 5 mm exceeds l/√2, as MODEL.md section 7 requires.
+    // l = 6 mm: d_t = 5 mm exceeds l/√2, as docs/model.md section 7 requires.
     Params p = load_scene("drop-table", {"cloth.center=[0,0,0]", "cloth.humidity=0.5",
                                          "cloth.resolution=[26,26]", "cloth.size=[0.15,0.15]"});
     p.self_collision.enabled = enabled;

@@ -54,6 +54,20 @@ TEST(MeshIo, BadMeshesAreRefusedNamingTheFileAndTheFault) {
   expect_refused("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 -1 0\nv 0 0 1\nf 1 2 3\nf 2 1 4\nf 1 2 5\n",
                  "not a manifold mesh");
   expect_refused("v 0 0 1e999\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "not a finite number");
+  // Numbers read whole (tinyobjloader read `1,5` as 1, `1.5` as 1, 4294967297 as 1), by line.
+  expect_refused("v 1,5 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n", "bad.obj:1: `1,5` is not a number");
+  expect_refused("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1.5 2 3\n", "bad.obj:4: `1.5` is not a face corner");
+  expect_refused("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 4294967297 2 3\n",
+                 "bad.obj:4: `4294967297` is not a face corner");
+  expect_refused("v 0 0 0\nvt 0 x\nv 1 0 0\nv 0 1 0\nf 1 3 4\n", "bad.obj:2: `x` is not a number");
+}
+
+TEST(MeshIo, EveryFaceCornerFormIsRead) {
+  const TriangleMesh m = read_obj(
+      "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nv 2 0 0\nvt 0 0\nvt 1 0\nvt 0 1\nvn 0 0 1\n"
+      "f 1/1/1 2/2/1 3/3/1\nf 2//1 4//1 3//1\nf 2/1 5/2 4/3\n",
+      "forms.obj");
+  EXPECT_EQ(m.triangles.size(), 3u);
 }
 
 TEST(MeshIo, AScenesPathsStayInItsFolder) {

@@ -1,4 +1,4 @@
-// Mesh obstacles (MODEL.md section 3, docs/guide.md "Obstacles"): the CGAL
+// Mesh obstacles (docs/model.md section 3, docs/guide.md "Obstacles"): the CGAL
 // tree's distances against the analytic ball, contact and air on a mesh
 // contact surface, no penetration, Coulomb's threshold on a mesh incline,
 // threads and restores, the scene keys and their errors.

@@ -1,4 +1,4 @@
-// Implicit Euler (MODEL.md section 8; src/integrators/implicit_euler.cpp and
+// Implicit Euler (docs/model.md section 8; src/integrators/implicit_euler.cpp and
 // its step control, step_control.cpp): stability at a frame-rate step, the
 // solve, the rig's force, and the halved substeps.
 #include <gtest/gtest.h>
@@ -127,7 +127,7 @@ TEST(ImplicitEuler, StretchedSpringRelaxesTowardRest) {
   EXPECT_LT(detail::workspace(sim).cg_iterations, 50);
 }
 
-// MODEL.md section 9: a move handle records everything the cloth does to its
+// docs/model.md section 9: a move handle records everything the cloth does to its
 // patch; under implicit Euler, the springs' force at the end of each
 // backward-Euler step as the solve took it (their stiffness over the step and
 // their damping), not their force at its start. Lifting a free hanging cloth

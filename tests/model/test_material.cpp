@@ -1,4 +1,4 @@
-// The material does not change with the grid (MODEL.md section 1): the
+// The material does not change with the grid (docs/model.md section 1): the
 // cantilever's bending length at several grids.
 #include <gtest/gtest.h>
 
@@ -134,7 +134,7 @@ double rigidity_at_mid_overhang(const Simulation& sim) {
   return moment / (kappa * load_scene("cantilever").cloth.size[1]);
 }
 
-// MODEL.md section 1's check: the material is the same at every grid. The
+// docs/model.md section 1's check: the material is the same at every grid. The
 // statics at mid-overhang give B back within 5 % at every grid from 26 to
 // 201 particles along the strip. Peirce's droop converges to B too, as
 // (L / (L + l))³ (measured 0.575, 0.766, 0.877, 0.937 of B): its error is the

@@ -23,11 +23,11 @@ TEST(SceneLoader, ReadsValuesAndKeepsDefaults) {
   const Params p = parse_scene("[cloth]\nhumidity = 0.3\nresolution = [11, 21]\n", "s.toml");
   EXPECT_EQ(p.cloth.humidity, 0.3);
   EXPECT_EQ(p.cloth.resolution[1], 21);
-  EXPECT_EQ(p.material.stretch_stiffness, 200);  // MODEL.md default
+  EXPECT_EQ(p.material.stretch_stiffness, 200);  // docs/model.md default
   EXPECT_FALSE(p.springs.structural_k);          // unset: from the material
 }
 
-// MODEL.md section 1: the springs follow from the material and the spacing,
+// docs/model.md section 1: the springs follow from the material and the spacing,
 // so that a 0.3 m cloth of 51 x 51 gets exactly 200/20/20 N/m; a spring
 // constant set directly is that constant at every grid.
 TEST(SceneLoader, SpringsFollowTheMaterialAndTheSpacing) {

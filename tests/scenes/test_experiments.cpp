@@ -1,5 +1,5 @@
 // The paper's experiments (section 4) at a coarser grid (25 x 25), the same
-// material: the trends of MODEL.md section 11 as humidity rises.
+// material: the trends of docs/model.md section 11 as humidity rises.
 #include <gtest/gtest.h>
 
 #include <algorithm>

@@ -119,7 +119,7 @@ for scene in $AGREEMENT; do
     --set 'integrator.type="implicit-euler"' --set integrator.dt=0.004166666666666667
 done
 
-# The material does not change with the grid (MODEL.md section 1, issue 25):
+# The material does not change with the grid (docs/model.md section 1, issue 25):
 # the same cloth (--grid: its handle's patch in metres, the explicit step
 # shrunk with its stability limit) at ω = 0.7 on coarser and finer grids, and
 # the cantilever's bending length at 12, 6 and 3 mm spacing.

@@ -1,4 +1,4 @@
-// Liquid-bridge adhesion (MODEL.md section 4, eqs. 6-13, after Lou et al. 2015).
+// Liquid-bridge adhesion (docs/model.md section 4, eqs. 6-13, after Lou et al. 2015).
 #include <cmath>
 
 #include "detail.hpp"

@@ -1,4 +1,4 @@
-// Quadratic bending (MODEL.md section 1; after Bergou, Wardetzky, Harmon,
+// Quadratic bending (docs/model.md section 1; after Bergou, Wardetzky, Harmon,
 // Zorin & Grinspun 2006, "A Quadratic Bending Model for Inextensible
 // Surfaces"). For a cloth whose rest shape is flat and whose stretch stays
 // small, the bending energy is ½ B ∫ |∇∇x|² dA = ½ B ∫ (κ₁² + κ₂²) dA: each

@@ -1,4 +1,4 @@
-// Gravity, m_i g, with the humidity-dependent mass of MODEL.md section 1.
+// Gravity, m_i g, with the humidity-dependent mass of docs/model.md section 1.
 #include "detail.hpp"
 
 namespace wetcloth::detail {

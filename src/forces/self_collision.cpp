@@ -1,4 +1,4 @@
-// Self-collision (MODEL.md section 7, eq. 15): repulsion springs between particles
+// Self-collision (docs/model.md section 7, eq. 15): repulsion springs between particles
 // closer than d_t that are not within two grid steps, found with a spatial hash.
 #include <algorithm>
 #include <cmath>
@@ -183,7 +183,7 @@ void refresh_collision_candidates(const Model& m, const State& s, Workspace& w) 
   // grid neighbours just past the excluded ones (360 B a particle at 401 x 401).
   const double step = m.spacing;
   const double margin = std::min(0.5 * dt_dist, 1.5 * step), radius = dt_dist + margin;
-  // Grid neighbours never collide: within two grid steps (MODEL.md), or more
+  // Grid neighbours never collide: within two grid steps (docs/model.md section 7), or more
   // on a grid fine enough that d_t spans more steps, else a flat cloth would
   // repel itself.
   const int reach = std::max(2, static_cast<int>(std::ceil(dt_dist / step)));

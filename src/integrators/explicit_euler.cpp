@@ -1,4 +1,4 @@
-// The explicit integrators (MODEL.md section 8): forward Euler, as the blog
+// The explicit integrators (docs/model.md section 8): forward Euler, as the blog
 // steps, and the symplectic Euler step; and the move x += h v every
 // integrator ends its velocity update with.
 #include "detail.hpp"

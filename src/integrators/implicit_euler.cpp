@@ -1,4 +1,4 @@
-// Backward Euler for large steps (MODEL.md section 8; Baraff & Witkin 1998).
+// Backward Euler for large steps (docs/model.md section 8; Baraff & Witkin 1998).
 // The springs are linearised about the start of the step and solved for the new
 // velocities with preconditioned conjugate gradients, matrix-free on the grid's
 // stencil:
@@ -279,7 +279,7 @@ std::pair<double, double> precondition(const Model& m, Workspace& w) {
 // On each pinned, driven or held particle, the force the springs and
 // colliding pairs exert at the end of the substep, as the solve took them:
 // f - (1/h) Σ B (v'_a - v'_b), their stiffness over the step and their damping
-// (left out of f). The rig's force (MODEL.md section 9) is minus these: from f
+// (left out of f). The rig's force (docs/model.md section 9) is minus these: from f
 // alone, it lagged by h K v' and fell as the substep grew.
 void add_forces_at_new_velocities(const Model& m, const State& s, Workspace& w, double h) {
   if (w.fixed_particles.empty()) return;

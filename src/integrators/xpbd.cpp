@@ -1,4 +1,4 @@
-// The large-step default integrator (MODEL.md section 8): small-step XPBD
+// The large-step integrator, the live tier (docs/model.md section 8): small-step XPBD
 // (Macklin et al. 2019, "Small Steps in Physics Simulation"). A step of Δt is
 // taken in substeps of h; each substep moves every particle by its external
 // forces (gravity, wind, air, adhesion, handles), then projects the springs
@@ -92,7 +92,7 @@ template <Projection kind>
     f = -((len - o.rest) + o.gamma * rate) * ws * q;
   }
   if constexpr (kind != Projection::Spring) {
-    // No longer than (1 + τ_c) l0 after the projection (MODEL.md section 2): a
+    // No longer than (1 + τ_c) l0 after the projection (docs/model.md section 2): a
     // hard constraint, split by inverse mass as the spring's own.
     const double limit = (o.max_len - len) * d * q;
     f = f < limit ? f : limit;
@@ -443,7 +443,7 @@ void xpbd_step(const Model& m, State& s, Workspace& w) {
   const double h = dt / substeps, inv_h2 = 1.0 / (h * h);
   Vec3 rig = Vec3::Zero();
   for (int k = 0; k < substeps; ++k) {
-    // The external forces (MODEL.md section 8's first stage without the
+    // The external forces (docs/model.md section 8's first stage without the
     // springs and self-collision, which are constraints here).
     for_each_particle(m, [&](int i) { put(w.force[i], Vec3::Zero()); });
     // The normals once a step: the wind and the air push along them.
@@ -463,7 +463,7 @@ void xpbd_step(const Model& m, State& s, Workspace& w) {
     apply_handle_constraints(m, s, w);
     xpbd_begin_substep(m, s, w);
     project_springs(m, s, w, h);
-    // The strain limit's further passes (MODEL.md section 2's 1-3): one sweep
+    // The strain limit's further passes (docs/model.md section 2's 1-3): one sweep
     // carries a stretch only a grid step or two from a pulled patch.
     if (m.params.strain_limit.enabled)
       for (long long pass = 1; pass < m.params.strain_limit.passes; ++pass)

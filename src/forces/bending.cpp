@@ -38,6 +38,21 @@ namespace {
 // Per row, (column, value) pairs being summed.
 using Row = std::vector<std::pair<int, double>>;
 
+// Each row's diagonal, which makes it sum to zero, and its Gershgorin bound
+// Σ_j |Q_ij| (the diagonal included).
+void set_diagonal_and_bound(BendingMatrix& b) {
+  const int n = static_cast<int>(b.start.size()) - 1;
+  b.diagonal.assign(n, 0.0);
+  b.bound.assign(n, 0.0);
+  for (int j = 0; j < n; ++j) {
+    for (int e = b.start[j]; e < b.start[j + 1]; ++e) {
+      b.diagonal[j] -= b.value[e];
+      b.bound[j] += std::abs(b.value[e]);
+    }
+    b.bound[j] += std::abs(b.diagonal[j]);
+  }
+}
+
 void add_to(Row& row, int column, double value) {
   for (auto& [c, v] : row)
     if (c == column) {
@@ -172,8 +187,6 @@ BendingMatrix build_bending_matrix(const std::vector<Vec3>& rest,
   }
   BendingMatrix b;
   b.start.push_back(0);
-  b.diagonal.assign(n, 0.0);
-  b.bound.assign(n, 0.0);
   for (int j = 0; j < n; ++j) {
     std::sort(q[j].begin(), q[j].end());
     for (const auto& [k, v] : q[j]) {
@@ -194,12 +207,7 @@ BendingMatrix build_bending_matrix(const std::vector<Vec3>& rest,
         b.value[e] = b.value[std::lower_bound(first, last, j) - b.column.begin()];
       }
     }
-  for (int j = 0; j < n; ++j)
-    for (int e = b.start[j]; e < b.start[j + 1]; ++e) {
-      b.diagonal[j] -= b.value[e];
-      b.bound[j] += std::abs(b.value[e]);
-    }
-  for (int j = 0; j < n; ++j) b.bound[j] += std::abs(b.diagonal[j]);
+  set_diagonal_and_bound(b);
   return b;
 }
 
@@ -255,14 +263,7 @@ void find_stencil(const Model& m, BendingMatrix& b) {
       }
     }
   }
-  for (int j = 0; j < m.n; ++j) {
-    b.diagonal[j] = b.bound[j] = 0;
-    for (int e = b.start[j]; e < b.start[j + 1]; ++e) {
-      b.diagonal[j] -= b.value[e];
-      b.bound[j] += std::abs(b.value[e]);
-    }
-    b.bound[j] += std::abs(b.diagonal[j]);
-  }
+  set_diagonal_and_bound(b);
   // The stencil's rows leave the stored matrix (about 300 bytes a particle).
   st.nu = m.nu;
   std::vector<int> start{0}, column;

@@ -42,6 +42,8 @@ SETTINGS = {
     "reference": ["integrator.type=\"symplectic-euler\"", "integrator.dt=2.5e-5"],
     "symplectic-1.25e-5": ["integrator.type=\"symplectic-euler\"", "integrator.dt=1.25e-5"],
     "symplectic-5e-5": ["integrator.type=\"symplectic-euler\"", "integrator.dt=5e-5"],
+    "symplectic-7.5e-5": ["integrator.type=\"symplectic-euler\"", "integrator.dt=7.5e-5"],
+    "symplectic-1e-4": ["integrator.type=\"symplectic-euler\"", "integrator.dt=1e-4"],
 }
 LARGE = "integrator.dt=0.004166666666666667"  # 1/240 s
 for strain in ("0.2", "0.1", "0.05", "0.025"):

@@ -64,6 +64,7 @@ void distances_from(const Model& m, const std::vector<int>& sources, State& s, W
 // their ends), stable so that a level keeps grid order.
 void order_springs(const Model& m, const State& s, Workspace& w) {
   w.strain_springs.clear();
+  w.strain_springs.reserve(m.structural.size() + m.shear.size());  // grown, up to twice that
   const double stretch = 1.0 + m.params.strain_limit.tau;
   for (const SpringSet* set : {&m.structural, &m.shear})
     for (std::size_t k = 0; k < set->size(); ++k) {

@@ -28,6 +28,7 @@
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include "detail.hpp"
 
@@ -45,10 +46,10 @@ void set_diagonal_and_bound(BendingMatrix& b) {
   b.diagonal.assign(n, 0.0);
   b.bound.assign(n, 0.0);
   for (int j = 0; j < n; ++j) {
-    for (int e = b.start[j]; e < b.start[j + 1]; ++e) {
-      b.diagonal[j] -= b.value[e];
-      b.bound[j] += std::abs(b.value[e]);
-    }
+    b.for_each_in_row(j, [&](int, double q) {
+      b.diagonal[j] -= q;
+      b.bound[j] += std::abs(q);
+    });
     b.bound[j] += std::abs(b.diagonal[j]);
   }
 }
@@ -156,11 +157,22 @@ HessianStencil hessian_stencil(const std::vector<Vec3>& x, const Rings& r, int i
 
 }  // namespace
 
-BendingMatrix build_bending_matrix(const std::vector<Vec3>& rest,
-                                   const std::vector<std::vector<std::array<int, 3>>>& splits,
-                                   const std::vector<std::uint8_t>& on_border, double rigidity) {
+namespace {
+
+// Q's rows where `needed` says (all when it is empty; the others left empty),
+// in its columns' order. E = ½ B Σ_i A_i (H_uu² + 2 H_uv² + H_vv²): row j of
+// Q gets, from each inner particle i whose stencil holds j, B A_i Σ_e w_e
+// c_je c_i·e, summed in the order of i (a row's bits do not depend on which
+// others are built). Exactly symmetric where both rows are built (Q_jk and
+// Q_kj summed the same terms in other orders), so that the forces' pairs
+// cancel: momentum is kept to the last bit of each pair.
+BendingMatrix build_rows(const std::vector<Vec3>& rest,
+                         const std::vector<std::vector<std::array<int, 3>>>& splits,
+                         const std::vector<std::uint8_t>& on_border, double rigidity,
+                         const std::vector<std::uint8_t>& needed) {
   const int n = static_cast<int>(rest.size());
   const Rings r = rings_of(rest, splits);
+  const auto is_needed = [&](int j) { return needed.empty() || needed[j] != 0; };
   // Each inner particle's area and its share of its border neighbours'.
   std::vector<double> carried(r.area);
   for (int k = 0; k < n; ++k) {
@@ -171,19 +183,25 @@ BendingMatrix build_bending_matrix(const std::vector<Vec3>& rest,
     for (const int j : r.around[k])
       if (!on_border[j]) carried[j] += r.area[k] / inner;
   }
-  // E = ½ B Σ_i A_i (H_uu² + 2 H_uv² + H_vv²): row j of Q gets, from each
-  // inner particle i whose stencil holds j, B A_i Σ_e w_e c_je c_i·e.
+  // The particles whose stencil can reach a needed row: within two rings.
+  std::vector<std::uint8_t> reaches(n, needed.empty());
+  if (!needed.empty())
+    for (int i = 0; i < n; ++i)
+      for (const int j : r.around[i])
+        for (const int k : r.around[j]) reaches[i] |= needed[i] | needed[j] | needed[k];
   std::vector<Row> q(n);
   for (int i = 0; i < n; ++i) {
-    if (on_border[i] || !(carried[i] > 0)) continue;
+    if (on_border[i] || !(carried[i] > 0) || !reaches[i]) continue;
     const HessianStencil h = hessian_stencil(rest, r, i);
     const double w = rigidity * carried[i];
-    for (std::size_t a = 0; a < h.particle.size(); ++a)
+    for (std::size_t a = 0; a < h.particle.size(); ++a) {
+      if (!is_needed(h.particle[a])) continue;
       for (std::size_t b = 0; b < h.particle.size(); ++b) {
         const auto &ca = h.c[a], &cb = h.c[b];
         add_to(q[h.particle[a]], h.particle[b],
                w * (ca[0] * cb[0] + 2 * ca[1] * cb[1] + ca[2] * cb[2]));
       }
+    }
   }
   BendingMatrix b;
   b.start.push_back(0);
@@ -195,29 +213,43 @@ BendingMatrix build_bending_matrix(const std::vector<Vec3>& rest,
       b.value.push_back(v);
     }
     b.start.push_back(static_cast<int>(b.column.size()));
+    Row().swap(q[j]);  // freed as it goes: the build's peak memory
   }
-  // Exactly symmetric (Q_jk and Q_kj summed the same terms in other orders),
-  // so that the forces' pairs cancel: momentum is kept to the last bit of
-  // each pair. The diagonal makes each row sum to zero.
   for (int j = 0; j < n; ++j)
     for (int e = b.start[j]; e < b.start[j + 1]; ++e) {
       const int k = b.column[e];
-      if (k < j) {
+      if (k < j && is_needed(k)) {
         const auto first = b.column.begin() + b.start[k], last = b.column.begin() + b.start[k + 1];
         b.value[e] = b.value[std::lower_bound(first, last, j) - b.column.begin()];
       }
     }
-  set_diagonal_and_bound(b);
+  return b;
+}
+
+}  // namespace
+
+BendingMatrix build_bending_matrix(const std::vector<Vec3>& rest,
+                                   const std::vector<std::vector<std::array<int, 3>>>& splits,
+                                   const std::vector<std::uint8_t>& on_border, double rigidity) {
+  BendingMatrix b = build_rows(rest, splits, on_border, rigidity, {});
+  set_diagonal_and_bound(b);  // each row sums to zero
   return b;
 }
 
 namespace {
 
+// A grid's rows: those within kBand of its border, and the centre's, from the
+// rest shape; the others, whose fits differ from the centre's only in the
+// rest positions' last bits, are its stencil without being built (a build of
+// every row held some 500 bytes a particle at its peak).
+constexpr int kBand = 4;
+
 // The rows of a grid's matrix that are its centre row's stencil, within
-// rounding (their fits differ only in the rest positions' last bits), made
-// that stencil exactly, in their columns and their transposes; then each
-// row's diagonal and bound again. Symmetry and zero row sums stay exact.
-void find_stencil(const Model& m, BendingMatrix& b) {
+// rounding, made that stencil exactly, in their columns and their
+// transposes; each row's diagonal and bound from its final values. Symmetry
+// and zero row sums stay exact. `built` marks the rows build_rows made; the
+// others are the stencil's.
+void find_stencil(const Model& m, BendingMatrix& b, const std::vector<std::uint8_t>& built) {
   const int centre = m.index(m.nu / 2, m.nv / 2);
   BendingMatrix::Stencil& st = b.stencil;
   for (int e = b.start[centre]; e < b.start[centre + 1]; ++e) {
@@ -232,6 +264,7 @@ void find_stencil(const Model& m, BendingMatrix& b) {
     if (e < opposite) st.value[e] = st.value[opposite] = 0.5 * (st.value[e] + st.value[opposite]);
   }
   const auto same = [&](int a) {
+    if (!built[a]) return true;
     if (static_cast<std::size_t>(b.start[a + 1] - b.start[a]) != size) return false;
     for (std::size_t e = 0; e < size; ++e) {
       const int c = b.start[a] + static_cast<int>(e);
@@ -241,12 +274,9 @@ void find_stencil(const Model& m, BendingMatrix& b) {
     }
     return true;
   };
+  st.nu = m.nu;
   st.first.assign(m.nv, 0);
   st.last.assign(m.nv, 0);
-  const auto at = [&](int row, int column) {
-    const auto first = b.column.begin() + b.start[row], last = b.column.begin() + b.start[row + 1];
-    return b.start[row] + static_cast<int>(std::lower_bound(first, last, column) - first);
-  };
   for (int j = 0; j < m.nv; ++j) {
     // The run of stencil rows about the row's middle.
     int lo = m.nu / 2, hi = m.nu / 2;
@@ -255,29 +285,30 @@ void find_stencil(const Model& m, BendingMatrix& b) {
     while (hi < m.nu && same(m.index(hi, j))) ++hi;
     st.first[j] = lo;
     st.last[j] = hi;
-    for (int i = lo; i < hi; ++i) {
-      const int a = m.index(i, j);
-      for (std::size_t e = 0; e < size; ++e) {
-        b.value[b.start[a] + static_cast<int>(e)] = st.value[e];
-        b.value[at(a + st.offset[e], a)] = st.value[e];
-      }
-    }
   }
-  set_diagonal_and_bound(b);
-  // The stencil's rows leave the stored matrix (about 300 bytes a particle).
-  st.nu = m.nu;
+  for (int a = 0; a < m.n; ++a)
+    if (!built[a] && !b.in_stencil(a))
+      throw std::logic_error("build_bending_matrix: a row left out is not the grid's stencil");
+  // The other rows keep their entries, those in a stencil row's column as
+  // the stencil's (its transpose); the stencil's rows leave the stored matrix.
   std::vector<int> start{0}, column;
   std::vector<double> value;
   for (int j = 0; j < m.n; ++j) {
-    if (!b.in_stencil(j)) {
-      column.insert(column.end(), b.column.begin() + b.start[j], b.column.begin() + b.start[j + 1]);
-      value.insert(value.end(), b.value.begin() + b.start[j], b.value.begin() + b.start[j + 1]);
-    }
+    if (!b.in_stencil(j))
+      for (int e = b.start[j]; e < b.start[j + 1]; ++e) {
+        const int k = b.column[e];
+        column.push_back(k);
+        value.push_back(b.in_stencil(k) ? st.value[std::lower_bound(st.offset.begin(),
+                                                                    st.offset.end(), j - k) -
+                                                   st.offset.begin()]
+                                        : b.value[e]);
+      }
     start.push_back(static_cast<int>(column.size()));
   }
   b.start = std::move(start);
   b.column = std::move(column);
   b.value = std::move(value);
+  set_diagonal_and_bound(b);
 }
 
 }  // namespace
@@ -294,8 +325,18 @@ BendingMatrix build_bending_matrix(const Model& m, double rigidity) {
       other.push_back({a, b, d});
       other.push_back({b, c, d});
     }
-  BendingMatrix b = build_bending_matrix(m.rest_position, {one, other}, m.on_border, rigidity);
-  if (m.nu >= 5 && m.nv >= 5) find_stencil(m, b);
+  if (m.nu < 5 || m.nv < 5) {
+    BendingMatrix b = build_rows(m.rest_position, {one, other}, m.on_border, rigidity, {});
+    set_diagonal_and_bound(b);
+    return b;
+  }
+  std::vector<std::uint8_t> built(m.n, 0);
+  for (int j = 0; j < m.nv; ++j)
+    for (int i = 0; i < m.nu; ++i)
+      built[m.index(i, j)] = std::min({i, j, m.nu - 1 - i, m.nv - 1 - j}) <= kBand;
+  built[m.index(m.nu / 2, m.nv / 2)] = 1;
+  BendingMatrix b = build_rows(m.rest_position, {one, other}, m.on_border, rigidity, built);
+  find_stencil(m, b, built);
   return b;
 }
 

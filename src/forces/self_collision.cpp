@@ -31,15 +31,20 @@ struct AnchorGap {
 // The largest of them: a maximum over columns, which vectorises (and is the
 // same in any order).
 double farthest(const Model& m, const AnchorGap& gap) {
-  double most = 0;
-#pragma omp parallel for reduction(max : most) num_threads(m.threads) if (m.threads > 1)
-  for (int j = 0; j < m.nv; ++j) {
+  const auto row_most = [&](int j) {
     const AnchorGap local = gap;  // a copy: through the reference GCC gathered
     double row = 0;
 #pragma omp simd reduction(max : row)
     for (int i = j * m.nu; i < (j + 1) * m.nu; ++i) row = std::max(row, local(i));
-    most = std::max(most, row);
+    return row;
+  };
+  double most = 0;
+  if (m.threads <= 1) {  // no region: even one its `if` turns off costs a futex call
+    for (int j = 0; j < m.nv; ++j) most = std::max(most, row_most(j));
+    return most;
   }
+#pragma omp parallel for reduction(max : most) num_threads(m.threads)
+  for (int j = 0; j < m.nv; ++j) most = std::max(most, row_most(j));
   return most;
 }
 
@@ -71,6 +76,14 @@ void search_whole_cloth(const Model& m, const State& s, Workspace& w, double rad
   anchor = s.x;
   build_hash(anchor, 2 * radius, w, m.threads);
   clear_stale(w);
+  if (m.threads <= 1) {  // straight into the list: no second copy of the pairs
+    w.candidates.clear();
+    for_each_close_pair(anchor, radius, w, near_in_grid, [&](int i, int j, const Vec3&, double) {
+      w.candidates.push_back({i, j});
+    });
+    std::sort(w.candidates.begin(), w.candidates.end());
+    return;
+  }
   w.thread_candidates.resize(m.threads);
   for (auto& list : w.thread_candidates) list.clear();  // the runtime may give fewer threads
   for_each_row_block(m, [&](int j0, int j1, int t) {

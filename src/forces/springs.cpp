@@ -361,9 +361,8 @@ void solve_damping_groups(const Model& m, double h, int damped, const DampingCol
   const int n = m.n, nu = m.nu, nv = m.nv;
   const std::size_t stride = d.stride;
   constexpr int kGrid = DampingColumns::kGrid, kScratch = DampingColumns::kScratch;
-#pragma omp parallel for schedule(static) num_threads(d.threads) if (d.threads > 1)
-  for (int group = 0; group < kGroups; ++group) {
-    Real* t = d.col(2 * kGrid + kScratch * omp_get_thread_num());
+  const auto solve_group = [&](int group, int thread) {
+    Real* t = d.col(2 * kGrid + kScratch * thread);
     const ChainScratch scratch{t,
                                t + stride,
                                t + 2 * stride,
@@ -406,6 +405,13 @@ void solve_damping_groups(const Model& m, double h, int damped, const DampingCol
         first[group] = false;
       }
     }
+  };
+  // On one thread no region: even one its `if` turns off costs a futex call.
+  if (d.threads <= 1) {
+    for (int group = 0; group < kGroups; ++group) solve_group(group, 0);
+  } else {
+#pragma omp parallel for schedule(static) num_threads(d.threads)
+    for (int group = 0; group < kGroups; ++group) solve_group(group, omp_get_thread_num());
   }
   for (int group = 0; group < kGroups; ++group) {
     if (first[group])

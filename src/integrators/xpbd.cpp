@@ -454,6 +454,9 @@ void xpbd_step(const Model& m, State& s, Workspace& w) {
     add_adhesion(m, s, w);
     add_handle_forces(m, s, w);
     if (!m.topology->bending.start.empty()) {
+      // xpbd's alone: made at its first step (an integrator set later included).
+      if (w.bending_force.size() != static_cast<std::size_t>(m.n))
+        w.bending_force.assign(m.n, Vec3::Zero());
       for_each_particle(m, [&](int i) { put(w.bending_force[i], Vec3::Zero()); });
       add_bending_forces(m, s, w.bending_force);
     }

@@ -335,6 +335,15 @@ void build_grid(Model& m, Topology& t, const Params& p) {
   const int wanted = p.integrator.threads > 0 ? static_cast<int>(p.integrator.threads)
                                               : std::max(1, omp_get_num_procs());
   m.threads = std::clamp(m.n / kParticlesPerThread, 1, wanted);
+  // Each set's springs at most two a particle (four for Provot's bending): as
+  // they are pushed, their arrays would grow to up to twice that.
+  const auto reserve = [&](SpringSet& set, std::size_t count) {
+    for (auto* a : {&set.a, &set.b}) a->reserve(count);
+    for (auto* a : {&set.rest, &set.k, &set.damping}) a->reserve(count);
+  };
+  reserve(m.structural, 2 * std::size_t(m.n));
+  reserve(m.shear, 2 * std::size_t(m.n));
+  if (t.stencil[4].k != 0 || t.stencil[4].damping != 0) reserve(m.bending, 4 * std::size_t(m.n));
   for (int j = 0; j < m.nv; ++j) {
     for (int i = 0; i < m.nu; ++i) {
       // Stencil offsets 0-7 (above), each from (i0, j0) to (i0 + di, j0 + dj).

@@ -1,5 +1,6 @@
 // Animation caches (src/io/caches.cpp): each read back by the rules of its format
-// and compared with the simulation's own positions and fields at each frame.
+// and compared with the simulation's own positions and fields at each frame;
+// and metrics.csv's rows (src/io/output.cpp).
 #include <gtest/gtest.h>
 #include <zlib.h>
 
@@ -12,6 +13,7 @@
 
 #include "common.hpp"
 #include "wetcloth/caches.hpp"
+#include "wetcloth/output.hpp"
 
 namespace wetcloth {
 namespace {
@@ -222,6 +224,25 @@ TEST(Caches, YUpTurnsEveryPointAboutX) {
     EXPECT_EQ(y, static_cast<float>(r.frames[4].points[i].z()));   // height is y
     EXPECT_EQ(z, static_cast<float>(-r.frames[4].points[i].y()));  // right-handed
   }
+}
+
+// metrics.csv: a frame's time as the step's time, 667 x 5e-5 = 0.03335 (in
+// binary 0.033350000000000005), and every value in its shortest exact form.
+TEST(MetricsCsv, TimesAsTheyAreAndValuesExactly) {
+  Metrics m;
+  m.time_s = 667 * 5e-5;
+  ASSERT_NE(m.time_s, 0.03335);  // the binary product is not the decimal
+  m.handle_height_m = 0.1 + 0.2;
+  const std::string row = metrics_csv_row(m);
+  EXPECT_EQ(row.substr(0, row.find(',')), "0.03335");
+  m.time_s = 1800 * 5e-5;
+  EXPECT_EQ(metrics_csv_row(m).substr(0, 5), "0.09,");
+  const std::vector<std::string> cols = metrics_columns();
+  std::vector<double> back;
+  std::stringstream in(row);
+  for (std::string cell; std::getline(in, cell, ',');) back.push_back(std::stod(cell));
+  ASSERT_EQ(back.size(), cols.size());
+  EXPECT_EQ(back[1], 0.1 + 0.2);  // 0.30000000000000004, all its digits
 }
 
 }  // namespace

@@ -481,8 +481,8 @@ std::vector<ParamDef> named_defs() {
           "comment), 0-based: a grid's particle (i, j) is j nu + i, a mesh cloth's are its "
           "file's vertices in order (a vertex group exported from Blender)"),
       obstacle_field("mesh", "", 1, 0,
-                     "[obstacle.NAME]: an obstacle (fixed, or moving by obstacle.*.motion), an OBJ triangle mesh (path relative to "
-                     "the scene file, inside its folder)",
+                     "[obstacle.NAME]: an obstacle (fixed, or moving by obstacle.*.motion), an OBJ "
+                     "triangle mesh (path relative to the scene file, inside its folder)",
                      O(mesh)),
       obstacle_field("up", "", 1, 0,
                      "the file's up axis: y (Blender's OBJ export) turns it z-up before scale, "

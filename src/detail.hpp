@@ -22,6 +22,12 @@ struct TriangleMesh;
 void build_mesh_cloth(Model& m, Topology& t, const Params& p);
 std::vector<Vec3> mesh_cloth_positions(const Params& p, const TriangleMesh& mesh);
 std::vector<int> mesh_handle_particles(const Model& m, const HandleParams& h);
+// handle.NAME.vertices read (its list, or its file) and checked against the
+// cloth's n particles: sorted, each once. Throws SceneError naming the key,
+// and a file's name and line.
+std::vector<int> handle_vertex_indices(const Params& p, const std::string& name, int n);
+// The same for every handle of a loaded scene (source: the scene file).
+void check_handle_vertices(const Params& p, const std::string& source);
 // A scene's cloth.mesh read and placed: throws SceneError naming the scene
 // file (source), the mesh file and what is wrong with it.
 void check_cloth_mesh(const Params& p, const std::string& source);
@@ -61,12 +67,65 @@ inline SurfaceHit query_surface(const Params& p, SurfaceKind kind, const Vec3& x
 // friction moved particles along a curved mesh (a chord of it dips inside).
 void collide_with_meshes(const Model& m, State& s, Workspace& w);
 
+// Moving surfaces (docs/model.md section 3): the poses of the ball and the mesh
+// obstacles at time t, into w.surfaces. Every stage that asks a surface
+// asks it where it is at the time the state has reached: the step places
+// them at its end (a substep's, in xpbd) before it collides.
+void place_surfaces(const Model& m, Workspace& w, double t);
+
+// The pose of the surface a byte names (SurfaceKind, or kMeshCode + k), or
+// null for one that stands still.
+inline const RigidPose* pose_of(const SurfacePoses& poses, int code) {
+  const RigidPose* pose = nullptr;
+  if (code == static_cast<int>(SurfaceKind::Ball)) pose = &poses.ball;
+  if (code >= kMeshCode && code - kMeshCode < static_cast<int>(poses.obstacles.size()))
+    pose = &poses.obstacles[code - kMeshCode];
+  return pose && pose->moving ? pose : nullptr;
+}
+
+// The table and the ball where they are now: the ball's centre moved by its
+// motion (it turns about its centre: its distances do not change with it).
+inline SurfaceHit query_surface(const Params& p, const SurfacePoses& poses, SurfaceKind kind,
+                                const Vec3& x) {
+  if (kind != SurfaceKind::Ball || !poses.ball.moving) return query_surface(p, kind, x);
+  return query_surface(p, kind, Vec3(x - poses.ball.shift));
+}
+
+// A mesh obstacle's hit where it is now: the query in its body frame (the
+// tree built once, where its keys place it; a rigid motion moves the
+// particle instead, which costs a 3 x 3 product where a rebuild costs the
+// whole tree), the normal turned back. The cache holds body-frame positions,
+// so its bounds hold as the obstacle moves.
+inline MeshObstacle::Hit query_mesh(const MeshObstacle& o, const RigidPose* pose, const Vec3& x,
+                                    double reach, MeshQueryCache* cache, int i) {
+  if (!pose) return query_mesh(o, x, reach, cache, i);
+  MeshObstacle::Hit h = query_mesh(o, pose->to_body(x), reach, cache, i);
+  h.normal = pose->rotation * h.normal;
+  return h;
+}
+
 // Any surface by its byte (SurfaceKind, or kMeshCode + k for obstacle k),
 // exactly (a whole search of a mesh): for what is asked once in a while.
 inline SurfaceHit query_code(const Model& m, int code, const Vec3& x) {
   if (code < kMeshCode) return query_surface(m.params, static_cast<SurfaceKind>(code), x);
   const MeshObstacle::Hit h = m.obstacles[code - kMeshCode]->query(x);
   return {h.distance, h.normal};
+}
+// The same where the surfaces are now.
+inline SurfaceHit query_code(const Model& m, const SurfacePoses& poses, int code, const Vec3& x) {
+  const RigidPose* pose = pose_of(poses, code);
+  if (!pose) return query_code(m, code, x);
+  if (code < kMeshCode) return query_surface(m.params, poses, static_cast<SurfaceKind>(code), x);
+  const MeshObstacle::Hit h = m.obstacles[code - kMeshCode]->query(pose->to_body(x));
+  return {h.distance, pose->rotation * h.normal};
+}
+
+// The velocity of the surface a byte names at x (zero where it stands
+// still): friction (eq. 14) and the inelastic contact act on the cloth's
+// velocity relative to it.
+inline Vec3 surface_velocity(const SurfacePoses& poses, int code, const Vec3& x) {
+  const RigidPose* pose = pose_of(poses, code);
+  return pose ? pose->velocity_at(x) : Vec3::Zero();
 }
 
 // contact/surfaces.cpp: projects particles out of every obstacle and removes inward normal

@@ -95,6 +95,7 @@ void Simulation::reset() {
   ws_->colliding.assign(n, 0);
   ws_->touched.assign(n, 0);
   release();
+  place_surfaces(model_, *ws_, 0.0);
   update_contact(model_, state_, *ws_);
   start_air(model_, state_, *ws_);
   update_strain_order(model_, state_, *ws_);
@@ -108,7 +109,9 @@ void Simulation::restore(const State& s) {
                                 " particles, the scene has " + std::to_string(n));
   reset();
   state_ = s;
-  // What each step's end leaves for the next, made from the state again.
+  // What each step's end leaves for the next, made from the state again (the
+  // surfaces' poses are a function of its time).
+  place_surfaces(model_, *ws_, state_.time);
   update_contact(model_, state_, *ws_);
   compute_normals(model_, state_.x, ws_->normal);
 }
@@ -150,6 +153,7 @@ void Simulation::set_params(const Params& p) {
   if (!same_grid) reset();
   ws_->strain_springs.clear();  // their lengths may have changed: ordered again next step
   ws_->mesh_cache.clear();      // an obstacle may have moved: its last answers bound nothing
+  place_surfaces(model_, *ws_, state_.time);
 }
 
 void Simulation::grab(int particle, const Vec3& target, double stiffness) {
@@ -222,6 +226,7 @@ void update_contact_and_air(const Model& m, State& s, Workspace& w, double h) {
 // Stages 3-6, after an integration over h. Handles hold their particles
 // first, and hold those that stopped after the constraints moved them.
 void finish_substep(const Model& m, State& s, Workspace& w, double h) {
+  if (w.surfaces.any) place_surfaces(m, w, s.time);  // where they are at the substep's end
   apply_handle_constraints(m, s, w);
   collide_with_surfaces(m, s, w);
   apply_friction(m, s, w, w.touched, h);

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "geometry/mesh_obstacle.hpp"
+#include "wetcloth/motion.hpp"
 #include "wetcloth/simulation.hpp"
 
 namespace wetcloth {
@@ -47,8 +48,20 @@ struct ThreadChoice {
   double per_substep[2] = {};
 };
 
+// Where the moving surfaces are at `time` (detail::place_surfaces): the ball's
+// and each mesh obstacle's pose (docs/model.md section 3, "Moving surfaces").
+// Nothing moves: every pose the identity, and the step runs as it did before
+// surfaces could move, bit for bit.
+struct SurfacePoses {
+  double time = 0;
+  bool any = false;  // some surface moves
+  RigidPose ball;
+  std::vector<RigidPose> obstacles;  // as Model::obstacles
+};
+
 // Scratch arrays, reused every step: nothing is allocated per step.
 struct Workspace {
+  SurfacePoses surfaces;
   Vec3Array force, normal, surface_normal;
   Vec3Array bending_force;  // xpbd: the quadratic bending's, apart (add_external_velocity)
   std::vector<Vec3> x_before;
@@ -143,6 +156,7 @@ struct Workspace {
   // particles the measured handle holds; those particles and the
   // constraints' impulse on them over the substep.
   Vec3Array x_prev, x_before_collide;
+  Vec3Array surface_velocity;  // moving surfaces: the one each particle touches, m/s
   std::vector<double> free_inv_mass, reaction_flag;
   std::vector<int> reaction_particles;
   Vec3 reaction_impulse = Vec3::Zero();

@@ -6,6 +6,7 @@
 #include <map>
 #include <optional>
 #include <string>
+#include <vector>
 
 namespace wetcloth {
 
@@ -48,8 +49,12 @@ WETCLOTH_CHOICE(BendingModel, "quadratic", "provot")
 // fastest, for the viewer.
 enum class IntegratorTier { Accurate, Live };
 WETCLOTH_CHOICE(IntegratorTier, "accurate", "live")
-enum class UpAxis { Z, Y };  // of the files written: the simulation's z, or y
+enum class UpAxis { Z, Y };  // of the files written (or read): the simulation's z, or y
 WETCLOTH_CHOICE(UpAxis, "z", "y")
+// Between a moving obstacle's keyframes: straight lines, or a cubic Hermite
+// spline with Catmull-Rom tangents (docs/guide.md "Moving obstacles").
+enum class Interpolation { Linear, Smooth };
+WETCLOTH_CHOICE(Interpolation, "linear", "smooth")
 #undef WETCLOTH_CHOICE
 
 // A choice's name in the scene file ("?" for a value no name has: the loader
@@ -59,6 +64,33 @@ std::string to_string(E e) {
   const auto k = static_cast<std::size_t>(e);
   return k < ChoiceNames<E>::names.size() ? ChoiceNames<E>::names[k] : "?";
 }
+
+// One key of a moving obstacle's path: at `time` it is moved by `translate`
+// and turned by `rotate` (degrees about x, then y, then z, fixed axes) from
+// where its own keys place it.
+struct Keyframe {
+  double time = 0;  // s
+  Vec3d translate{0, 0, 0};
+  Vec3d rotate{0, 0, 0};
+  bool operator==(const Keyframe&) const = default;
+};
+
+// A rigid motion by keyframes (none: the body stands still), held at the
+// first key before it and at the last after it.
+struct Motion {
+  std::vector<Keyframe> keys;
+  Interpolation interpolation = Interpolation::Linear;
+  bool moves() const { return !keys.empty(); }
+};
+
+// Particles named by index (0-based: a grid's j nu + i, a mesh cloth's
+// vertex in its file's order): a list in the scene, or a file of
+// whitespace-separated indices (relative to the scene file). Empty: none.
+struct VertexList {
+  std::string file;
+  std::vector<long long> indices;
+  bool empty() const { return file.empty() && indices.empty(); }
+};
 
 // How a scene pulls on the cloth (docs/model.md section 9).
 struct HandleParams {
@@ -71,18 +103,24 @@ struct HandleParams {
   double max_height = 0;    // force: height cap above the table, m (0: none)
   double max_travel = 0;    // force, move: distance the hand travels before it stops, m (0: none)
   double start = 0;         // time the handle starts acting, s (a late pin holds where it is then)
+  VertexList vertices;      // the particles by index, instead of at, span and patch
 };
 
-// A fixed obstacle made of a triangle mesh ([obstacle.NAME], docs/guide.md
-// "Obstacles"): the file's points p become R (S p) + translate, S the
-// per-axis scale, R the rotation about x, then y, then z (fixed axes).
+// An obstacle made of a triangle mesh ([obstacle.NAME], docs/guide.md
+// "Obstacles"): the file's points p (turned z-up first when `up` is y) become
+// R (S p) + translate, S the per-axis scale, R the rotation about x, then y,
+// then z (fixed axes). With a motion, that placement is then turned by the
+// motion's rotation about `pivot` and moved by its translation.
 struct ObstacleParams {
   std::string mesh;          // OBJ file, relative to the scene file's folder
+  UpAxis up = UpAxis::Z;     // the file's up axis
   Vec3d translate{0, 0, 0};  // m
   Vec3d rotate{0, 0, 0};     // degrees about x, y, z, applied in that order
   Vec3d scale{1, 1, 1};      // per axis (the same three: uniform)
   double thickness = 0;      // open meshes: a shell this thick about the surface, m
   bool contact = false;      // the contact surface (with contact.surface = "obstacle")
+  Motion motion;
+  Vec3d pivot{0, 0, 0};  // the point the motion turns about, in the file's coordinates
 };
 
 struct Params {
@@ -103,6 +141,16 @@ struct Params {
     Vec3d center{0, 0, 0};     // centre of the cloth at t = 0, m
     Orientation orientation = Orientation::Horizontal;
     double tilt = 0;              // then turned about the x axis, degrees
+    // A mesh placed as obstacles are (instead of center, orientation, tilt):
+    // the file's points, turned z-up when `up` is y, become R (S p) + translate.
+    UpAxis up = UpAxis::Z;
+    Vec3d translate{0, 0, 0};  // m
+    Vec3d rotate{0, 0, 0};     // degrees about x, then y, then z
+    Vec3d scale{1, 1, 1};      // per axis, times mesh_scale
+    bool placed() const {      // by these keys rather than by center
+      return up != UpAxis::Z || translate != Vec3d{0, 0, 0} || rotate != Vec3d{0, 0, 0} ||
+             scale != Vec3d{1, 1, 1};
+    }
     double humidity = 0.0;        // water saturation by weight ω, 0..1
     double areal_density = 0.12;  // dry ρ_A, kg/m²
     double water_ratio = 1.0;     // water held at ω = 1 per unit dry mass r_w
@@ -162,6 +210,7 @@ struct Params {
     bool enabled = false;
     Vec3d center{0, 0, 0.1};
     double radius = 0.1;
+    Motion motion;  // about its centre
   } ball;
 
   struct Contact {

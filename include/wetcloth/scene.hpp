@@ -17,7 +17,10 @@ struct SceneError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-using ParamValue = std::variant<bool, long long, double, std::string, Vec2i, Vec2d, Vec3d>;
+// A list of numbers: a motion's keyframes, 7 numbers each (time, translate,
+// rotate), or a handle's particle indices (ParamDef::list says which).
+using NumberList = std::vector<double>;
+using ParamValue = std::variant<bool, long long, double, std::string, Vec2i, Vec2d, Vec3d, NumberList>;
 
 // One scene parameter. Keys under a handle read `handle.*.KEY`.
 struct ParamDef {
@@ -28,6 +31,11 @@ struct ParamDef {
   std::vector<std::string> choices;  // allowed strings
   ParamValue default_value;          // an optional number unset: NaN
   bool optional = false;             // a number that may be left unset (get gives NaN)
+  // What a NumberList holds: keyframes [[t, [x, y, z], [rx, ry, rz]], ...]
+  // (flattened, 7 numbers a key), or particle indices [i, ...], which may
+  // instead be a string: a file of indices.
+  enum class List { None, Keyframes, Indices };
+  List list = List::None;
   std::function<ParamValue(const Params&, const std::string& handle)> get;
   std::function<void(Params&, const std::string& handle, const ParamValue&)> set;
 
@@ -38,6 +46,8 @@ struct ParamDef {
 
 const std::vector<ParamDef>& param_defs();
 std::string format_value(const ParamValue& v);
+// The value as the scene file writes it: keyframes as nested arrays.
+std::string format_value(const ParamDef& d, const ParamValue& v);
 
 struct BuiltinScene {
   std::string name, description, text;

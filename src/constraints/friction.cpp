@@ -10,10 +10,13 @@ namespace wetcloth::detail {
 namespace {
 
 // Eq. 14 on particle i, given its surface normal n and load (the loop over
-// the contact surface below does the same arithmetic in columns).
-void slow_down(const Model& m, State& s, int i, const Vec3& n, double load, double mu, double dt) {
+// the contact surface below does the same arithmetic in columns), on its
+// velocity relative to a moving surface's `surface` (null: one standing still).
+void slow_down(const Model& m, State& s, int i, const Vec3& n, double load, double mu, double dt,
+               const Vec3* surface = nullptr) {
   if (load <= 0) return;
-  const Vec3 vt = s.v[i] - s.v[i].dot(n) * n;
+  const Vec3 v = surface ? Vec3(s.v[i] - *surface) : Vec3(s.v[i]);
+  const Vec3 vt = v - v.dot(n) * n;
   const double speed = vt.norm();
   if (speed == 0) return;
   const double dv = mu * load * dt * m.inv_mass[i];
@@ -37,6 +40,19 @@ void apply_friction(const Model& m, State& s, const Workspace& w,
   const double mu = m.params.friction.mu;
   if (mu == 0) return;
   const bool with_load = m.params.friction.normal == FrictionNormal::Contact;
+  // A moving contact surface (docs/model.md section 3): eq. 14 on each
+  // particle's velocity relative to the surface where it is. A particle
+  // held by friction then rides along with it.
+  if (const RigidPose* pose = pose_of(w.surfaces, m.contact_code())) {
+    for_each_particle(m, [&](int i) {
+      if (!s.contact[i] || m.driven[i]) return;
+      const Vec3 n = w.surface_normal[i];
+      const double pressing = -(w.force[i].dot(n) + w.adhesion[i]);
+      const double load = w.adhesion[i] + (with_load && pressing > 0 ? pressing : 0.0);
+      const Vec3 surface = pose->velocity_at(s.x[i]);
+      slow_down(m, s, i, n, load, mu, dt, &surface);
+    });
+  } else {
   // On the contact surface, slow_down's arithmetic without a branch (a factor
   // of zero where it does not apply), over columns: a loop that vectorises.
   // w.force holds the step's forces, adhesion included (it is -adhesion·n_s).
@@ -63,13 +79,16 @@ void apply_friction(const Model& m, State& s, const Workspace& w,
       }
     });
   });
+  }
   // Off the contact surface, a particle pushed out of another obstacle this
   // step: its load is the part of the forces that presses it in.
   if (!with_load) return;
   for_each_particle(m, [&](int i) {
     if (m.driven[i] || s.contact[i] || touched[i] == 0) return;
-    const Vec3 n = query_code(m, touched[i], s.x[i]).normal;
-    slow_down(m, s, i, n, std::max(0.0, -w.force[i].dot(n)), mu, dt);
+    const Vec3 n = query_code(m, w.surfaces, touched[i], s.x[i]).normal;
+    const Vec3 surface = surface_velocity(w.surfaces, touched[i], s.x[i]);
+    slow_down(m, s, i, n, std::max(0.0, -w.force[i].dot(n)), mu, dt,
+              pose_of(w.surfaces, touched[i]) ? &surface : nullptr);
   });
 }
 

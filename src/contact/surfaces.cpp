@@ -33,6 +33,18 @@ void collide_with_table(const Model& m, State& s, std::uint8_t* touched) {
 
 }  // namespace
 
+void place_surfaces(const Model& m, Workspace& w, double t) {
+  SurfacePoses& poses = w.surfaces;
+  poses.time = t;
+  poses.ball = m.params.ball.enabled ? ball_pose(m.params, t) : RigidPose{};
+  poses.any = poses.ball.moving;
+  poses.obstacles.resize(m.obstacles.size());
+  for (std::size_t k = 0; k < m.obstacles.size(); ++k) {
+    poses.obstacles[k] = obstacle_pose(m.params, m.obstacles[k]->name, t);
+    poses.any = poses.any || poses.obstacles[k].moving;
+  }
+}
+
 void collide(const Model& m, State& s, std::vector<std::uint8_t>* touched,
              const std::vector<int>* only, Workspace* w) {
   const Params& p = m.params;
@@ -46,10 +58,20 @@ void collide(const Model& m, State& s, std::vector<std::uint8_t>* touched,
     w->mesh_cache.resize(m.obstacles.size());
     for (MeshQueryCache& c : w->mesh_cache) c.prepare(m.n);
   }
+  // Where the surfaces are now (a workspace placed them); none moves without one.
+  static const SurfacePoses still;
+  const SurfacePoses& poses = w ? w->surfaces : still;
   auto push_out = [&](int i, double distance, const Vec3& normal, int code) {
     sub(s.x[i], distance * normal);
-    const double vn = s.v[i].dot(normal);
-    if (vn < 0) sub(s.v[i], vn * normal);
+    // The inward velocity relative to the surface is removed: a moving
+    // surface carries the particle along its normal (docs/model.md section 3).
+    if (const RigidPose* pose = pose_of(poses, code)) {
+      const double vn = (s.v[i] - pose->velocity_at(s.x[i])).dot(normal);
+      if (vn < 0) sub(s.v[i], vn * normal);
+    } else {
+      const double vn = s.v[i].dot(normal);
+      if (vn < 0) sub(s.v[i], vn * normal);
+    }
     if (touched) (*touched)[i] = static_cast<std::uint8_t>(code);
   };
   auto one = [&](int i) {
@@ -57,13 +79,13 @@ void collide(const Model& m, State& s, std::vector<std::uint8_t>* touched,
     if (m.driven[i]) return;
     for (int o = 0; o < 2; ++o) {
       if (!enabled[o]) continue;
-      const SurfaceHit h = query_surface(p, kinds[o], s.x[i]);
+      const SurfaceHit h = query_surface(p, poses, kinds[o], s.x[i]);
       if (h.distance >= 0) continue;
       push_out(i, h.distance, h.normal, static_cast<int>(kinds[o]));
     }
     for (int k = 0; k < meshes; ++k) {
-      const MeshObstacle::Hit h =
-          query_mesh(*m.obstacles[k], s.x[i], 0.0, w ? &w->mesh_cache[k] : nullptr, i);
+      const MeshObstacle::Hit h = query_mesh(*m.obstacles[k], pose_of(poses, kMeshCode + k), s.x[i],
+                                             0.0, w ? &w->mesh_cache[k] : nullptr, i);
       if (h.distance >= 0) continue;
       push_out(i, h.distance, h.normal, kMeshCode + k);
     }
@@ -80,10 +102,12 @@ void collide_with_meshes(const Model& m, State& s, Workspace& w) {
   for_each_particle(m, [&](int i) {
     if (m.driven[i]) return;
     for (std::size_t k = 0; k < m.obstacles.size(); ++k) {
-      const MeshObstacle::Hit h = query_mesh(*m.obstacles[k], s.x[i], 0.0, &w.mesh_cache[k], i);
+      const RigidPose* pose = pose_of(w.surfaces, kMeshCode + static_cast<int>(k));
+      const MeshObstacle::Hit h = query_mesh(*m.obstacles[k], pose, s.x[i], 0.0, &w.mesh_cache[k], i);
       if (h.distance >= 0) continue;
       sub(s.x[i], h.distance * h.normal);
-      const double vn = s.v[i].dot(h.normal);
+      const Vec3 v = pose ? Vec3(s.v[i] - pose->velocity_at(s.x[i])) : Vec3(s.v[i]);
+      const double vn = v.dot(h.normal);
       if (vn < 0) sub(s.v[i], vn * h.normal);
     }
   });
@@ -129,9 +153,10 @@ void update_contact(const Model& m, State& s, Workspace& w) {
     if (kind == SurfaceKind::Mesh) {  // within the air's band: beyond it nothing needs more
       const MeshObstacle& o = *m.obstacles[m.contact_obstacle];
       MeshQueryCache* cache = &w.mesh_cache[m.contact_obstacle];
+      const RigidPose* pose = pose_of(w.surfaces, m.contact_code());
       const double reach = std::max(p.air.band, h_th);
       for (int i = begin; i < end; ++i) {
-        const MeshObstacle::Hit h = query_mesh(o, s.x[i], reach, cache, i);
+        const MeshObstacle::Hit h = query_mesh(o, pose, s.x[i], reach, cache, i);
         distance[i] = h.distance;
         nx[i] = h.normal.x();
         ny[i] = h.normal.y();
@@ -140,8 +165,8 @@ void update_contact(const Model& m, State& s, Workspace& w) {
       }
       return;
     }
-    for (int i = begin; i < end; ++i) {
-      const SurfaceHit h = query_surface(p, kind, s.x[i]);
+    for (int i = begin; i < end; ++i) {  // the ball, where it is now
+      const SurfaceHit h = query_surface(p, w.surfaces, kind, s.x[i]);
       distance[i] = h.distance;
       nx[i] = h.normal.x();
       ny[i] = h.normal.y();

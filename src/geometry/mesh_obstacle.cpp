@@ -15,6 +15,7 @@
 
 #include "detail.hpp"
 #include "geometry/mesh_io.hpp"
+#include "wetcloth/motion.hpp"
 #include "wetcloth/scene.hpp"
 
 namespace wetcloth {
@@ -37,15 +38,6 @@ namespace {
 
 [[noreturn]] void fail(const std::string& key, const std::string& what) {
   throw SceneError(key + ": " + what);
-}
-
-// R (S p) + t, R about x, then y, then z.
-Eigen::Matrix3d rotation(const Vec3d& degrees) {
-  const double k = std::numbers::pi / 180;
-  return (Eigen::AngleAxisd(degrees[2] * k, Vec3::UnitZ()) *
-          Eigen::AngleAxisd(degrees[1] * k, Vec3::UnitY()) *
-          Eigen::AngleAxisd(degrees[0] * k, Vec3::UnitX()))
-      .toRotationMatrix();
 }
 
 // The point of triangle (a, b, c) closest to x, after Ericson (Real-Time
@@ -217,9 +209,8 @@ std::shared_ptr<const MeshObstacle> build_mesh_obstacle(const Params& p, const s
   auto o = std::make_shared<MeshObstacle>();
   o->name = name;
   o->source = mesh.source;
-  const Eigen::Matrix3d R = rotation(op.rotate);
-  const Vec3 S = to_vec(op.scale), T = to_vec(op.translate);
-  for (const auto& q : mesh.position) o->points.push_back(R * Vec3(to_vec(q).cwiseProduct(S)) + T);
+  // Where its keys place it: a moving obstacle's body frame (wetcloth/motion.hpp).
+  for (const auto& q : mesh.position) o->points.push_back(place_obstacle_point(op, to_vec(q)));
   o->triangles = mesh.triangles;
   check_orientation(*o, op, name, key, mesh.source);
   auto g = std::make_shared<MeshObstacle::Geometry>();
@@ -243,13 +234,23 @@ std::shared_ptr<const MeshObstacle> build_mesh_obstacle(const Params& p, const s
 void check_obstacle_meshes(const Params& p, const std::string& source) {
   // Where the cloth starts: the grid's points, or a mesh cloth's vertices
   // (check_cloth_mesh has read its file).
-  std::vector<Vec3> start;
+  std::vector<Vec3> start, turned;  // turned: the mesh cloth read with the other up axis
   if (!p.obstacles.empty() && p.cloth.mesh.empty()) {
     for (int j = 0; j < p.cloth.resolution[1]; ++j)
       for (int i = 0; i < p.cloth.resolution[0]; ++i)
         start.push_back(cloth_start_position(p, i, j));
   } else if (!p.obstacles.empty()) {
-    start = mesh_cloth_positions(p, load_scene_mesh(p, "cloth.mesh", p.cloth.mesh));
+    const TriangleMesh mesh = load_scene_mesh(p, "cloth.mesh", p.cloth.mesh);
+    start = mesh_cloth_positions(p, mesh);
+    Params other = p;
+    other.cloth.up = p.cloth.up == UpAxis::Z ? UpAxis::Y : UpAxis::Z;
+    turned = mesh_cloth_positions(other, mesh);
+    if (!p.cloth.placed()) {  // placed by its bounding box's centre: that one's too
+      Vec3 lo = turned.front(), hi = lo;
+      for (const Vec3& x : turned) lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
+      const Vec3 shift = to_vec(p.cloth.center) - 0.5 * (lo + hi);
+      for (Vec3& x : turned) x += shift;
+    }
   }
   for (const auto& [name, op] : p.obstacles) {
     std::shared_ptr<const MeshObstacle> o;
@@ -260,20 +261,37 @@ void check_obstacle_meshes(const Params& p, const std::string& source) {
       if (what.rfind("Params: ", 0) == 0) what.erase(0, 8);
       throw SceneError(source + ": " + what);
     }
-    // A cloth that starts inside the obstacle would be flung out at the first step.
-    double deepest = 0;
-    for (const Vec3& x : start) {
-      if ((x.array() < o->lo.array() - o->half_thickness).any() ||
-          (x.array() > o->hi.array() + o->half_thickness).any())
-        continue;  // outside its box
-      deepest = std::min(deepest, o->query(x).distance);
-    }
+    // A cloth that starts inside the obstacle would be flung out at the first
+    // step: where a moving one is at t = 0, in its body frame.
+    const RigidPose pose = obstacle_pose(p, name, 0.0);
+    const auto deepest_of = [&](const std::vector<Vec3>& points) {
+      double deepest = 0;
+      for (const Vec3& x_world : points) {
+        const Vec3 x = pose.to_body(x_world);
+        if ((x.array() < o->lo.array() - o->half_thickness).any() ||
+            (x.array() > o->hi.array() + o->half_thickness).any())
+          continue;  // outside its box
+        deepest = std::min(deepest, o->query(x).distance);
+      }
+      return deepest;
+    };
+    const double deepest = deepest_of(start);
     if (deepest < -1e-9) {
       char mm[32];
       std::snprintf(mm, sizeof mm, "%.3g", -deepest * 1000);
+      // A garment from a y-up tool (Blender) lies on its side in a z-up
+      // world: say so when the other up axis would have kept it outside.
+      std::string axis;
+      if (!turned.empty() && deepest_of(turned) >= -1e-9) {
+        const char* other = p.cloth.up == UpAxis::Z ? "y" : "z";
+        axis = std::string(". The file seems to be ") + other + "-up: with cloth.up = \"" + other +
+               "\" the cloth would start outside it";
+      }
       throw SceneError(source + ": cloth.center: the cloth starts " + std::string(mm) +
-                       " mm inside obstacle." + name + " (cloth.center, cloth.tilt, obstacle." +
-                       name + ".translate)");
+                       " mm inside obstacle." + name + " (cloth.center, cloth.tilt, cloth.up, " +
+                       "cloth.translate, obstacle." + name + ".translate" +
+                       (p.obstacles.at(name).motion.moves() ? ", obstacle." + name + ".motion" : "") +
+                       ")" + axis);
     }
   }
 }

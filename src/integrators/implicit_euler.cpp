@@ -485,6 +485,9 @@ void invert_diagonal_blocks(const Model& m, const State& s, Workspace& w) {
 void set_up_solve(const Model& m, const State& s, Workspace& w, double h) {
   const Columns x = columns(m, w, kX), r = columns(m, w, kR), q = columns(m, w, kQ);
   const bool guess = !s.acceleration.empty();
+  // Held with no normal velocity: not where a moving surface has one (collide
+  // then carries the particle, docs/model.md section 3).
+  const RigidPose* moving = pose_of(w.surfaces, m.contact_code());
   for_each_particle(m, [&](int a) {
     const Vec3& v = s.v[a];
     Vec3 b = v, start = v;  // fixed: b = x, no change
@@ -493,7 +496,8 @@ void set_up_solve(const Model& m, const State& s, Workspace& w, double h) {
       if (guess) start += h * s.acceleration[a];
     }
     Vec3 held = Vec3::Zero();
-    if (!fixed(m, s, a) && w.distance[a] <= kOnSurface && w.force[a].dot(w.surface_normal[a]) < 0)
+    if (!fixed(m, s, a) && w.distance[a] <= kOnSurface && w.force[a].dot(w.surface_normal[a]) < 0 &&
+        (!moving || moving->velocity_at(s.x[a]).dot(w.surface_normal[a]) == 0))
       held = w.surface_normal[a];
     for (int k = 0; k < 3; ++k) {
       r.c[k][a] = b[k];

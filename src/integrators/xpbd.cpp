@@ -360,6 +360,18 @@ void collide_with_friction(const Model& m, State& s, Workspace& w,
     return on_surface && (touched[i] == 0 || touched[i] == surface) ? 2.0 : 1.0;
   };
   const double load_scale = with_load ? inv_h * inv_h : 0.0, dv_scale = mu * h;
+  // On a moving surface eq. 14 acts on the velocity relative to it
+  // (docs/model.md section 3): the surface's velocity where each particle
+  // is, of the surface that pushed it or else the contact surface.
+  const bool moving = w.surfaces.any;
+  if (moving) {
+    w.surface_velocity.assign(s.x.size(), Vec3::Zero());
+    for_each_particle(m, [&](int i) {
+      const int code = touched[i] != 0 ? touched[i] : surface;
+      if (pose_of(w.surfaces, code)) put(w.surface_velocity[i], surface_velocity(w.surfaces, code, s.x[i]));
+    });
+  }
+  const auto clamp_all = [&]<bool relative>() {
   for_each_particle_block(m, [&](int first, int end) {
     double* __restrict xx = s.x.column(0), * __restrict xy = s.x.column(1), * __restrict xz = s.x.column(2);
     double* __restrict vx = s.v.column(0), * __restrict vy = s.v.column(1), * __restrict vz = s.v.column(2);
@@ -371,6 +383,9 @@ void collide_with_friction(const Model& m, State& s, Workspace& w,
                              *__restrict nz = w.surface_normal.column(2);
     const double *__restrict adhesion = w.adhesion.data(), *__restrict mass = m.mass.data(),
                              *__restrict inv_mass = m.inv_mass.data();
+    const double *svx = relative ? w.surface_velocity.column(0) : nullptr,
+                 *svy = relative ? w.surface_velocity.column(1) : nullptr,
+                 *svz = relative ? w.surface_velocity.column(2) : nullptr;
     for_each_chunk(first, end, kind, [&](int i0, int count, const double* how) {
 #pragma omp simd
       for (int k = 0; k < count; ++k) {
@@ -386,11 +401,24 @@ void collide_with_friction(const Model& m, State& s, Workspace& w,
         const double pressing = mass[i] * pushed * load_scale;
         const double load = ad > pressing ? ad : pressing;
         const double dv = dv_scale * load * inv_mass[i];
-        coulomb_clamp(vx[i], vy[i], vz[i], xx[i], xy[i], xz[i], ux, uy, uz, dv,
-                      (how[k] > 0.5) & (load > 0), h);
+        if constexpr (relative) {
+          const double sx = svx[i], sy = svy[i], sz = svz[i];
+          double rx = vx[i] - sx, ry = vy[i] - sy, rz = vz[i] - sz;
+          coulomb_clamp(rx, ry, rz, xx[i], xy[i], xz[i], ux, uy, uz, dv,
+                        (how[k] > 0.5) & (load > 0), h);
+          vx[i] = rx + sx, vy[i] = ry + sy, vz[i] = rz + sz;
+        } else {
+          coulomb_clamp(vx[i], vy[i], vz[i], xx[i], xy[i], xz[i], ux, uy, uz, dv,
+                        (how[k] > 0.5) & (load > 0), h);
+        }
       }
     });
   });
+  };
+  if (moving)
+    clamp_all.template operator()<true>();
+  else
+    clamp_all.template operator()<false>();
   // Friction moved particles along the surface: on a curved mesh that chord
   // dips inside (on the ball it is left as it was, its results unchanged).
   if (!m.obstacles.empty()) collide_with_meshes(m, s, w);
@@ -463,6 +491,7 @@ void xpbd_step(const Model& m, State& s, Workspace& w) {
     add_external_velocity(m, s, w, h);
     move_from_substep_start(m, s, w, h);  // the air term implicit, then x += h v
     s.time = (static_cast<double>(s.steps) + static_cast<double>(k + 1) / substeps) * dt;
+    if (w.surfaces.any) place_surfaces(m, w, s.time);  // moving surfaces at the substep's end
     apply_handle_constraints(m, s, w);
     xpbd_begin_substep(m, s, w);
     project_springs(m, s, w, h);

@@ -8,14 +8,17 @@
 // The grid keeps its own kernels, which are faster; a mesh cloth runs on one
 // thread, so the thread count never changes its result.
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <map>
 #include <numbers>
+#include <sstream>
 #include <tuple>
 
 #include "detail.hpp"
 #include "geometry/mesh_io.hpp"
+#include "wetcloth/motion.hpp"
 #include "wetcloth/scene.hpp"
 
 namespace wetcloth {
@@ -71,6 +74,19 @@ void lists(int n, const std::vector<std::array<int, 2>>& pairs, std::vector<int>
 }  // namespace
 
 std::vector<Vec3> mesh_cloth_positions(const Params& p, const TriangleMesh& mesh) {
+  if (p.cloth.placed()) {
+    // As obstacles are placed, from the file's own origin (a garment made
+    // around a body keeps its place on it): up, scale, rotate, translate.
+    ObstacleParams as;
+    as.up = p.cloth.up;
+    as.translate = p.cloth.translate;
+    as.rotate = p.cloth.rotate;
+    for (int c = 0; c < 3; ++c) as.scale[c] = p.cloth.scale[c] * p.cloth.mesh_scale;
+    std::vector<Vec3> x(mesh.position.size());
+    for (std::size_t k = 0; k < x.size(); ++k)
+      x[k] = place_obstacle_point(as, at(mesh, static_cast<int>(k)));
+    return x;
+  }
   Vec3 lo = Vec3::Constant(detail::kInf), hi = Vec3::Constant(-detail::kInf);
   for (std::size_t k = 0; k < mesh.position.size(); ++k) {
     lo = lo.cwiseMin(at(mesh, static_cast<int>(k)));
@@ -440,7 +456,10 @@ void check_cloth_mesh(const Params& p, const std::string& source) {
                                        std::tuple{SurfaceKind::Ball, "ball", p.ball.enabled}}) {
     if (!on) continue;
     double deepest = 0;
-    for (const Vec3& q : x) deepest = std::min(deepest, detail::query_surface(p, kind, q).distance);
+    SurfacePoses at_start;  // a moving ball where it is at t = 0
+    if (p.ball.enabled) at_start.ball = ball_pose(p, 0.0);
+    for (const Vec3& q : x)
+      deepest = std::min(deepest, detail::query_surface(p, at_start, kind, q).distance);
     if (deepest < -1e-9) {
       char mm[32];
       std::snprintf(mm, sizeof mm, "%.3g", -deepest * 1000);
@@ -448,6 +467,67 @@ void check_cloth_mesh(const Params& p, const std::string& source) {
           source + ": cloth.center: the cloth of cloth.mesh = \"" + p.cloth.mesh + "\" starts " +
           mm + " mm inside the " + name + " (cloth.center, cloth.mesh_scale, cloth.tilt, " +
           (kind == SurfaceKind::Table ? "table.height" : "ball.center, ball.radius") + ")");
+    }
+  }
+}
+
+std::vector<int> handle_vertex_indices(const Params& p, const std::string& name, int n) {
+  const VertexList& list = p.handles.at(name).vertices;
+  const std::string key = "handle." + name + ".vertices";
+  const auto out_of_range = [&](long long i) {
+    return "index " + std::to_string(i) + " is out of range: the cloth has " + std::to_string(n) +
+           " particles (0 to " + std::to_string(n - 1) + ")";
+  };
+  std::vector<int> picked;
+  if (list.file.empty()) {
+    for (const long long i : list.indices) {
+      if (i < 0 || i >= n) throw SceneError("Params: " + key + ": " + out_of_range(i));
+      picked.push_back(static_cast<int>(i));
+    }
+  } else {
+    // Whitespace-separated 0-based indices; # starts a comment. An error
+    // names the file and the line.
+    const std::string text = scene_file_text(p, key, list.file);
+    const std::string source =
+        p.scene_dir == "builtin:" ? "scenes/" + list.file
+                                  : resolve_scene_path(p, key, list.file).string();
+    std::istringstream lines(text);
+    std::string line;
+    for (int number = 1; std::getline(lines, line); ++number) {
+      std::istringstream words(line.substr(0, line.find('#')));
+      std::string word;
+      while (words >> word) {
+        const auto where = source + ":" + std::to_string(number) + ": " + key + ": ";
+        long long i = -1;
+        const auto [end, error] = std::from_chars(word.data(), word.data() + word.size(), i);
+        if (error != std::errc() || end != word.data() + word.size() || i < 0)
+          throw SceneError(where + "'" + word + "' is not a particle index (an integer from 0)");
+        if (i >= n) throw SceneError(where + out_of_range(i));
+        picked.push_back(static_cast<int>(i));
+      }
+    }
+    if (picked.empty()) throw SceneError(source + ": " + key + ": the file names no particle");
+  }
+  std::sort(picked.begin(), picked.end());
+  picked.erase(std::unique(picked.begin(), picked.end()), picked.end());
+  return picked;
+}
+
+void check_handle_vertices(const Params& p, const std::string& source) {
+  int n = static_cast<int>(p.cloth.resolution[0] * p.cloth.resolution[1]);
+  bool any = false;
+  for (const auto& [name, h] : p.handles) any = any || !h.vertices.empty();
+  if (!any) return;
+  if (!p.cloth.mesh.empty())
+    n = static_cast<int>(load_scene_mesh(p, "cloth.mesh", p.cloth.mesh).position.size());
+  for (const auto& [name, h] : p.handles) {
+    if (h.vertices.empty()) continue;
+    try {
+      handle_vertex_indices(p, name, n);
+    } catch (const SceneError& e) {
+      // The file's faults name it; the scene's own keys the scene file.
+      const std::string what = e.what(), lead = "Params: ";
+      throw SceneError(what.rfind(lead, 0) == 0 ? source + ": " + what.substr(lead.size()) : what);
     }
   }
 }

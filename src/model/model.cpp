@@ -246,7 +246,9 @@ Model build_model(const Params& p) {
     Handle h;
     h.name = name;
     h.type = hp.type;
-    if (m.grid) {
+    if (!hp.vertices.empty()) {
+      h.particles = handle_vertex_indices(p, name, m.n);  // painted: by index
+    } else if (m.grid) {
       // The grid rectangle from `at` to `at + span`, widened by the patch.
       const int r = static_cast<int>(hp.patch);
       // (std::minmax of two temporaries would return dangling references; of a

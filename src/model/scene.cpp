@@ -26,6 +26,7 @@
 
 #include "detail.hpp"
 #include "geometry/mesh_obstacle.hpp"
+#include "wetcloth/motion.hpp"
 
 namespace wetcloth {
 
@@ -134,6 +135,63 @@ ParamDef optional_field(std::string key, std::string unit, double lo, double hi,
   return d;
 }
 
+// A motion's keyframes as a flat list, 7 numbers a key (time, translate, rotate).
+NumberList flatten(const Motion& m) {
+  NumberList v;
+  for (const Keyframe& k : m.keys) {
+    v.push_back(k.time);
+    v.insert(v.end(), k.translate.begin(), k.translate.end());
+    v.insert(v.end(), k.rotate.begin(), k.rotate.end());
+  }
+  return v;
+}
+std::vector<Keyframe> unflatten(const NumberList& v) {
+  std::vector<Keyframe> keys(v.size() / 7);
+  for (std::size_t k = 0; k < keys.size(); ++k) {
+    const double* a = v.data() + 7 * k;
+    keys[k] = {a[0], {a[1], a[2], a[3]}, {a[4], a[5], a[6]}};
+  }
+  return keys;
+}
+
+// A moving body's keyframes (ball.motion, obstacle.*.motion): motion(p, name)
+// is its Motion, made where it is new.
+template <class F>
+ParamDef motion_field(std::string key, std::string meaning, F motion) {
+  ParamDef d = describe(std::move(key), "s, m, °", 1, 0, std::move(meaning));
+  d.list = ParamDef::List::Keyframes;
+  d.default_value = NumberList{};
+  d.get = [motion](const Params& p, const std::string& name) -> ParamValue {
+    return flatten(motion(const_cast<Params&>(p), name));
+  };
+  d.set = [motion](Params& p, const std::string& name, const ParamValue& v) {
+    motion(p, name).keys = unflatten(std::get<NumberList>(v));
+  };
+  return d;
+}
+
+// handle.*.vertices: a list of particle indices, or a file of them.
+ParamDef vertices_field(std::string meaning) {
+  ParamDef d = describe("handle.*.vertices", "", 1, 0, std::move(meaning));
+  d.list = ParamDef::List::Indices;
+  d.default_value = NumberList{};
+  d.get = [](const Params& p, const std::string& name) -> ParamValue {
+    const VertexList& v = p.handles.at(name).vertices;
+    if (!v.file.empty()) return v.file;
+    return NumberList(v.indices.begin(), v.indices.end());
+  };
+  d.set = [](Params& p, const std::string& name, const ParamValue& v) {
+    VertexList& list = p.handles[name].vertices;
+    list = VertexList{};
+    if (const auto* file = std::get_if<std::string>(&v)) {
+      list.file = *file;
+      return;
+    }
+    for (const double i : std::get<NumberList>(v)) list.indices.push_back(std::llround(i));
+  };
+  return d;
+}
+
 #define P(path) \
   [](Params & p) -> auto& { return p.path; }
 #define H(path) \
@@ -177,6 +235,22 @@ std::vector<ParamDef> cloth_defs() {
             "lands edge first (with air.model = \"exchange\" the wedge of air under it leaks "
             "only through the cloth and holds it up; \"vented\" lets it out at the sides)",
             P(cloth.tilt)),
+      field("cloth.up", "", 1, 0,
+            "cloth.mesh: the file's up axis; y (Blender's and most tools' OBJ export) turns it "
+            "z-up first. With cloth.up, cloth.translate, cloth.rotate or cloth.scale the mesh is "
+            "placed as obstacles are, from the file's own origin (not by cloth.center, "
+            "cloth.orientation and cloth.tilt): a garment made around a body keeps its place on it",
+            P(cloth.up)),
+      field("cloth.translate", "m", -kFar, kFar,
+            "cloth.mesh: its points p become R (S p) + translate, as obstacle.*.translate",
+            P(cloth.translate)),
+      field("cloth.rotate", "°", -360, 360,
+            "cloth.mesh: turns it about the x, then y, then z axis (fixed axes), as "
+            "obstacle.*.rotate",
+            P(cloth.rotate)),
+      field("cloth.scale", "1", 1e-6, 1e6,
+            "cloth.mesh: scales it along x, y, z (times cloth.mesh_scale) before turning it",
+            P(cloth.scale)),
       field("cloth.humidity", "1", 0, 1, "water saturation by weight ω = (w − w0)/(w100 − w0)",
             P(cloth.humidity)),
       field("cloth.areal_density", "kg/m²", 1e-6, 100, "dry areal density ρ_A",
@@ -260,9 +334,20 @@ std::vector<ParamDef> force_defs() {
             P(strain_limit.passes)),
       field("table.enabled", "", 0, 0, "the table: the plane z = table.height", P(table.enabled)),
       field("table.height", "m", -kFar, kFar, "height of the table", P(table.height)),
-      field("ball.enabled", "", 0, 0, "a fixed ball", P(ball.enabled)),
+      field("ball.enabled", "", 0, 0, "a ball (fixed, or moving by ball.motion)", P(ball.enabled)),
       field("ball.center", "m", -kFar, kFar, "centre of the ball", P(ball.center)),
       field("ball.radius", "m", 1e-4, 100, "radius of the ball", P(ball.radius)),
+      motion_field("ball.motion",
+                   "keyframes [[t, [x, y, z], [rx, ry, rz]], ...]: at time t (s) the ball is "
+                   "moved by [x, y, z] (m) from ball.center and turned by rx, ry, rz degrees "
+                   "about x, then y, then z through its centre (a rolling ball turns: its "
+                   "surface's velocity drives friction); times increasing; held before the first "
+                   "and after the last ([]: fixed)",
+                   [](Params& p, const std::string&) -> Motion& { return p.ball.motion; }),
+      field("ball.motion_interpolation", "", 1, 0,
+            "between keyframes: linear, or smooth (a cubic Hermite spline with Catmull-Rom "
+            "tangents, starting and stopping at rest)",
+            P(ball.motion.interpolation)),
       field("contact.surface", "", 1, 0, "the surface the cloth sticks to and traps air against",
             P(contact.surface)),
       field("contact.bridge_height", "m", 0, 1,
@@ -390,10 +475,19 @@ std::vector<ParamDef> named_defs() {
                    "time the handle starts acting (a pin or move handle leaves its particles free "
                    "until then, then holds or drives them from where they are)",
                    H(start)),
+      vertices_field(
+          "the handle's particles by index instead of at, span and patch: a list [i, j, ...] or a "
+          "file of whitespace-separated indices (relative to the scene file; # starts a "
+          "comment), 0-based: a grid's particle (i, j) is j nu + i, a mesh cloth's are its "
+          "file's vertices in order (a vertex group exported from Blender)"),
       obstacle_field("mesh", "", 1, 0,
-                     "[obstacle.NAME]: a fixed obstacle, an OBJ triangle mesh (path relative to "
-                     "the scene file, inside its folder)",
+                     "[obstacle.NAME]: an obstacle (fixed, or moving by obstacle.*.motion), an OBJ "
+                     "triangle mesh (path relative to the scene file, inside its folder)",
                      O(mesh)),
+      obstacle_field("up", "", 1, 0,
+                     "the file's up axis: y (Blender's OBJ export) turns it z-up before scale, "
+                     "rotate and translate",
+                     O(up)),
       obstacle_field("translate", "m", -kFar, kFar,
                      "moves the mesh: its points p become R (S p) + translate", O(translate)),
       obstacle_field("rotate", "°", -360, 360,
@@ -411,6 +505,23 @@ std::vector<ParamDef> named_defs() {
                      "this obstacle is the contact surface (with contact.surface = "
                      "\"obstacle\"): adhesion, friction's wet load and trapped air act on it",
                      O(contact)),
+      motion_field("obstacle.*.motion",
+                   "keyframes [[t, [x, y, z], [rx, ry, rz]], ...]: at time t (s) the placed mesh "
+                   "is turned by rx, ry, rz degrees (about x, then y, then z) about its pivot and "
+                   "moved by [x, y, z] (m); times increasing; held before the first and after "
+                   "the last ([]: fixed). Contact, friction and the trapped air follow its "
+                   "surface and its velocity",
+                   [](Params& p, const std::string& name) -> Motion& {
+                     return p.obstacles[name].motion;
+                   }),
+      obstacle_field("motion_interpolation", "", 1, 0,
+                     "between keyframes: linear, or smooth (a cubic Hermite spline with "
+                     "Catmull-Rom tangents, starting and stopping at rest)",
+                     O(motion.interpolation)),
+      obstacle_field("pivot", "file units", -kFar, kFar,
+                     "the point the motion turns the mesh about, in the file's coordinates "
+                     "(placed with the mesh): a shoulder, a hinge",
+                     O(pivot)),
   };
 }
 
@@ -713,6 +824,72 @@ std::string not_a_choice(const ParamDef& d, const std::string& s) {
          (best.empty() ? std::string() : " (did you mean " + best + "?)");
 }
 
+// A number within [lo, hi], for the parts of a list.
+double number_in(const toml::node& n, double lo, double hi, const std::string& key,
+                 const std::string& what) {
+  double v;
+  if (auto i = n.as_integer())
+    v = static_cast<double>(i->get());
+  else if (auto f = n.as_floating_point())
+    v = f->get();
+  else
+    fail(n, key, what + ": expected a number");
+  if (!std::isfinite(v)) fail(n, key, what + ": value is not finite");
+  if (v < lo || v > hi)
+    fail(n, key, what + ": value " + shortest(v) + " is out of range [" + shortest(lo) + ", " +
+                     shortest(hi) + "]");
+  return v;
+}
+
+// Keyframes [[t, [x, y, z], [rx, ry, rz]], ...], times increasing: flattened.
+// An error names the line of the keyframe at fault.
+NumberList keyframes(const toml::node& n, const std::string& key) {
+  const char* form = "[[t, [x, y, z], [rx, ry, rz]], ...] (seconds, metres, degrees)";
+  const auto* a = n.as_array();
+  if (!a) fail(n, key, std::string("expected keyframes ") + form);
+  NumberList out;
+  for (std::size_t i = 0; i < a->size(); ++i) {
+    const toml::node& e = *a->get(i);
+    const std::string what = "keyframe " + std::to_string(i + 1);
+    const auto* k = e.as_array();
+    if (!k || k->size() != 3 || !k->get(1)->is_array() || !k->get(2)->is_array() ||
+        k->get(1)->as_array()->size() != 3 || k->get(2)->as_array()->size() != 3)
+      fail(e, key, what + ": expected [t, [x, y, z], [rx, ry, rz]], as in " + form);
+    const double t = number_in(*k->get(0), 0, 1e6, key, what + "'s time");
+    if (i > 0 && !(t > out[out.size() - 7]))
+      fail(e, key,
+           what + "'s time " + shortest(t) + " s is not after keyframe " + std::to_string(i) +
+               "'s, " + shortest(out[out.size() - 7]) + " s: the times must increase");
+    out.push_back(t);
+    for (int c = 0; c < 3; ++c)
+      out.push_back(number_in(*k->get(1)->as_array()->get(c), -kFar, kFar, key,
+                              what + "'s translation"));
+    for (int c = 0; c < 3; ++c)
+      out.push_back(
+          number_in(*k->get(2)->as_array()->get(c), -1e6, 1e6, key, what + "'s rotation"));
+  }
+  return out;
+}
+
+// Particle indices [i, ...] (0-based integers), or a string: a file of them.
+ParamValue index_list(const toml::node& n, const std::string& key) {
+  if (const auto* file = n.as_string()) {
+    if (file->get().empty()) fail(n, key, "is empty: name a file of particle indices, or list them");
+    return file->get();
+  }
+  const auto* a = n.as_array();
+  if (!a) fail(n, key, "expected a list of particle indices [i, j, ...] (0-based) or a file name");
+  NumberList out;
+  for (std::size_t i = 0; i < a->size(); ++i) {
+    const auto* v = a->get(i)->as_integer();
+    if (!v || v->get() < 0 || v->get() > (1LL << 31))
+      fail(*a->get(i), key,
+           "entry " + std::to_string(i + 1) + ": a particle index is an integer from 0");
+    out.push_back(static_cast<double>(v->get()));
+  }
+  return out;
+}
+
 ParamValue convert(const toml::node& n, const ParamDef& d, const std::string& key) {
   return std::visit(
       [&](const auto& def) -> ParamValue {
@@ -736,8 +913,12 @@ ParamValue convert(const toml::node& n, const ParamDef& d, const std::string& ke
           return array_of<2, long long>(n, d, key);
         } else if constexpr (std::is_same_v<T, Vec2d>) {
           return array_of<2, double>(n, d, key);
-        } else {
+        } else if constexpr (std::is_same_v<T, Vec3d>) {
           return array_of<3, double>(n, d, key);
+        } else if (d.list == ParamDef::List::Indices) {
+          return index_list(n, key);
+        } else {
+          return keyframes(n, key);
         }
       },
       d.default_value);
@@ -987,12 +1168,14 @@ void check_cloth_start(const Params& p, const Complain& bad) {
                                        std::tuple{SurfaceKind::Ball, "ball", p.ball.enabled}}) {
     if (!on) continue;
     double deepest = 0;
+    SurfacePoses at_start;  // a moving ball where it is at t = 0
+    if (p.ball.enabled) at_start.ball = ball_pose(p, 0.0);
     // (A mesh cloth's: check_cloth_mesh, once its file is found.)
     if (p.cloth.mesh.empty())
       for (int j = 0; j < p.cloth.resolution[1]; ++j)
         for (int i = 0; i < p.cloth.resolution[0]; ++i) {
           const Vec3 x = cloth_start_position(p, i, j);
-          deepest = std::min(deepest, detail::query_surface(p, kind, x).distance);
+          deepest = std::min(deepest, detail::query_surface(p, at_start, kind, x).distance);
         }
     if (deepest < -1e-9) {
       char mm[32];
@@ -1034,7 +1217,58 @@ void check_handles(const Params& p, const Complain& bad) {
       bad(key + "max_travel", "applies to force and move handles only" + is);
     if (h.type != HandleType::Move && nonzero(h.velocity))
       bad(key + "velocity", "applies to move handles only" + is);
+    if (!h.vertices.empty() && (h.span[0] != 0 || h.span[1] != 0 || h.patch != 0))
+      bad(key + "vertices",
+          "names the handle's particles: span and patch place one by (u, v) instead; give "
+          "one or the other");
+    // A grid's particles are known here; a mesh cloth's once its file is read
+    // (check_handle_vertices), as are a file's indices.
+    if (p.cloth.mesh.empty()) {
+      const long long n = p.cloth.resolution[0] * p.cloth.resolution[1];
+      for (const long long i : h.vertices.indices)
+        if (i >= n)
+          bad(key + "vertices", "index " + std::to_string(i) + " is out of range: the cloth has " +
+                                    std::to_string(n) + " particles (0 to " +
+                                    std::to_string(n - 1) + ")");
+    }
   }
+}
+
+// Keyframes in time order (a scene file's are checked as they are read, with
+// their line; Params made in code here), each number finite.
+void check_motions(const Params& p, const Complain& bad) {
+  const auto check = [&](const Motion& m, const std::string& key) {
+    for (std::size_t k = 0; k < m.keys.size(); ++k) {
+      const Keyframe& f = m.keys[k];
+      bool finite = std::isfinite(f.time);
+      for (int c = 0; c < 3; ++c)
+        finite = finite && std::isfinite(f.translate[c]) && std::isfinite(f.rotate[c]);
+      if (!finite) bad(key, "keyframe " + std::to_string(k + 1) + " holds a value that is not finite");
+      if (k > 0 && !(f.time > m.keys[k - 1].time))
+        bad(key, "keyframe " + std::to_string(k + 1) + "'s time " + shortest(f.time) +
+                     " s is not after keyframe " + std::to_string(k) + "'s, " +
+                     shortest(m.keys[k - 1].time) + " s: the times must increase");
+    }
+  };
+  check(p.ball.motion, "ball.motion");
+  if (p.ball.motion.moves() && !p.ball.enabled)
+    bad("ball.motion", "moves a ball that is not there (ball.enabled = false)");
+  for (const auto& [name, o] : p.obstacles) check(o.motion, "obstacle." + name + ".motion");
+}
+
+// A mesh cloth placed as obstacles are, or by its centre: not both.
+void check_cloth_placement(const Params& p, const Complain& bad) {
+  if (!p.cloth.placed()) return;
+  const char* keys = "cloth.up, cloth.translate, cloth.rotate and cloth.scale";
+  if (p.cloth.mesh.empty())
+    bad("cloth.translate", std::string(keys) +
+                               " place a cloth.mesh; the grid is placed by cloth.center, "
+                               "cloth.orientation and cloth.tilt");
+  if (p.cloth.center != Vec3d{0, 0, 0} || p.cloth.tilt != 0 ||
+      p.cloth.orientation != Orientation::Horizontal)
+    bad("cloth.center", std::string("places the mesh's bounding box (with cloth.orientation and "
+                                    "cloth.tilt), and ") +
+                            keys + " place the file's own origin: give one or the other");
 }
 
 void check_consistency(const Params& p, const std::string& source,
@@ -1069,6 +1303,8 @@ void check_consistency(const Params& p, const std::string& source,
     bad(p.springs.bending_k ? "springs.bending_k" : "springs.bending_damping",
         "sets Provot's bending springs, which material.bending = \"quadratic\" (the default) "
         "does not have: set material.bending = \"provot\", or material.bending_rigidity");
+  check_cloth_placement(p, bad);
+  check_motions(p, bad);
   check_cloth_start(p, bad);
   // Params made in code (validate) may step to any time they like.
   if (source != kInCode) check_run_timing(p, bad);
@@ -1092,7 +1328,7 @@ std::string read_file(const std::string& path) {
 }  // namespace
 
 std::string ParamDef::type_name() const {
-  return std::visit(
+  const std::string name = std::visit(
       [](const auto& v) -> std::string {
         using T = std::decay_t<decltype(v)>;
         if constexpr (std::is_same_v<T, bool>) return "bool";
@@ -1101,9 +1337,13 @@ std::string ParamDef::type_name() const {
         if constexpr (std::is_same_v<T, std::string>) return "string";
         if constexpr (std::is_same_v<T, Vec2i>) return "[int, int]";
         if constexpr (std::is_same_v<T, Vec2d>) return "[num, num]";
-        return "[x, y, z]";
+        if constexpr (std::is_same_v<T, Vec3d>) return "[x, y, z]";
+        return "";
       },
       default_value);
+  if (list == List::Keyframes) return "[[t, [x, y, z], [rx, ry, rz]], ...]";
+  if (list == List::Indices) return "[int, ...] or file";
+  return name;
 }
 
 std::string ParamDef::default_text() const {
@@ -1185,8 +1425,29 @@ std::string format_value(const ParamValue& v) {
           return "[" + shortest(x[0]) + ", " + shortest(x[1]) + "]";
         if constexpr (std::is_same_v<T, Vec3d>)
           return "[" + shortest(x[0]) + ", " + shortest(x[1]) + ", " + shortest(x[2]) + "]";
+        if constexpr (std::is_same_v<T, NumberList>) {
+          std::string s = "[";
+          for (const double e : x) s += (s.size() > 1 ? ", " : "") + shortest(e);
+          return s + "]";
+        }
       },
       v);
+}
+
+std::string format_value(const ParamDef& d, const ParamValue& v) {
+  const auto* list = std::get_if<NumberList>(&v);
+  if (!list || d.list == ParamDef::List::None) return format_value(v);
+  std::string s = "[";
+  if (d.list == ParamDef::List::Indices) {
+    for (const double e : *list) s += (s.size() > 1 ? ", " : "") + std::to_string(std::llround(e));
+    return s + "]";
+  }
+  for (std::size_t k = 0; k + 7 <= list->size(); k += 7) {
+    const double* a = list->data() + k;
+    s += std::string(s.size() > 1 ? ", " : "") + "[" + shortest(a[0]) + ", " +
+         format_value(Vec3d{a[1], a[2], a[3]}) + ", " + format_value(Vec3d{a[4], a[5], a[6]}) + "]";
+  }
+  return s + "]";
 }
 
 Params parse_scene(const std::string& text, const std::string& source,
@@ -1241,6 +1502,7 @@ Params load_scene(const std::string& scene, const std::vector<std::string>& over
     p.scene_dir = std::filesystem::absolute(scene).parent_path().lexically_normal().string();
     check_cloth_mesh(p, scene);
     check_obstacle_meshes(p, scene);
+    check_handle_vertices(p, scene);
     return p;
   }
   for (const auto& b : builtin_scenes())
@@ -1249,6 +1511,7 @@ Params load_scene(const std::string& scene, const std::vector<std::string>& over
       p.scene_dir = "builtin:";
       check_cloth_mesh(p, "scenes/" + b.name + ".toml");
       check_obstacle_meshes(p, "scenes/" + b.name + ".toml");
+      check_handle_vertices(p, "scenes/" + b.name + ".toml");
       return p;
     }
   if (scene.find('/') != std::string::npos || scene.find(".toml") != std::string::npos)
@@ -1291,7 +1554,7 @@ std::string to_toml(const Params& p) {
     if (d.optional && std::isnan(std::get<double>(v)))
       o << "# " << leaf << ": unset, from [material]\n";
     else
-      o << leaf << " = " << format_value(v) << "\n";
+      o << leaf << " = " << format_value(d, v) << "\n";
     if (d.key == "material.preset") o << preset_overrides_text(p);
   }
   for (const std::string_view kind : kNamedKinds)
@@ -1299,7 +1562,7 @@ std::string to_toml(const Params& p) {
       o << "\n[" << kind << "." << name << "]\n";
       for (const auto& d : param_defs()) {
         if (named_kind(d.key) != kind) continue;
-        o << d.key.substr(kind.size() + 3) << " = " << format_value(d.get(p, name)) << "\n";
+        o << d.key.substr(kind.size() + 3) << " = " << format_value(d, d.get(p, name)) << "\n";
       }
     }
   return o.str();
@@ -1340,6 +1603,11 @@ Params at_resolution(Params p, long long grid) {
                      " wide was asked of a cloth that is a mesh (" + "cloth.mesh = \"" +
                      p.cloth.mesh + "\"): its vertices are its particles and " +
                      "cloth.resolution is not used; remesh the file for another resolution");
+  for (const auto& [name, h] : p.handles)  // j nu + i: other particles on another grid
+    if (!h.vertices.empty())
+      throw SceneError("a grid " + std::to_string(grid) + " wide was asked of a scene whose handle." +
+                       name + ".vertices names particles by index: on another grid they are "
+                       "other particles (place the handle by at, span and patch to scale it)");
   const auto [nu, nv] = p.cloth.resolution;
   const double scale = static_cast<double>(grid - 1) / static_cast<double>(nu - 1);
   const long long height = std::llround(static_cast<double>(nv - 1) * scale) + 1;

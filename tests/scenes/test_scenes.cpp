@@ -7,6 +7,7 @@
 
 #include "common.hpp"
 #include "detail.hpp"
+#include "wetcloth/motion.hpp"
 #include "wetcloth/output.hpp"
 
 using namespace wetcloth;
@@ -219,4 +220,27 @@ TEST(Scenes, TiltedDropLandsEdgeFirstAndLiesFlat) {
   EXPECT_NEAR(highest, 0.08 + rise, 1e-12);
   ASSERT_TRUE(sim.advance_to(0.4)) << sim.blow_up_reason();
   EXPECT_EQ(std::count(sim.state().contact.begin(), sim.state().contact.end(), 1), m.n);
+}
+
+// arm-swing (issue 39's moving obstacles): the arm swings down, up and down
+// again about its shoulder. Soaked, the sleeve rides along with it, its
+// middle where it started on the arm, 24 cm from the shoulder; dry, it slides
+// down the arm while the hand is up (measured 6 cm), and keeps less contact.
+TEST(Scenes, ArmSwingWetSleeveRidesAlongDryOneSlides) {
+  std::vector<double> along, contact;
+  for (const char* humidity : {"cloth.humidity=1", "cloth.humidity=0"}) {
+    const Params p = load_scene("arm-swing", {humidity});
+    Simulation sim(p);
+    ASSERT_TRUE(sim.advance_to(p.run.duration)) << sim.blow_up_reason();
+    // The sleeve's middle in the arm's frame: how far from the shoulder along it.
+    const RigidPose arm = detail::workspace(sim).surfaces.obstacles.at(0);
+    Vec3 mean = Vec3::Zero();
+    for (int i = 0; i < sim.model().n; ++i) mean += arm.to_body(sim.state().x[i]);
+    mean /= sim.model().n;
+    along.push_back(mean.x() + 0.2);  // the shoulder is the file's x = -0.2
+    contact.push_back(sim.metrics().contact_area_m2);
+  }
+  EXPECT_NEAR(along[0], 0.24, 0.002);
+  EXPECT_LT(along[1], 0.24 - 0.03);
+  EXPECT_GT(contact[0], 1.2 * contact[1]);
 }

@@ -1,0 +1,184 @@
+// Moving surfaces (docs/model.md section 3, "Moving surfaces"): contact and
+// friction act on the cloth's velocity relative to the surface. A cloth on a
+// plate sliding at constant velocity rides along with enough friction and
+// stays put with none; a ball moving into a hanging cloth pushes it and never
+// holds it inside; a moving scene keeps its bits on any thread count and
+// across a restore.
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+
+#include "common.hpp"
+#include "detail.hpp"
+#include "wetcloth/motion.hpp"
+
+using namespace wetcloth;
+namespace fs = std::filesystem;
+
+namespace {
+
+// A folder of its own for a test's files, removed at the end.
+struct TempDir {
+  fs::path path;
+  explicit TempDir(const std::string& name)
+      : path(fs::temp_directory_path() /
+             ("wetcloth_moving_" + name + "_" + std::to_string(::getpid()))) {
+    fs::remove_all(path);
+    fs::create_directories(path / "meshes");
+  }
+  ~TempDir() { fs::remove_all(path); }
+  void write(const std::string& file, const std::string& text) const {
+    std::ofstream(path / file) << text;
+  }
+};
+
+// A square plate of half-side 1 m in the xy plane (an open mesh, a shell 2 mm
+// thick), sliding along x at `speed` from t = 0: a moving table.
+Params on_sliding_plate(const TempDir& dir, double speed, const std::vector<std::string>& sets) {
+  dir.write("meshes/plate.obj",
+            "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nf 1 2 3\nf 1 3 4\n");
+  std::vector<std::string> all = {"cloth.humidity=0", "air.model=\"off\""};
+  all.insert(all.end(), sets.begin(), sets.end());
+  Params p = test::coarse("pull-straight", all);
+  p.handles.clear();
+  p.table.enabled = false;
+  p.scene_dir = dir.path.string();
+  ObstacleParams o;
+  o.mesh = "meshes/plate.obj";
+  o.thickness = 0.002;
+  o.contact = true;
+  o.motion.keys = {{0, {0, 0, 0}, {0, 0, 0}}, {10, {10 * speed, 0, 0}, {0, 0, 0}}};
+  p.obstacles["plate"] = o;
+  p.contact.surface = SurfaceChoice::Obstacle;
+  p.cloth.center = {0, 0, 0.0012};  // 0.2 mm above the shell
+  return p;
+}
+
+Vec3 mean_of(const Vec3Array& a) {
+  Vec3 sum = Vec3::Zero();
+  for (std::size_t i = 0; i < a.size(); ++i) sum += a[i];
+  return sum / static_cast<double>(a.size());
+}
+
+const std::vector<std::string> kXpbd = {"integrator.type=xpbd",
+                                        "integrator.dt=0.004166666666666667"};
+
+}  // namespace
+
+// Dry, on a plate that starts sliding at v: friction μ g accelerates the cloth
+// until it moves with the plate (Coulomb: it slips v² / (2 μ g) meanwhile),
+// then it rides along, its velocity relative to the plate zero. Both friction
+// passes: the small steps' (constraints/friction.cpp) and xpbd's.
+TEST(MovingSurfaces, ClothRidesAlongOnASlidingPlate) {
+  TempDir dir("ride");
+  const double v = 0.1, t = 0.4, mu = Params{}.friction.mu;
+  for (const bool xpbd : {false, true}) {
+    Simulation sim(on_sliding_plate(dir, v, xpbd ? kXpbd : std::vector<std::string>{}));
+    const Vec3 start = mean_of(sim.state().x);
+    ASSERT_TRUE(sim.advance_to(t)) << sim.blow_up_reason();
+    const Vec3 moved = mean_of(sim.state().x) - start;
+    const double slip = v * v / (2 * mu * 9.81);  // 1.7 mm
+    EXPECT_NEAR(moved.x(), v * t - slip, 0.1 * slip) << (xpbd ? "xpbd" : "symplectic");
+    EXPECT_LT(std::abs(moved.y()), 1e-9);
+    for (int i = 0; i < sim.model().n; ++i) {
+      ASSERT_NEAR(sim.state().v[i].x(), v, 1e-3) << "particle " << i;
+      ASSERT_TRUE(sim.state().contact[i]) << "particle " << i;
+    }
+  }
+}
+
+// Frictionless, the plate's motion along its own plane reaches the cloth
+// through nothing: only the normal couples, and the cloth stays where it was
+// (to the rounding of the projection: the closest point on a triangle is
+// found to an ulp of its x and y).
+TEST(MovingSurfaces, FrictionlessPlateSlidesUnderAClothThatStaysPut) {
+  TempDir dir("frictionless");
+  for (const bool xpbd : {false, true}) {
+    std::vector<std::string> sets = {"friction.mu=0"};
+    if (xpbd) sets.insert(sets.end(), kXpbd.begin(), kXpbd.end());
+    Simulation sim(on_sliding_plate(dir, 0.1, sets));
+    const Vec3Array start = sim.state().x;
+    ASSERT_TRUE(sim.advance_to(0.3)) << sim.blow_up_reason();
+    for (int i = 0; i < sim.model().n; ++i) {
+      ASSERT_NEAR(sim.state().x[i].x(), start[i].x(), 1e-12) << "particle " << i;
+      ASSERT_NEAR(sim.state().x[i].y(), start[i].y(), 1e-12) << "particle " << i;
+      ASSERT_TRUE(sim.state().contact[i]) << "particle " << i;
+    }
+  }
+}
+
+// A plate rising at 0.1 m/s lifts the cloth lying on it: contact carries it
+// along the normal at the plate's velocity.
+TEST(MovingSurfaces, ClothOnAPlateThatRisesMovesUpWithIt) {
+  TempDir dir("rise");
+  Params p = on_sliding_plate(dir, 0.0, {});
+  p.obstacles["plate"].motion.keys = {{0, {0, 0, 0}, {0, 0, 0}}, {1, {0, 0, 0.1}, {0, 0, 0}}};
+  Simulation sim(p);
+  ASSERT_TRUE(sim.advance_to(0.3)) << sim.blow_up_reason();
+  // The plate's top is at 0.03 + 1 mm; the cloth on it, lifted at 0.1 m/s.
+  for (int i = 0; i < sim.model().n; ++i) {
+    ASSERT_GE(sim.state().x[i].z(), 0.031 - 1e-9) << "particle " << i;
+    ASSERT_NEAR(sim.state().v[i].z(), 0.1, 1e-6) << "particle " << i;
+  }
+}
+
+// A ball moving into a cloth hanging from its top edge pushes it ahead, and
+// no particle is ever inside it.
+TEST(MovingSurfaces, MovingBallPushesAHangingCloth) {
+  for (const bool xpbd : {false, true}) {
+    std::vector<std::string> sets = {"cloth.orientation=\"vertical\"", "cloth.center=[0,0,0.3]",
+                                     "table.enabled=false", "contact.surface=\"none\"",
+                                     "air.model=\"off\"", "ball.enabled=true",
+                                     "ball.center=[0,-0.1,0.25]", "ball.radius=0.06"};
+    if (xpbd) sets.insert(sets.end(), kXpbd.begin(), kXpbd.end());
+    Params p = test::coarse("hang", sets);
+    p.ball.motion.keys = {{0, {0, 0, 0}, {0, 0, 0}}, {0.5, {0, 0.2, 0}, {0, 0, 0}}};
+    Simulation sim(p);
+    const double dt = p.integrator.dt;
+    for (double t = 0.05; t <= 0.5 + 1e-9; t += 0.05) {
+      ASSERT_TRUE(sim.advance_to(t)) << sim.blow_up_reason();
+      const Vec3 c = ball_pose(p, sim.state().time).to_world(to_vec(p.ball.center));
+      for (int i = 0; i < sim.model().n; ++i)
+        ASSERT_GE((sim.state().x[i] - c).norm(), p.ball.radius - 1e-9)
+            << "particle " << i << " at t = " << t;
+    }
+    // The ball's front is at y = 0.16 at the end; the cloth hung at y = 0.
+    double furthest = -1;
+    for (int i = 0; i < sim.model().n; ++i) furthest = std::max(furthest, sim.state().x[i].y());
+    EXPECT_GT(furthest, 0.12) << (xpbd ? "xpbd" : "symplectic") << " dt " << dt;
+  }
+}
+
+// A moving surface is a function of time: the same bits on one thread and on
+// two, and a state restored half-way continues with the same bits.
+TEST(MovingSurfaces, SameBitsOnAnyThreadCountAndAfterARestore) {
+  const auto scene = [](const char* threads) {
+    // At the scene's 51 x 51 (a coarser grid runs on one thread), in xpbd's
+    // steps; the small steps' friction is per particle, as collide is.
+    Params p = load_scene("drape-ball", {threads, "run.duration=0.3", "integrator.type=xpbd",
+                                         "integrator.dt=0.004166666666666667"});
+    p.ball.motion.interpolation = Interpolation::Smooth;
+    p.ball.motion.keys = {{0.05, {0, 0, 0}, {0, 0, 0}}, {0.3, {0.05, 0, 0.02}, {0, 30, 10}}};
+    return p;
+  };
+  std::vector<Simulation> sims;
+  for (const char* threads : {"integrator.threads=1", "integrator.threads=2"})
+    sims.emplace_back(scene(threads));
+  ASSERT_EQ(sims[1].model().threads, 2);
+  for (auto& sim : sims) ASSERT_TRUE(sim.advance_to(0.1)) << sim.blow_up_reason();
+  const State middle = sims[0].state();
+  for (auto& sim : sims) ASSERT_TRUE(sim.advance_to(0.2)) << sim.blow_up_reason();
+  Simulation restored(scene("integrator.threads=1"));
+  restored.restore(middle);
+  ASSERT_TRUE(restored.advance_to(0.2)) << restored.blow_up_reason();
+  EXPECT_TRUE(test::same_bits(sims[0].state().x, sims[1].state().x));
+  EXPECT_TRUE(test::same_bits(sims[0].state().v, sims[1].state().v));
+  EXPECT_TRUE(test::same_bits(sims[0].state().x, restored.state().x));
+  EXPECT_TRUE(test::same_bits(sims[0].state().v, restored.state().v));
+  int touching = 0;
+  for (int i = 0; i < sims[0].model().n; ++i) touching += sims[0].state().contact[i];
+  EXPECT_GT(touching, 0);
+}

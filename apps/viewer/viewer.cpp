@@ -674,8 +674,10 @@ class Viewer {
   // --- the frame loop ---------------------------------------------------------------
 
   int loop() {
-    auto last = Clock::now(), rtf_wall = last;
+    auto last = Clock::now(), rtf_wall = last, run_start = last;
     double rtf_sim = sim_->state().time;
+    const double start_time = rtf_sim;
+    double shot_time = start_time, next_progress = 1.0;
     int frames_at_target = 0;
     while (!glfwWindowShouldClose(window_)) {
       glfwPollEvents();
@@ -685,9 +687,22 @@ class Viewer {
       update_grab();
       advance(wall_dt);
       const State& s = sim_->state();
-      // Real-time factor over about half a second of wall time.
-      const double wall = std::chrono::duration<double>(Clock::now() - rtf_wall).count();
-      if (wall > 0.5 || s.time < rtf_sim) {
+      if (opts_.screenshot_after) {
+        // The whole run's real-time factor (the last frames, at the target
+        // time, step nothing), and a progress line about every second.
+        const double run_wall = std::chrono::duration<double>(Clock::now() - run_start).count();
+        if (run_wall > 0 && s.time > shot_time) {
+          rtf_ = (s.time - start_time) / run_wall;
+          shot_time = s.time;
+        }
+        if (run_wall >= next_progress) {
+          std::fprintf(stderr, "wetcloth view: t = %.3f of %.3f s simulated, %.3fx real time\n",
+                       s.time, *opts_.screenshot_after, rtf_);
+          next_progress = run_wall + 1.0;
+        }
+      } else if (const double wall =
+                     std::chrono::duration<double>(Clock::now() - rtf_wall).count();
+                 wall > 0.5 || s.time < rtf_sim) {  // over about half a second of wall time
         rtf_ = std::max(0.0, s.time - rtf_sim) / wall;
         rtf_sim = s.time;
         rtf_wall = Clock::now();
@@ -735,6 +750,9 @@ class Viewer {
           sim_->state().time >= *opts_.screenshot_after - 0.5 * params_.integrator.dt)
         if (++frames_at_target >= 3 || !blow_up_.empty()) {
           if (!blow_up_.empty()) return fail("the simulation blew up: " + blow_up_);
+          std::fprintf(stderr, "wetcloth view: t = %.3f s simulated in %.1f s, %.3fx real time\n",
+                       sim_->state().time,
+                       std::chrono::duration<double>(Clock::now() - run_start).count(), rtf_);
           save_screenshot(opts_.screenshot_file);
           return fs::exists(opts_.screenshot_file) ? 0 : 1;
         }

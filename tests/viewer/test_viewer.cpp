@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -194,7 +195,8 @@ TEST(View, ScreenshotUnderXvfbShowsTheSceneAndThePanel) {
   const fs::path shot = out / "viewer.png";
   const std::string cmd = "xvfb-run -a -s '-screen 0 1280x800x24' '" + kCli.string() +
                           "' view --screenshot-after 0.05 '" + shot.string() + "' > '" +
-                          (out / "stdout.txt").string() + "'";
+                          (out / "stdout.txt").string() + "' 2> '" + (out / "stderr.txt").string() +
+                          "'";
   const int status = std::system(cmd.c_str());
   ASSERT_TRUE(WIFEXITED(status));
   ASSERT_EQ(WEXITSTATUS(status), 0) << "xvfb-run or the viewer failed";
@@ -217,6 +219,16 @@ TEST(View, ScreenshotUnderXvfbShowsTheSceneAndThePanel) {
       dark += p[0] < 40 && p[1] < 40 && p[2] < 40;
     }
   EXPECT_GT(dark, total / 2) << "the panel is visible";
+
+  // The whole run's real-time factor, the one the panel shows: not the 0 of
+  // the last frames, which step nothing.
+  std::ifstream err(out / "stderr.txt");
+  std::string line, last;
+  while (std::getline(err, line))
+    if (line.rfind("wetcloth view: t = ", 0) == 0) last = line;
+  ASSERT_NE(last.find("s simulated in"), std::string::npos) << last;
+  const double factor = std::stod(last.substr(last.rfind(", ") + 2));
+  EXPECT_GT(factor, 0.0) << last;
 }
 
 // An integrator picked in the panel gets a step of its kind: the large-step

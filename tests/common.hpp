@@ -2,7 +2,11 @@
 // for bit.
 #pragma once
 
+#include <unistd.h>
+
 #include <cstring>
+#include <filesystem>
+#include <fstream>
 #include <string>
 #include <vector>
 
@@ -63,5 +67,24 @@ inline bool same_bits(const Vec3Array& a, const Vec3Array& b) {
     }
   return true;
 }
+
+// A folder of its own for a test's files (with meshes/ in it), removed at the end.
+struct TempDir {
+  std::filesystem::path path;
+  explicit TempDir(const std::string& name)
+      : path(std::filesystem::temp_directory_path() /
+             ("wetcloth_" + name + "_" + std::to_string(::getpid()))) {
+    std::filesystem::remove_all(path);
+    std::filesystem::create_directories(path / "meshes");
+  }
+  ~TempDir() { std::filesystem::remove_all(path); }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  // Writes `text` to the folder's `file`; returns its path.
+  std::filesystem::path write(const std::string& file, const std::string& text) const {
+    std::ofstream(path / file) << text;
+    return path / file;
+  }
+};
 
 }  // namespace wetcloth::test

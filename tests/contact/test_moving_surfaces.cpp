@@ -20,20 +20,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// A folder of its own for a test's files, removed at the end.
-struct TempDir {
-  fs::path path;
-  explicit TempDir(const std::string& name)
-      : path(fs::temp_directory_path() /
-             ("wetcloth_moving_" + name + "_" + std::to_string(::getpid()))) {
-    fs::remove_all(path);
-    fs::create_directories(path / "meshes");
-  }
-  ~TempDir() { fs::remove_all(path); }
-  void write(const std::string& file, const std::string& text) const {
-    std::ofstream(path / file) << text;
-  }
-};
+using test::TempDir;
 
 // A square plate of half-side 1 m in the xy plane (an open mesh, a shell 2 mm
 // thick), sliding along x at `speed` from t = 0: a moving table.
@@ -73,7 +60,7 @@ const std::vector<std::string> kXpbd = {"integrator.type=xpbd",
 // then it rides along, its velocity relative to the plate zero. Both friction
 // passes: the small steps' (constraints/friction.cpp) and xpbd's.
 TEST(MovingSurfaces, ClothRidesAlongOnASlidingPlate) {
-  TempDir dir("ride");
+  TempDir dir("moving_ride");
   const double v = 0.1, t = 0.4, mu = Params{}.friction.mu;
   for (const bool xpbd : {false, true}) {
     Simulation sim(on_sliding_plate(dir, v, xpbd ? kXpbd : std::vector<std::string>{}));
@@ -95,7 +82,7 @@ TEST(MovingSurfaces, ClothRidesAlongOnASlidingPlate) {
 // (to the rounding of the projection: the closest point on a triangle is
 // found to an ulp of its x and y).
 TEST(MovingSurfaces, FrictionlessPlateSlidesUnderAClothThatStaysPut) {
-  TempDir dir("frictionless");
+  TempDir dir("moving_frictionless");
   for (const bool xpbd : {false, true}) {
     std::vector<std::string> sets = {"friction.mu=0"};
     if (xpbd) sets.insert(sets.end(), kXpbd.begin(), kXpbd.end());
@@ -113,7 +100,7 @@ TEST(MovingSurfaces, FrictionlessPlateSlidesUnderAClothThatStaysPut) {
 // A plate rising at 0.1 m/s lifts the cloth lying on it: contact carries it
 // along the normal at the plate's velocity.
 TEST(MovingSurfaces, ClothOnAPlateThatRisesMovesUpWithIt) {
-  TempDir dir("rise");
+  TempDir dir("moving_rise");
   Params p = on_sliding_plate(dir, 0.0, {});
   p.obstacles["plate"].motion.keys = {{0, {0, 0, 0}, {0, 0, 0}}, {1, {0, 0, 0.1}, {0, 0, 0}}};
   Simulation sim(p);

@@ -70,20 +70,7 @@ Obj square(double half) {
   return o;
 }
 
-// A folder of its own for a test's files, removed at the end.
-struct TempDir {
-  fs::path path;
-  explicit TempDir(const std::string& name)
-      : path(fs::temp_directory_path() /
-             ("wetcloth_mesh_obstacle_" + name + "_" + std::to_string(::getpid()))) {
-    fs::remove_all(path);
-    fs::create_directories(path / "meshes");
-  }
-  ~TempDir() { fs::remove_all(path); }
-  void write(const std::string& file, const std::string& text) const {
-    std::ofstream(path / file) << text;
-  }
-};
+using test::TempDir;
 
 // Params with one obstacle, the contact surface, from `dir`.
 void add_contact_obstacle(Params& p, const TempDir& dir, const std::string& file) {
@@ -113,7 +100,7 @@ double chord_error(const Obj& o, const Vec3& c, double r) {
 // A finely triangulated sphere gives the ball's distance within the chord
 // error, inside and out, with the ball's normal within the facets' angle.
 TEST(MeshObstacle, SphereMeshGivesTheBallsDistanceWithinTheChordError) {
-  TempDir dir("sphere");
+  TempDir dir("mesh_obstacle_sphere");
   const Vec3 c(0.01, -0.02, 0.08);
   const double r = 0.08;
   const Obj sphere = uv_sphere(c, r, 96, 192);
@@ -159,7 +146,7 @@ TEST(MeshObstacle, SphereMeshGivesTheBallsDistanceWithinTheChordError) {
 // The same cloth dropped on the ball and on a sphere mesh in its place lands
 // alike: contact area and the air under it within a few percent.
 TEST(MeshObstacle, ClothOnASphereMeshTouchesAsOnTheBall) {
-  TempDir dir("drop");
+  TempDir dir("mesh_obstacle_drop");
   const Params ball = test::coarse("drop-ball", kXpbd);
   Params mesh = ball;
   const Obj sphere = uv_sphere(to_vec(ball.ball.center), ball.ball.radius, 48, 96);
@@ -182,7 +169,7 @@ TEST(MeshObstacle, ClothOnASphereMeshTouchesAsOnTheBall) {
 // the mesh's normal (the ball's, within the facets' angle) and suction
 // points into the surface.
 TEST(MeshObstacle, AirPressesAlongTheMeshNormal) {
-  TempDir dir("air");
+  TempDir dir("mesh_obstacle_air");
   Params p = test::coarse("drape-ball", with({"air.model=\"sealed\""}, kXpbd));
   const Obj sphere = uv_sphere(to_vec(p.ball.center), p.ball.radius, 48, 96);
   dir.write("meshes/ball.obj", sphere.text());
@@ -236,7 +223,7 @@ TEST(MeshObstacle, AClosedMeshIsNeverPenetrated) {
 // shell 2 mm thick), as on the tilted table (Xpbd.DryClothHolds...): a dry
 // cloth holds when tan θ < μ and slides at g (sin θ - μ cos θ) above.
 TEST(MeshObstacle, DryClothHoldsOnAMeshInclineBelowTheFrictionAngleAndSlidesAbove) {
-  TempDir dir("incline");
+  TempDir dir("mesh_obstacle_incline");
   dir.write("meshes/incline.obj", square(1.0).text());
   const double mu = Params{}.friction.mu;
   for (const double degrees : {12.0, 30.0}) {
@@ -325,7 +312,7 @@ TEST(MeshObstacle, SceneKeysAndTheirErrors) {
   EXPECT_NE(error(obstacle, {"obstacle.other.mesh=\"x.obj\""}).find("no such obstacle"),
             std::string::npos);
 
-  TempDir dir("errors");
+  TempDir dir("mesh_obstacle_errors");
   dir.write("meshes/open.obj", square(0.5).text());
   dir.write("meshes/bad.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n");
   const auto load_error = [&](const std::string& text) {

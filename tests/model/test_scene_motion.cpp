@@ -16,20 +16,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-struct TempDir {
-  fs::path path;
-  explicit TempDir(const std::string& name)
-      : path(fs::temp_directory_path() /
-             ("wetcloth_scene_motion_" + name + "_" + std::to_string(::getpid()))) {
-    fs::remove_all(path);
-    fs::create_directories(path / "meshes");
-  }
-  ~TempDir() { fs::remove_all(path); }
-  fs::path write(const std::string& file, const std::string& text) const {
-    std::ofstream(path / file) << text;
-    return path / file;
-  }
-};
+using test::TempDir;
 
 std::string error_of(const std::string& text, const std::vector<std::string>& sets = {}) {
   try {
@@ -109,7 +96,7 @@ TEST(SceneMotion, BadKeyframesNameTheLineAndKey) {
 // from the file's own origin, scaled and moved as obstacles are; and check
 // says which axis a file seems to use when it starts inside an obstacle.
 TEST(SceneMotion, YUpClothMeshIsPlacedByItsKeys) {
-  TempDir dir("up");
+  TempDir dir("scene_motion_up");
   // A 0.2 x 0.1 sheet in the file's xz plane (y-up: the file's "floor"),
   // 0.05 above its origin along the file's y.
   dir.write("meshes/sheet.obj",
@@ -147,7 +134,7 @@ TEST(SceneMotion, YUpClothMeshIsPlacedByItsKeys) {
 // indices; the listed particles of a pin stay where they started; a bad index
 // names the file, its line and the key.
 TEST(SceneMotion, VertexListHandlesHoldTheirParticles) {
-  TempDir dir("vertices");
+  TempDir dir("scene_motion_vertices");
   dir.write("cuff.txt", "# the top corners\n0 10\n\n  120 # and the last\n");
   const std::string cloth =
       "[cloth]\nresolution = [11, 11]\nsize = [0.1, 0.1]\ncenter = [0, 0, 0.3]\n"

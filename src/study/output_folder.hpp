@@ -1,22 +1,19 @@
 // A run's output folder: what a run may write there and remove (docs/guide.md,
-// Outputs). A run lists the files it writes in DIR/.wetcloth.manifest before
-// it writes them; the next run into DIR removes those and nothing else, so a
-// user's own file in DIR (or in DIR/frames) stays. No symbolic link is
-// followed when writing or clearing.
+// Outputs); the checks before a run are wetcloth/run.hpp's. A run lists the files it writes in
+// DIR/.wetcloth.manifest before it writes them; the next run into DIR removes those and nothing
+// else, so a user's own file in DIR (or in DIR/frames) stays. No symbolic link is followed when
+// writing or clearing.
 #pragma once
 
 #include <filesystem>
 #include <string>
 #include <vector>
 
-namespace wetcloth::cli {
+#include "wetcloth/run.hpp"
+
+namespace wetcloth {
 
 inline constexpr const char* kManifest = ".wetcloth.manifest";
-
-// Throws SceneError where OUT exists, holds something, and holds no earlier
-// wetcloth run (no manifest, no scene.toml a run wrote): a run would mix its
-// files with someone else's. `run --force` writes into it all the same.
-void refuse_foreign_folder(const std::filesystem::path& out);
 
 // Throws SceneError naming the first of `files` (paths relative to OUT), or a
 // folder on the way to one, that is a symbolic link: a run writes through none.
@@ -35,4 +32,4 @@ void remove_outputs(const std::filesystem::path& out, const std::vector<std::str
 // Writes OUT/.wetcloth.manifest listing `files`.
 void write_manifest(const std::filesystem::path& out, const std::vector<std::string>& files);
 
-}  // namespace wetcloth::cli
+}  // namespace wetcloth

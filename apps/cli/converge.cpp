@@ -1,14 +1,12 @@
-#include "converge.hpp"
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <thread>
 
+#include "cli.hpp"
 #include "common/convergence.hpp"
 #include "common/scene_options.hpp"
-#include "run.hpp"
 #include "wetcloth/output.hpp"
 
 namespace wetcloth::cli {

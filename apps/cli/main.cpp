@@ -10,11 +10,8 @@
 #include <optional>
 #include <vector>
 
-#include "bench.hpp"
+#include "cli.hpp"
 #include "common/scene_options.hpp"
-#include "converge.hpp"
-#include "run.hpp"
-#include "sweep.hpp"
 #ifdef WETCLOTH_VIEWER
 #include "../viewer/commands.hpp"
 #endif

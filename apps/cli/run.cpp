@@ -1,8 +1,6 @@
 // `wetcloth run`: one scene into an output folder, or a stopped run resumed
 // from its checkpoint. The run is the library's (wetcloth/run.hpp); here are
 // its options, the stop signals and the progress bar.
-#include "run.hpp"
-
 #include <unistd.h>
 
 #include <algorithm>
@@ -14,6 +12,7 @@
 #include <optional>
 #include <string>
 
+#include "cli.hpp"
 #include "common/scene_options.hpp"
 #include "wetcloth/output.hpp"
 #include "wetcloth/scene.hpp"

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "wetcloth/output_folder.hpp"
 #include "wetcloth/params.hpp"
 #include "wetcloth/simulation.hpp"
 
@@ -55,31 +56,6 @@ ResourceEstimate estimate_resources(const Params& p);
 // Throws SceneError, naming SOURCE and the estimate, where P would need more
 // memory than is available or more disk than is free where OUT is.
 void check_resources(const Params& p, const std::filesystem::path& out, const std::string& source);
-
-// --- the output folder -----------------------------------------------------
-// `option` names the folder in an error: "--out" on the command line, "out"
-// in Python.
-
-// A scene's name as one folder under out/ (the default output folder): a name
-// is a label, not a path, so '/', '\\' and control characters become '_', and
-// a leading '.' too (no "..", no hidden folder); an empty name is "scene".
-std::string folder_name(const std::string& name);
-// Throws SceneError (bad input) when `out`, or the nearest part of it that
-// exists, is not a folder: checked before anything runs or is written.
-void check_output_folder(const std::filesystem::path& out, const std::string& option = "--out");
-// Throws SceneError (bad input) where OUT is the filesystem's root or a
-// system folder (/etc, /proc, /usr, ...), however it is spelt (`..`, a link):
-// no command writes there, force or not.
-void refuse_system_folder(const std::filesystem::path& out, const std::string& option = "--out");
-// check_output_folder, then makes the folder: one that cannot be made (no
-// permission, a read-only place) is bad input too, as is a system folder. (An
-// existing folder that cannot be written into fails as the first file does:
-// exit 4, an output that cannot be written.)
-void make_output_folder(const std::filesystem::path& out, const std::string& option = "--out");
-// Throws SceneError where OUT exists, holds something, and holds no earlier
-// wetcloth run (no manifest, no scene.toml a run wrote): a run would mix its
-// files with someone else's. `force` writes into it all the same.
-void refuse_foreign_folder(const std::filesystem::path& out, const std::string& option = "--out");
 
 // A new run of P into OUT, checked before anything is written and its folder
 // made: the memory and disk it needs (unless force; SOURCE names the scene in

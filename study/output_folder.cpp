@@ -1,4 +1,4 @@
-#include "study/output_folder.hpp"
+#include "wetcloth/output_folder.hpp"
 
 #include <sys/stat.h>
 #include <unistd.h>

@@ -1,4 +1,4 @@
-#include "sweep.hpp"
+#include "wetcloth/sweep.hpp"
 
 #include <unistd.h>
 
@@ -14,10 +14,9 @@
 #include <sstream>
 #include <thread>
 
+#include "cli.hpp"
 #include "common/scene_options.hpp"
-#include "run.hpp"
 #include "wetcloth/output.hpp"
-#include "wetcloth/sweep.hpp"
 #ifdef WETCLOTH_VIEWER
 #include "../viewer/commands.hpp"
 #endif

@@ -24,7 +24,6 @@
 #include <sstream>
 #include <thread>
 
-#include "study/output_folder.hpp"
 #include "wetcloth/caches.hpp"
 #include "wetcloth/checkpoint.hpp"
 #include "wetcloth/output.hpp"

@@ -171,10 +171,21 @@ class _Small(_Simulation):
         super().__init__(scene, overrides, **keywords)
     def advance_to(self, t):
         return super().advance_to(min(t, {DURATION}))
-def _small_sweep(scene, vary, client=None, overrides=None, grid=None, processes=None):
+import os as _os, tempfile as _tempfile
+_run, _tmp = _w.run, _tempfile.mkdtemp()  # a block's folders go to a temporary one
+def _small_sweep(scene, vary, client=None, overrides=None, grid=None, processes=None, out=None, plots=True):
     overrides = dict(overrides or {{}}, **{{"run.duration": {DURATION}}})
-    return _sweep(scene, vary, client=client, overrides=overrides, grid={GRID}, processes=1)
-_w.Simulation, _w.sweep = _Small, _small_sweep
+    out = out and _os.path.join(_tmp, out)
+    return _sweep(scene, vary, client=client, overrides=overrides, grid={GRID}, processes=1, out=out,
+                  plots=plots)
+def _small_run(scene=None, **keywords):
+    if scene is not None:
+        keywords.update(grid={GRID}, duration=min(keywords.get("duration", {DURATION}), {DURATION}))
+    for k in ("out", "resume"):
+        if k in keywords:
+            keywords[k] = _os.path.join(_tmp, keywords[k])
+    return _run(scene, **keywords)
+_w.Simulation, _w.sweep, _w.run = _Small, _small_sweep, _small_run
 '''
 
 targets = makefile_targets()

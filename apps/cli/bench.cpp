@@ -1,5 +1,3 @@
-#include "bench.hpp"
-
 #include <sys/resource.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -14,8 +12,8 @@
 #include <optional>
 #include <thread>
 
+#include "cli.hpp"
 #include "common/scene_options.hpp"
-#include "run.hpp"
 #ifdef WETCLOTH_BULLET
 #include "bullet_peer.hpp"
 #endif

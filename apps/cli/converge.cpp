@@ -1,14 +1,12 @@
-#include "converge.hpp"
-
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <thread>
 
+#include "cli.hpp"
 #include "common/convergence.hpp"
 #include "common/scene_options.hpp"
-#include "run.hpp"
 #include "wetcloth/output.hpp"
 
 namespace wetcloth::cli {
@@ -104,7 +102,7 @@ std::vector<Case> load_cases(const Options& o, const std::vector<double>& dts) {
 void run_cases(const Options& o, std::vector<Case>& cases, const fs::path& out) {
   std::vector<std::pair<Params, fs::path>> runs;
   for (const auto& c : cases) runs.emplace_back(c.params, out / c.name);
-  run_all(runs, o.jobs, [&](std::size_t i, const RunResult& r) {
+  run_all(runs, o.jobs, run_hooks(false), [&](std::size_t i, const RunResult& r) {
     cases[i].result = r;
     if (o.quiet) return;
     std::printf("dt %-10s %s  (%.1f s wall)\n", format_number(cases[i].dt).c_str(),

@@ -10,12 +10,8 @@
 #include <optional>
 #include <vector>
 
-#include "bench.hpp"
+#include "cli.hpp"
 #include "common/scene_options.hpp"
-#include "converge.hpp"
-#include "run.hpp"
-#include "run_command.hpp"
-#include "sweep.hpp"
 #ifdef WETCLOTH_VIEWER
 #include "../viewer/commands.hpp"
 #endif
@@ -37,7 +33,7 @@ Command add_scenes_command(CLI::App& app) {
     for (const auto& s : builtin_scenes()) width = std::max(width, static_cast<int>(s.name.size()));
     for (const auto& s : builtin_scenes())
       std::printf("%-*s  %s\n", width, s.name.c_str(), s.description.c_str());
-    return cli::kOk;
+    return kOk;
   };
 }
 
@@ -55,7 +51,7 @@ Command add_check_command(CLI::App& app) {
                 << (p.cloth.mesh.empty() ? xpbd_substeps(p) : xpbd_substeps(build_model(p)))
                 << " substeps a step of " << p.integrator.dt << " s\n";
     std::cout << to_toml(p);
-    return cli::kOk;
+    return kOk;
   };
 }
 
@@ -79,15 +75,15 @@ std::string params_json() {
 int print_preset(const std::string& name) {
   if (name.empty()) {
     std::cout << presets_text();
-    return cli::kOk;
+    return kOk;
   }
   if (const FabricPreset* f = find_preset(name)) {
     std::cout << preset_text(*f);
-    return cli::kOk;
+    return kOk;
   }
   std::fprintf(stderr, "wetcloth: error: params --preset: '%s' is not a preset; the presets:\n%s",
                name.c_str(), presets_text().c_str());
-  return cli::kBadInput;
+  return kBadInput;
 }
 
 Command add_params_command(CLI::App& app) {
@@ -111,7 +107,7 @@ Command add_params_command(CLI::App& app) {
     if (!*cmd) return -1;
     if (cmd->count("--preset") > 0) return print_preset(o->preset);
     std::cout << (o->markdown ? params_markdown() : o->json ? params_json() : params_text());
-    return cli::kOk;
+    return kOk;
   };
 }
 
@@ -122,7 +118,7 @@ std::optional<int> check_command_word(CLI::App& app, int argc, char** argv) {
   if (argc <= 1) {  // no command: what there is to do
     app.name(argv[0]);
     std::cerr << app.help();
-    return cli::kBadInput;
+    return kBadInput;
   }
   const std::string first = argv[1];
   std::string names;
@@ -135,7 +131,7 @@ std::optional<int> check_command_word(CLI::App& app, int argc, char** argv) {
   std::fprintf(stderr, "wetcloth: error: unknown %s '%s'%s (the commands: %s; wetcloth --help)\n",
                first[0] == '-' ? "option" : "command", first.c_str(),
                first[0] == '-' ? " before the command" : "", names.c_str());
-  return cli::kBadInput;
+  return kBadInput;
 }
 
 // Runs the chosen command; the library's errors become exit codes.
@@ -145,15 +141,15 @@ int run_chosen(const std::vector<Command>& commands) {
       if (const int code = command(); code >= 0) return code;
   } catch (const SceneError& e) {
     std::fprintf(stderr, "wetcloth: error: %s\n", e.what());
-    return cli::kBadInput;
+    return kBadInput;
   } catch (const OutputError& e) {
     std::fprintf(stderr, "wetcloth: error: %s\n", e.what());
-    return cli::kOutputError;
+    return kOutputError;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "wetcloth: error: %s\n", e.what());
-    return cli::kError;
+    return kError;
   }
-  return cli::kOk;
+  return kOk;
 }
 
 }  // namespace
@@ -184,7 +180,7 @@ int main(int argc, char** argv) {
     // loader says it.
     if (e.get_exit_code() == 0) return app.exit(e);
     std::fprintf(stderr, "wetcloth: error: %s\nRun with --help for more information.\n", e.what());
-    return cli::kBadInput;
+    return kBadInput;
   }
   return run_chosen(commands);
 }

@@ -1,32 +1,19 @@
-#include "run.hpp"
-
-#include <fcntl.h>
-#include <sys/file.h>
-#include <sys/resource.h>
-#include <sys/stat.h>
-#include <sys/statvfs.h>
+// `wetcloth run`: one scene into an output folder, or a stopped run resumed
+// from its checkpoint. The run is the library's (wetcloth/run.hpp); here are
+// its options, the stop signals and the progress bar.
 #include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
-#include <cerrno>
-#include <chrono>
-#include <cmath>
 #include <csignal>
 #include <cstdio>
-#include <cstdlib>
-#include <fstream>
-#include <limits>
-#include <mutex>
-#include <nlohmann/json.hpp>
+#include <filesystem>
+#include <memory>
 #include <optional>
-#include <sstream>
-#include <thread>
+#include <string>
 
+#include "cli.hpp"
 #include "common/scene_options.hpp"
-#include "output_folder.hpp"
-#include "wetcloth/caches.hpp"
-#include "wetcloth/checkpoint.hpp"
 #include "wetcloth/output.hpp"
 #include "wetcloth/scene.hpp"
 
@@ -35,24 +22,6 @@ namespace wetcloth::cli {
 namespace fs = std::filesystem;
 
 namespace {
-
-void print_progress(double t, double duration, double wall) {
-  const int width = 30;
-  const double frac = duration > 0 ? std::min(1.0, t / duration) : 1.0;
-  const int fill = static_cast<int>(frac * width);
-  std::fprintf(stderr, "\r[%.*s%*s] %5.1f%%  sim %.3f s  wall %.1f s  %.2fx real time ", fill,
-               "##############################", width - fill, "", 100 * frac, t, wall,
-               wall > 0 ? t / wall : 0.0);
-  std::fflush(stderr);
-}
-
-nlohmann::json metrics_json(const Metrics& m) {
-  nlohmann::json j;
-  const auto cols = metrics_columns();
-  const auto vals = metrics_values(m);
-  for (std::size_t i = 0; i < cols.size(); ++i) j[cols[i]] = vals[i];
-  return j;
-}
 
 // The signal that asked the run to stop (0: none). A second one ends the
 // process at once, removing the temporary file being written.
@@ -69,286 +38,151 @@ extern "C" void on_stop_signal(int sig) {
   [[maybe_unused]] const auto w = ::write(STDERR_FILENO, msg, sizeof msg - 1);
 }
 
-// The output folder's lock: held (flock) while a run writes into it, released
-// by the system however the process ends, and the empty file removed when the
-// run ends. A run that locked a file another removed meanwhile takes the lock
-// again on the file now there.
-class OutputLock {
- public:
-  explicit OutputLock(const fs::path& out) : path_(out / ".wetcloth.lock") {
-    for (int attempt = 0;; ++attempt) {
-      fd_ = ::open(path_.c_str(), O_RDWR | O_CREAT | O_CLOEXEC | O_NOFOLLOW, 0644);
-      if (fd_ < 0) throw_output_error(path_, "cannot create the lock file", errno);
-      if (::flock(fd_, LOCK_EX | LOCK_NB) != 0) {
-        const int e = errno;
-        ::close(fd_);
-        if (e == EWOULDBLOCK)
-          throw SceneError("--out " + out.string() + ": another wetcloth run is writing into it (" +
-                           path_.string() + " is locked); wait for it, or choose another --out");
-        throw_output_error(path_, "cannot lock", e);
-      }
-      struct stat held {
-      }, named{};
-      if (::fstat(fd_, &held) == 0 && ::stat(path_.c_str(), &named) == 0 &&
-          held.st_ino == named.st_ino && held.st_dev == named.st_dev)
-        return;
-      ::close(fd_);
-      if (attempt == 100) throw_output_error(path_, "cannot lock", EAGAIN);
-    }
-  }
-  ~OutputLock() {
-    ::unlink(path_.c_str());  // before the lock goes: no other run holds this file
-    ::close(fd_);
-  }
-  OutputLock(const OutputLock&) = delete;
-  OutputLock& operator=(const OutputLock&) = delete;
+void print_progress(double t, double duration, double wall) {
+  const int width = 30;
+  const double frac = duration > 0 ? std::min(1.0, t / duration) : 1.0;
+  const int fill = static_cast<int>(frac * width);
+  std::fprintf(stderr, "\r[%.*s%*s] %5.1f%%  sim %.3f s  wall %.1f s  %.2fx real time ", fill,
+               "##############################", width - fill, "", 100 * frac, t, wall,
+               wall > 0 ? t / wall : 0.0);
+  std::fflush(stderr);
+}
 
- private:
-  fs::path path_;
-  int fd_ = -1;
+struct RunOptions {
+  SceneOptions scene;
+  std::string out_dir, resume_dir;
+  std::optional<double> checkpoint_every;
+  std::optional<std::string> exports, up;
+  bool quiet = false, force = false;
 };
 
-// Removes the frames (frames/frame_NNNNN.obj, vtk/cloth_NNNNN.vtp) from
-// `first` on: a resumed run writes them again.
-void remove_frames_from(const fs::path& out, long long first) {
-  std::error_code ec;
-  for (const auto& [folder, prefix] : {std::pair{"frames", "frame_"}, {"vtk", "cloth_"}}) {
-    const fs::path dir = out / folder;
-    if (!fs::is_directory(dir, ec)) continue;
-    for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
-      const std::string name = it->path().filename().string();
-      const std::string p = prefix;
-      if (name.rfind(p, 0) != 0 || name.size() < p.size() + 5) continue;
-      char* endp = nullptr;
-      const long long index = std::strtoll(name.c_str() + p.size(), &endp, 10);
-      if (endp == name.c_str() + p.size() || index < first) continue;
-      if (std::string(endp) != (std::string(folder) == "frames" ? ".obj" : ".vtp")) continue;
-      if (std::error_code rec; fs::remove(it->path(), rec), rec)
-        throw_output_error(it->path(), "cannot remove", rec.value());
-    }
-    if (ec) throw_output_error(dir, "cannot list", ec.value());
-  }
+void add_run_options(CLI::App* run, RunOptions& o) {
+  o.scene.add_to(run, false);  // no SCENE with --resume
+  run->add_option("--checkpoint-every", o.checkpoint_every,
+                  "write the whole state into DIR/checkpoint.state every S of simulated time, "
+                  "for --resume (= --set run.checkpoint_every=S)")
+      ->check(in_range_of("run.checkpoint_every"));
+  run->add_option("--resume", o.resume_dir,
+                  "continue the run in DIR from its checkpoint.state, with the same bits as a run "
+                  "never stopped (no SCENE: it comes from the checkpoint; --threads and "
+                  "--checkpoint-every may be given)")
+      ->check(a_path());
+  run->add_option("--out", o.out_dir, "output folder (default out/<scene name>)")->check(a_path());
+  run->add_flag("--quiet", o.quiet, "no progress bar");
+  run->add_option("--export", o.exports,
+                  "animation caches, any of usd,pc2,vtk (= --set run.export=LIST): DIR/cloth.usda; "
+                  "DIR/cloth.pc2 with DIR/cloth_rest.obj; DIR/vtk/*.vtp with DIR/cloth.pvd");
+  run->add_option("--up", o.up,
+                  "up axis of every file written, z (default) or y (= --set run.up=A)")
+      ->check(CLI::IsMember({"z", "y"}));
+  run->add_flag("--force", o.force,
+                "run even where the memory or disk the run needs (estimated) is more than the "
+                "machine has, or into a folder that holds files no wetcloth run wrote (they stay)");
+  run->footer(
+      "Writes DIR/metrics.csv (one row per frame, SI units in the header), DIR/frames/*.obj,\n"
+      "DIR/obstacles.obj, DIR/scene.toml (every parameter, resolved) and DIR/summary.json,\n"
+      "listed in DIR/.wetcloth.manifest: a run into DIR removes only what the last run listed.\n"
+      "Exit codes: 0 ok, 2 bad input (nothing written; or DIR is in use by another run, a\n"
+      "system folder, or holds files of no wetcloth run and --force is not given),\n"
+      "3 the simulation blew up (outputs so far kept), 4 an output could not be written\n"
+      "(full disk, read-only folder: the file and the reason named), 130 / 143 stopped by\n"
+      "SIGINT / SIGTERM at the end of a step (outputs whole, summary.json \"interrupted\",\n"
+      "DIR/checkpoint.state written: `wetcloth run --resume DIR` continues the run).");
 }
 
-std::string read_file(const fs::path& path) {
-  std::ifstream f(path, std::ios::binary);
-  if (!f) throw SceneError(path.string() + ": cannot read");
-  std::ostringstream buf;
-  buf << f.rdbuf();
-  return buf.str();
-}
-
-// The first metric that is not a number, or empty: such a row is not written.
-std::string non_finite_metric(const Metrics& m) {
-  const auto cols = metrics_columns();
-  const auto vals = metrics_values(m);
-  for (std::size_t i = 0; i < vals.size(); ++i)
-    if (!std::isfinite(vals[i])) return cols[i] + " = " + format_number(vals[i]);
-  return {};
-}
-
-const char* signal_name(int sig) {
-  return sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : "a signal";
-}
-
-// A run's scene.toml runs from its folder: the meshes the scene names go to
-// OUT/meshes/ (a built-in scene's from the copies in the program), and its
-// keys name them there. P with those paths; with `files`, each file's path in
-// OUT and its text. One file named twice is copied once; two files of one
-// name become meshes/NAME and meshes/2-NAME.
-Params with_output_meshes(const Params& p,
-                          std::vector<std::pair<std::string, std::string>>* files = nullptr) {
-  Params q = p;
-  std::vector<std::pair<std::string, std::string>> placed;  // the scene's path, the new one
-  const auto place = [&](const std::string& key, std::string& path) {
-    if (path.empty()) return;
-    const std::string from = fs::path(path).lexically_normal().generic_string();
-    for (const auto& [source, to] : placed)
-      if (source == from) {
-        path = to;
-        return;
-      }
-    const std::string name = fs::path(from).filename().string();
-    std::string to = "meshes/" + name;
-    for (int k = 2;
-         std::any_of(placed.begin(), placed.end(), [&](const auto& e) { return e.second == to; });
-         ++k)
-      to = "meshes/" + std::to_string(k) + "-" + name;
-    placed.emplace_back(from, to);
-    if (files) files->emplace_back(to, scene_file_text(p, key, path));
-    path = to;
+// The scene is the checkpoint's: what would change it is refused.
+void refuse_scene_changes(const RunOptions& o) {
+  std::string given;
+  const auto refuse = [&](bool set, const char* what) {
+    if (set) given += (given.empty() ? "" : ", ") + std::string(what);
   };
-  place("cloth.mesh", q.cloth.mesh);
-  for (auto& [name, o] : q.obstacles) place("obstacle." + name + ".mesh", o.mesh);
-  return q;
+  refuse(!o.scene.scene.empty(), "a SCENE");
+  refuse(!o.scene.sets.empty(), "--set");
+  refuse(o.scene.humidity.has_value(), "--humidity");
+  refuse(o.scene.duration.has_value(), "--duration");
+  refuse(o.scene.grid.has_value(), "--grid");
+  refuse(o.exports.has_value(), "--export");
+  refuse(o.up.has_value(), "--up");
+  refuse(!o.out_dir.empty(), "--out");
+  if (!given.empty())
+    throw SceneError("--resume " + o.resume_dir +
+                     ": the run continues in that folder with its checkpoint's scene; " + given +
+                     " would change it (--threads, --checkpoint-every, --quiet and --force "
+                     "may be given)");
 }
 
-std::string frame_file(const char* folder, const char* prefix, long long f, const char* extension) {
-  char name[64];
-  std::snprintf(name, sizeof name, "%s/%s%05lld%s", folder, prefix, f, extension);
-  return name;
+// --resume DIR: the checkpoint's scene with the options that may change, or
+// nothing when the run in DIR has ended whole.
+std::optional<ResumePoint> resume_point(const RunOptions& o, fs::path& out) {
+  refuse_scene_changes(o);
+  out = o.resume_dir;
+  std::optional<ResumePoint> resume = resume_run(out, o.scene.threads, o.checkpoint_every, o.force);
+  if (!resume && !o.quiet)
+    std::printf("%s: the run ended whole (summary.json); nothing to resume\n", out.c_str());
+  return resume;
 }
 
-// Every file (and, ending in '/', folder) a run of P may write in its folder,
-// relative to it: its manifest. Its frames are known from the start.
-std::vector<std::string> run_outputs(const Params& p) {
-  std::vector<std::string> files = {"metrics.csv", "summary.json", "scene.toml", "obstacles.obj",
-                                    "checkpoint.state"};
-  const Params q = with_output_meshes(p);
-  std::vector<std::string> meshes;
-  if (!q.cloth.mesh.empty()) meshes.push_back(q.cloth.mesh);
-  for (const auto& [name, o] : q.obstacles)
-    if (std::find(meshes.begin(), meshes.end(), o.mesh) == meshes.end()) meshes.push_back(o.mesh);
-  if (!meshes.empty()) files.push_back("meshes/");
-  files.insert(files.end(), meshes.begin(), meshes.end());
-  const long long last = last_frame_index(p.run.duration, p.run.fps);
-  if (p.run.meshes) {
-    files.push_back("frames/");
-    for (long long f = 0; f <= last; ++f)
-      files.push_back(frame_file("frames", "frame_", f, ".obj"));
-  }
-  const ExportFormats formats = parse_export_formats(p.run.exports);
-  if (formats.pc2) files.insert(files.end(), {"cloth.pc2", "cloth_rest.obj"});
-  if (formats.vtk) {
-    files.insert(files.end(), {"cloth.pvd", "vtk/", "vtk/obstacles.vtp"});
-    for (long long f = 0; f <= last; ++f) files.push_back(frame_file("vtk", "cloth_", f, ".vtp"));
-  }
-  if (formats.usd) {
-    files.insert(files.end(), {"cloth.usda", ".cloth.usda.samples/"});
-    for (const char* a : {"points", "normals", "extent", "contact", "pressure", "adhesion",
-                          "humidity", "velocities", "deficit"})
-      files.push_back(std::string(".cloth.usda.samples/") + a);
-  }
-  return files;
-}
-
-// Throws SceneError naming the first output that the checkpoint of a resumed
-// run says was written and that is not there (as a file: no link).
-void check_resume_outputs(const Params& p, const fs::path& out, long long frames,
-                          const fs::path& checkpoint) {
-  std::vector<std::string> files = {"scene.toml", "obstacles.obj"};
-  const Params q = with_output_meshes(p);
-  if (!q.cloth.mesh.empty()) files.push_back(q.cloth.mesh);
-  for (const auto& [name, o] : q.obstacles) files.push_back(o.mesh);
-  const ExportFormats formats = parse_export_formats(p.run.exports);
-  if (formats.pc2) files.push_back("cloth_rest.obj");
-  if (formats.vtk) files.push_back("vtk/obstacles.vtp");
-  for (long long f = 0; f < frames; ++f) {
-    if (p.run.meshes) files.push_back(frame_file("frames", "frame_", f, ".obj"));
-    if (formats.vtk) files.push_back(frame_file("vtk", "cloth_", f, ".vtp"));
-  }
-  for (const std::string& rel : files) {
-    struct stat st {};
-    if (::lstat((out / rel).c_str(), &st) != 0 || !S_ISREG(st.st_mode))
-      throw SceneError((out / rel).string() + ": " +
-                       (::lstat((out / rel).c_str(), &st) != 0 ? "missing" : "not a file") +
-                       ", where " + checkpoint.string() + " continues a run that wrote it (" +
-                       std::to_string(frames) +
-                       " frames): the outputs are not whole; run the scene again (wetcloth run " +
-                       (out / "scene.toml").string() + " --out " + out.string() + ")");
-  }
-}
-
-}  // namespace
-
-ResourceEstimate estimate_resources(const Params& p) {
-  ResourceEstimate e;
-  // A mesh cloth's particles are its vertices (cloth.resolution is not used).
-  const bool grid = p.cloth.mesh.empty();
-  const ClothMeshSize mesh = grid ? ClothMeshSize{} : cloth_mesh_size(p);
-  const double n = grid ? static_cast<double>(p.cloth.resolution[0]) * p.cloth.resolution[1]
-                        : static_cast<double>(mesh.vertices);
-  const double triangles = grid ? 2 * n : static_cast<double>(mesh.triangles);
-  // Measured: peak RSS 8 MB + 1.5 kB a particle (hang, one thread, at 201 x
-  // 201 and 401 x 401: 67 and 245 MB), 1.5 to 1.7 kB over whole runs at 401 x
-  // 401 and 1001 x 1001, self-collision's pair lists included (they hold the
-  // pairs near now, not every pair within reach).
-  e.memory_bytes = kBaseBytes + n * kBytesPerParticle;
-  const double frames = static_cast<double>(last_frame_index(p.run.duration, p.run.fps)) + 1;
-  // An OBJ frame: a position and a normal a particle (70 bytes), a triangle 35.
-  e.disk_bytes = frames * (300 + (p.run.meshes ? 70 * n + 35 * triangles : 0)) + 1e5;
-  return e;
-}
-
-namespace {
-
-std::string gigabytes(double bytes) {
-  char b[32];
-  std::snprintf(b, sizeof b, bytes < 1e9 ? "%.0f MB" : "%.1f GB",
-                bytes < 1e9 ? bytes / 1e6 : bytes / 1e9);
-  return b;
-}
-
-// MemAvailable, or the cgroup's limit, or what the address space limit
-// (ulimit -v) leaves, where lower; < 0: unknown.
-double available_memory() {
-  double avail = -1;
-  std::FILE* f = std::fopen("/proc/meminfo", "r");
-  if (f) {
-    char line[256];
-    while (std::fgets(line, sizeof line, f))
-      if (unsigned long long kb; std::sscanf(line, "MemAvailable: %llu kB", &kb) == 1)
-        avail = static_cast<double>(kb) * 1024;
-    std::fclose(f);
-  }
-  if (std::FILE* g = std::fopen("/sys/fs/cgroup/memory.max", "r")) {
-    if (unsigned long long limit; std::fscanf(g, "%llu", &limit) == 1) {
-      double used = 0;
-      if (std::FILE* c = std::fopen("/sys/fs/cgroup/memory.current", "r")) {
-        if (unsigned long long u; std::fscanf(c, "%llu", &u) == 1) used = static_cast<double>(u);
-        std::fclose(c);
-      }
-      const double left = static_cast<double>(limit) - used;
-      if (avail < 0 || left < avail) avail = left;
-    }
-    std::fclose(g);
-  }
-  if (rlimit r{}; ::getrlimit(RLIMIT_AS, &r) == 0 && r.rlim_cur != RLIM_INFINITY) {
-    double used = 0;  // the address space this process already takes
-    if (std::FILE* f = std::fopen("/proc/self/statm", "r")) {
-      if (unsigned long long pages; std::fscanf(f, "%llu", &pages) == 1)
-        used = static_cast<double>(pages) * static_cast<double>(::sysconf(_SC_PAGESIZE));
-      std::fclose(f);
-    }
-    const double left = static_cast<double>(r.rlim_cur) - used;
-    if (avail < 0 || left < avail) avail = left;
-  }
-  return avail;
-}
-
-}  // namespace
-
-void check_resources(const Params& p, const fs::path& out, const std::string& source) {
-  const ResourceEstimate e = estimate_resources(p);
-  const double mem = available_memory();
-  const std::string force = "; --force runs it all the same";
-  if (mem >= 0 && e.memory_bytes > mem)
+// A new run: SCENE with the options that stand for overrides, into a folder
+// made for it.
+void new_run(RunOptions o, Params& p, fs::path& out) {
+  if (o.scene.scene.empty())
     throw SceneError(
-        source + ": " +
-        (p.cloth.mesh.empty() ? "cloth.resolution = [" + std::to_string(p.cloth.resolution[0]) +
-                                    ", " + std::to_string(p.cloth.resolution[1]) + "]"
-                              : "cloth.mesh = \"" + p.cloth.mesh + "\" (" +
-                                    std::to_string(cloth_mesh_size(p).vertices) + " vertices)") +
-        " needs about " + gigabytes(e.memory_bytes) +
-        " of memory (an estimate: " + format_number(kBytesPerParticle / 1000) +
-        " kB a particle, as measured), more than the " + gigabytes(mem) + " available" + force);
-  fs::path at = fs::absolute(out);
-  std::error_code ec;
-  while (!fs::exists(at, ec) && at.has_parent_path() && at != at.parent_path())
-    at = at.parent_path();
-  struct statvfs st {};
-  if (::statvfs(at.c_str(), &st) == 0 && st.f_blocks > 0) {  // /proc has none: not a disk
-    const double free = static_cast<double>(st.f_bavail) * static_cast<double>(st.f_frsize);
-    if (e.disk_bytes > free)
-      throw SceneError(source + ": the outputs (" +
-                       std::to_string(last_frame_index(p.run.duration, p.run.fps) + 1) +
-                       " frames of run.duration = " + format_number(p.run.duration) +
-                       " s at run.fps = " + format_number(p.run.fps) +
-                       (p.run.meshes ? ", with run.meshes" : "") + ") need about " +
-                       gigabytes(e.disk_bytes) + ", more than the " + gigabytes(free) +
-                       " free in " + at.string() + force);
-  }
+        "run: a SCENE is needed (a TOML file or a built-in name: wetcloth scenes), or "
+        "--resume DIR");
+  if (o.exports) o.scene.sets.push_back("run.export=\"" + *o.exports + "\"");
+  if (o.up) o.scene.sets.push_back("run.up=" + *o.up);
+  if (o.checkpoint_every)
+    o.scene.sets.push_back("run.checkpoint_every=" + format_number(*o.checkpoint_every));
+  p = o.scene.load();
+  out = o.out_dir.empty() ? fs::path("out") / folder_name(p.name) : fs::path(o.out_dir);
+  prepare_run(p, out, o.force, o.scene.scene);
 }
+
+// How the run ended, on stderr when it failed, with where its results are.
+int report(const RunResult& r, const Params& p, const fs::path& out, bool quiet) {
+  if (r.code > 128) {
+    std::fprintf(stderr,
+                 "wetcloth: %s\nresults so far (whole): %s; `wetcloth run --resume %s` "
+                 "continues the run\n",
+                 r.message.c_str(), out.c_str(), out.c_str());
+    return r.code;
+  }
+  if (r.code != kOk) {
+    std::fprintf(stderr, "wetcloth: %s\nresults so far: %s\n", r.message.c_str(), out.c_str());
+    return r.code;
+  }
+  if (!quiet)
+    std::printf("%s: %lld steps in %.2f s wall (%.2fx real time); results in %s\n", p.name.c_str(),
+                r.steps, r.wall_seconds, r.wall_seconds > 0 ? r.final.time_s / r.wall_seconds : 0.0,
+                out.c_str());
+  return kOk;
+}
+
+int run_command(const RunOptions& o) {
+  Params p;
+  fs::path out;
+  std::optional<ResumePoint> resume;
+  if (!o.resume_dir.empty()) {
+    resume = resume_point(o, out);
+    if (!resume) return kOk;  // it ended whole
+    p = resume->params;
+  } else {
+    new_run(o, p, out);
+  }
+  const bool progress = !o.quiet && isatty(STDERR_FILENO);
+  install_stop_handlers();
+  RunResult r;
+  try {
+    r = run_scene(p, out, run_hooks(progress), resume ? &*resume : nullptr);
+  } catch (...) {
+    if (progress) std::fprintf(stderr, "\n");  // the bar's line ended before the error
+    throw;
+  }
+  if (progress) std::fprintf(stderr, "\n");
+  return report(r, p, out, o.quiet);
+}
+
+}  // namespace
 
 void install_stop_handlers() {
   struct sigaction sa {};
@@ -361,482 +195,18 @@ void install_stop_handlers() {
 
 int stop_signal() { return g_stop.load(); }
 
-bool run_ended_whole(const fs::path& dir) {
-  std::error_code ec;
-  if (fs::exists(dir / "checkpoint.state", ec)) return false;
-  std::ifstream f(dir / "summary.json");
-  if (!f) return false;
-  const auto j = nlohmann::json::parse(f, nullptr, false);
-  return !j.is_discarded() && j.is_object() && j.value("status", "") == "ok";
+RunHooks run_hooks(bool progress) {
+  RunHooks hooks;
+  hooks.stop = stop_signal;
+  if (progress) hooks.progress = print_progress;
+  return hooks;
 }
 
-ResumePoint load_resume_point(const fs::path& dir) {
-  ResumePoint rp;
-  rp.file = dir / "checkpoint.state";
-  std::error_code ec;
-  if (!fs::is_directory(dir, ec))
-    throw SceneError("--resume " + dir.string() + ": not a folder of a run");
-  if (!fs::exists(rp.file, ec))
-    throw SceneError(rp.file.string() +
-                     ": no checkpoint to resume from (a run writes one every "
-                     "--checkpoint-every S of simulated time, and when SIGINT or SIGTERM stops "
-                     "it; a run that ended whole removes it)");
-  Checkpoint c = load_checkpoint(rp.file);
-  if (c.run.empty())
-    throw SceneError(rp.file.string() +
-                     ": a state without its run's record (saved by the viewer, Python's "
-                     "Simulation.save or an older wetcloth): `run --resume` continues only a "
-                     "checkpoint that `wetcloth run` wrote");
-  // The folder's scene.toml is the scene its outputs came from.
-  const fs::path scene = dir / "scene.toml";
-  if (!fs::exists(scene, ec))
-    throw SceneError(scene.string() + ": missing, so the outputs of " + dir.string() +
-                     " cannot be matched with " + rp.file.string());
-  // What --resume may set (the step's threads, the checkpoints' interval)
-  // changes no result: not compared.
-  const Params folder = load_scene(scene.string());
-  Params compared = c.params;
-  compared.integrator.threads = folder.integrator.threads;
-  compared.run.checkpoint_every = folder.run.checkpoint_every;
-  // scene.toml names the meshes it copied (or, from an older run, the scene's).
-  const std::string mine = to_toml(with_output_meshes(compared)), theirs = to_toml(folder);
-  if (mine != theirs && to_toml(compared) != theirs) {
-    std::istringstream a(mine), b(theirs);
-    std::string la, lb;
-    while (std::getline(a, la) && std::getline(b, lb) && la == lb) {
-    }
-    throw SceneError(rp.file.string() + ": a checkpoint of another scene than " + scene.string() +
-                     " (the checkpoint's `" + la + "`, scene.toml's `" + lb + "`)");
-  }
-  rp.params = std::move(c.params);
-  rp.state = std::move(c.state);
-  rp.record = std::move(c.run);
-  return rp;
-}
-
-namespace {
-
-// Where the outputs stand after the last frame that a resumed run keeps.
-struct OutputsAt {
-  long long next_frame = 0;     // the frame a resumed run writes first
-  long long metrics_bytes = 0;  // metrics.csv's header and rows up to it
-  CachePosition cache;
-  bool any_row = false;
-  nlohmann::json first, final;  // metrics of the first and last rows kept
-  double time_to_5cm_s = -1, frame_peak_deficit_pa = 0;
-};
-
-nlohmann::json record_json(const OutputsAt& at, long long substeps, double wall) {
-  return {{"next_frame", at.next_frame},
-          {"metrics_bytes", at.metrics_bytes},
-          {"cache",
-           {{"frames", at.cache.frames},
-            {"last_code", at.cache.last_code},
-            {"samples_bytes", at.cache.samples_bytes}}},
-          {"any_row", at.any_row},
-          {"first", at.first},
-          {"final", at.final},
-          {"time_to_5cm_s", at.time_to_5cm_s},
-          {"frame_peak_deficit_pa", at.frame_peak_deficit_pa},
-          {"substeps", substeps},
-          {"wall_seconds", wall}};
-}
-
-OutputsAt record_outputs(const ResumePoint& rp, long long& substeps, double& wall) {
-  try {
-    const auto j = nlohmann::json::parse(rp.record);
-    OutputsAt at;
-    at.next_frame = j.at("next_frame").get<long long>();
-    at.metrics_bytes = j.at("metrics_bytes").get<long long>();
-    at.cache.frames = j.at("cache").at("frames").get<long long>();
-    at.cache.last_code = j.at("cache").at("last_code").get<double>();
-    at.cache.samples_bytes = j.at("cache").at("samples_bytes").get<std::vector<long long>>();
-    at.any_row = j.at("any_row").get<bool>();
-    at.first = j.at("first");
-    at.final = j.at("final");
-    at.time_to_5cm_s = j.at("time_to_5cm_s").get<double>();
-    at.frame_peak_deficit_pa = j.at("frame_peak_deficit_pa").get<double>();
-    substeps = j.at("substeps").get<long long>();
-    wall = j.at("wall_seconds").get<double>();
-    if (at.next_frame < 0 || at.metrics_bytes < 0 ||
-        (!at.cache.samples_bytes.empty() && at.cache.frames != at.next_frame))
-      throw std::invalid_argument("its frames do not agree");
-    return at;
-  } catch (const std::exception& e) {
-    throw SceneError(rp.file.string() + ": its run record is damaged (" + e.what() + ")");
-  }
-}
-
-// The times of the rows of metrics.csv a resumed run keeps (its first
-// `bytes`: the header and `rows` whole rows); SceneError where the file does
-// not hold them.
-std::vector<double> kept_row_times(const fs::path& path, long long bytes, long long rows,
-                                   const fs::path& checkpoint) {
-  std::error_code ec;
-  if (!fs::exists(path, ec))
-    throw SceneError(path.string() + ": missing; " + checkpoint.string() + " continues it");
-  const std::string text = read_file(path);
-  const std::string why = path.string() + ": not the metrics.csv " + checkpoint.string() +
-                          " continues (" + std::to_string(rows) + " rows, " +
-                          std::to_string(bytes) + " bytes): ";
-  if (static_cast<long long>(text.size()) < bytes)
-    throw SceneError(why + "only " + std::to_string(text.size()) + " bytes");
-  const std::string kept = text.substr(0, static_cast<std::size_t>(bytes));
-  const std::string header = metrics_csv_header();
-  if (kept.rfind(header, 0) != 0) throw SceneError(why + "another header");
-  std::vector<double> times;
-  for (std::size_t at = header.size(); at < kept.size();) {
-    const std::size_t end = kept.find('\n', at);
-    if (end == std::string::npos) throw SceneError(why + "a row cut short");
-    times.push_back(std::strtod(kept.c_str() + at, nullptr));
-    at = end + 1;
-  }
-  if (static_cast<long long>(times.size()) != rows)
-    throw SceneError(why + std::to_string(times.size()) + " rows");
-  return times;
-}
-
-// What a run writes to, and where its outputs stand after the last whole frame.
-struct RunOutputs {
-  std::optional<CacheWriter> caches;
-  std::optional<MetricsFile> metrics;
-  OutputsAt at;
-  long long substeps_before = 0;  // a resumed run's, before the checkpoint
-  double wall_before = 0;
-};
-
-// A new run's outputs started, or a resumed one's taken back to where its
-// checkpoint left them.
-void open_outputs(const Params& p, const fs::path& out, const Simulation& sim,
-                  const ResumePoint* resume, RunOutputs& o, RunResult& r) {
-  const UpAxis up = p.run.up;
-  const ExportFormats formats = parse_export_formats(p.run.exports);
-  auto& caches = o.caches;
-  auto& metrics = o.metrics;
-  auto& at = o.at;
-  // Nothing is written through a link; what the run before wrote goes, and
-  // only that; the manifest lists this run's files before they are written.
-  const std::vector<std::string> files = run_outputs(p);
-  refuse_links(out, files);
-  if (!resume) {
-    // The meshes read first: a run of DIR/scene.toml into DIR reads its own.
-    std::vector<std::pair<std::string, std::string>> meshes;
-    const Params written = with_output_meshes(p, &meshes);
-    remove_outputs(out, earlier_outputs(out));
-    write_manifest(out, files);
-    if (p.run.meshes)
-      if (std::error_code ec; fs::create_directories(out / "frames", ec), ec)
-        throw_output_error(out / "frames", "cannot make the folder", ec.value());
-    if (!meshes.empty())
-      if (std::error_code ec; fs::create_directories(out / "meshes", ec), ec)
-        throw_output_error(out / "meshes", "cannot make the folder", ec.value());
-    for (const auto& [path, text] : meshes) write_file_atomic(out / path, text);
-    write_file_atomic(out / "scene.toml", "# resolved by wetcloth " WETCLOTH_VERSION
-                                          "; `wetcloth run` this file to reproduce the run\n" +
-                                              to_toml(written));
-    write_file_atomic(out / "obstacles.obj", obstacles_obj(sim.model(), up));
-    if (formats.any()) caches.emplace(out, sim, formats, up, p.run.fps);
-    metrics.emplace(out / "metrics.csv");
-    at.metrics_bytes = metrics->size();
-    if (caches) at.cache = caches->position(false);
-  } else {
-    at = record_outputs(*resume, o.substeps_before, o.wall_before);
-    check_resume_outputs(p, out, at.next_frame, resume->file);
-    const std::vector<double> times =
-        kept_row_times(out / "metrics.csv", at.metrics_bytes, at.next_frame, resume->file);
-    if (formats.any()) {
-      at.cache.frames = at.next_frame;  // a cache has a frame a row
-      caches.emplace(out, sim, formats, up, p.run.fps, at.cache, times);
-    }
-    metrics.emplace(out / "metrics.csv", at.metrics_bytes);
-    // The folder as it stood at the checkpoint: nothing after it, no summary yet.
-    if (std::error_code ec; fs::remove(out / "summary.json", ec), ec)
-      throw_output_error(out / "summary.json", "cannot remove", ec.value());
-    remove_frames_from(out, at.next_frame);
-    write_manifest(out, files);  // a run of a wetcloth that wrote none has one now
-    if (p.run.meshes)
-      if (std::error_code ec; fs::create_directories(out / "frames", ec), ec)
-        throw_output_error(out / "frames", "cannot make the folder", ec.value());
-    r.time_to_5cm_s = at.time_to_5cm_s;
-    r.frame_peak_deficit_pa = at.frame_peak_deficit_pa;
-  }
-}
-
-// Frame f's row, mesh and cache frame; the run's first and last rows, its
-// peak deficit and time to 5 cm follow them.
-void write_frame(const Params& p, const fs::path& out, const Simulation& sim, const Metrics& m,
-                 long long f, RunOutputs& o, RunResult& r, nlohmann::json& first_json,
-                 nlohmann::json& final_json) {
-  o.metrics->append(m);
-  if (first_json.is_null()) {
-    first_json = metrics_json(m);
-    r.first = m;
-  }
-  r.final = m;
-  final_json = metrics_json(m);
-  r.frame_peak_deficit_pa = std::max(r.frame_peak_deficit_pa, p.air.p_atm - m.inner_pressure_pa);
-  if (p.run.meshes) {
-    char name[32];
-    std::snprintf(name, sizeof name, "frame_%05lld.obj", f);
-    write_file_atomic(out / "frames" / name, cloth_obj(sim.model(), sim.state(), p.run.up));
-  }
-  // A frame on the frame rate has its number as its USD time code; the last
-  // one, where the duration falls between two, its time × fps.
-  const bool between =
-      frame_time(f, p.run.duration, p.run.fps) < static_cast<double>(f) / p.run.fps;
-  if (o.caches) o.caches->add_frame(sim, between ? -1 : static_cast<double>(f));
-  // Time to 5 cm is a pulled handle's: a pin (measured when there are only
-  // pins) sits at its height from the start.
-  const bool pulled = sim.model().measures_a_pull();
-  if (pulled && r.time_to_5cm_s < 0 && m.handle_height_m >= 0.05) r.time_to_5cm_s = m.time_s;
-}
-
-// Where the outputs stand after whole frame f, for a checkpoint.
-void mark_whole_frame(long long f, RunOutputs& o, const RunResult& r,
-                      const nlohmann::json& first_json, const nlohmann::json& final_json) {
-  OutputsAt& at = o.at;
-  at.next_frame = f + 1;
-  at.metrics_bytes = o.metrics->size();
-  if (o.caches) at.cache = o.caches->position(false);
-  at.any_row = true;
-  at.first = first_json;
-  at.final = final_json;
-  at.time_to_5cm_s = r.time_to_5cm_s;
-  at.frame_peak_deficit_pa = r.frame_peak_deficit_pa;
-}
-
-// summary.json: how the run ended, its size and speed, the last row.
-void write_summary(const fs::path& out, const Params& p, const Simulation& sim, const RunResult& r,
-                   const nlohmann::json& final_json, long long substeps_before,
-                   const ResumePoint* resume) {
-  const bool interrupted = r.code > 128;
-  nlohmann::json s;
-  s["scene"] = p.name;
-  s["version"] = WETCLOTH_VERSION;
-  s["status"] = r.code == kOk ? "ok" : interrupted ? "interrupted" : "blew up";
-  s["interrupted"] = interrupted;
-  if (interrupted) s["signal"] = signal_name(r.code - 128);
-  if (r.code != kOk) s["message"] = r.message;
-  s["steps"] = r.steps;
-  // More than steps where implicit Euler halved some.
-  s["substeps"] = substeps_before + sim.stats().substeps;
-  s["particles"] = sim.model().n;
-  // The count asked for (0: chosen as it ran), always a number; beside it how
-  // the choice went, or the count used (at most one thread per 1024 particles).
-  s["threads"] = p.integrator.threads;
-  if (const StepStats c = sim.stats(); c.threads_chosen)
-    s["thread_choice"] = {{"most", c.most_threads},
-                          {"steps_on_1", c.steps_on_one},
-                          {"steps_on_most", c.steps_on_most}};
-  else
-    s["threads_used"] = sim.model().threads;
-  s["simulated_seconds"] = sim.state().time;
-  s["wall_seconds"] = r.wall_seconds;
-  s["realtime_factor"] = r.wall_seconds > 0 ? sim.state().time / r.wall_seconds : 0.0;
-  s["peak_pressure_deficit_pa"] = r.peak_deficit_pa;
-  s["final"] = final_json;  // the last row's (JSON has no inf: a row never has one)
-  if (resume) s["resumed_at_s"] = resume->state.time;
-  write_file_atomic(out / "summary.json", s.dump(2) + "\n");
-}
-
-// The run's end: the outputs closed, the result's totals, summary.json, and
-// on success the checkpoint removed. wrote_a_row: this run wrote a row;
-// start: when it started.
-void finish_run(const Params& p, const fs::path& out, const Simulation& sim,
-                const ResumePoint* resume, bool wrote_a_row,
-                std::chrono::steady_clock::time_point start, RunOutputs& o, RunResult& r,
-                nlohmann::json& first_json, nlohmann::json& final_json) {
-  o.metrics->close();
-  if (o.caches) o.caches->finish();
-  if (first_json.is_null()) {
-    r.first = r.final = sim.metrics();
-    first_json = final_json = metrics_json(r.first);
-  } else if (!wrote_a_row) {
-    r.final = sim.metrics();  // a resumed run that had no frame left: the state's
-  }
-  r.peak_deficit_pa = sim.state().peak_deficit;
-  r.steps = sim.state().steps;
-  r.wall_seconds = o.wall_before +
-                   std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  r.simulated_seconds = sim.state().time;
-  const bool interrupted = r.code > 128;
-  if (interrupted)
-    r.message = std::string("interrupted by ") + signal_name(r.code - 128) +
-                " at t = " + format_number(sim.state().time) + " s";
-  write_summary(out, p, sim, r, final_json, o.substeps_before, resume);
-  // Whole: nothing to resume. The checkpoint goes once cloth.usda and
-  // summary.json are written, the USD samples after it: a run killed at any
-  // moment either resumes from its checkpoint or has ended whole.
-  if (r.code == kOk) {
-    if (std::error_code ec; fs::remove(out / "checkpoint.state", ec), ec)
-      throw_output_error(out / "checkpoint.state", "cannot remove", ec.value());
-    if (o.caches) o.caches->remove_samples();
-  }
-}
-
-// Steps until `target`, a step at a time (Simulation::advance_to): a signal
-// stops the run at the end of the step it arrived in, a blow-up at once.
-void advance_to_step(Simulation& sim, long long target) {
-  while (sim.state().steps < target && stop_signal() == 0) {
-    sim.step();
-    if (!sim.blow_up_reason().empty()) break;
-  }
-}
-
-// A run's frames, from where its outputs stand to the last: the simulation,
-// what it writes, and its clock (from `start`, the wall time before a resume
-// added to it).
-struct FrameLoop {
-  const Params& p;
-  const fs::path& out;
-  Simulation& sim;
-  RunOutputs& o;
-  RunResult& r;
-  nlohmann::json first_json, final_json;  // the first and last rows' metrics
-  long long written_at_step = -1;         // the step of the last row written
-  const std::chrono::steady_clock::time_point start = std::chrono::steady_clock::now();
-
-  double wall() const {
-    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  }
-  long long target_step(long long f) const {
-    return std::llround(frame_time(f, p.run.duration, p.run.fps) / p.integrator.dt);
-  }
-  // The checkpoint: this state, and the outputs as they stood after the last
-  // whole frame (a row at a step between two frames is written again).
-  void save() {
-    o.metrics->sync();
-    if (o.caches) o.caches->position(true);  // on the disk
-    const nlohmann::json rec =
-        record_json(o.at, o.substeps_before + sim.stats().substeps, o.wall_before + wall());
-    save_checkpoint(out / "checkpoint.state", p, sim.state(), rec.dump());
-  }
-  // Frame f: the steps to it, its row, mesh and cache frame. False where the
-  // run ends there (a signal, a blow-up), r saying why.
-  bool frame(long long f, bool progress);
-  void run(bool progress);
-};
-
-bool FrameLoop::frame(long long f, bool progress) {
-  const long long target = target_step(f);
-  advance_to_step(sim, target);
-  const bool ok = sim.blow_up_reason().empty();
-  const int sig = stop_signal();
-  if (sig != 0 && sim.state().steps == written_at_step) {  // the last row is this state's
-    r.code = 128 + sig;
-    save();
-    return false;
-  }
-  const Metrics m = sim.metrics();
-  if (const std::string bad = non_finite_metric(m); !bad.empty()) {
-    r.code = kBlowUp;
-    r.message =
-        "the simulation left the range of numbers at t = " + format_number(sim.state().time) +
-        " s (" + bad + "; not written to metrics.csv). " +
-        (ok ? "Look at positions and sizes far from the origin (cloth.center, "
-              "ball.center, table.height, cloth.size) and the forces."
-            : sim.blow_up_reason());
-    return false;
-  }
-  write_frame(p, out, sim, m, f, o, r, first_json, final_json);
-  written_at_step = sim.state().steps;
-  if (progress) print_progress(sim.state().time, p.run.duration, o.wall_before + wall());
-  if (!ok) {
-    r.code = kBlowUp;
-    r.message = sim.blow_up_reason();
-    return false;
-  }
-  // A whole frame: a resumed run goes on after it.
-  if (sim.state().steps == target) mark_whole_frame(f, o, r, first_json, final_json);
-  if (sig != 0) {
-    r.code = 128 + sig;
-    save();
-    return false;
-  }
-  return true;
-}
-
-void FrameLoop::run(bool progress) {
-  const long long frames = last_frame_index(p.run.duration, p.run.fps);
-  const double every = p.run.checkpoint_every;
-  const auto next_checkpoint_after = [&](double t) {
-    return every > 0 ? (std::floor(t / every + 1e-9) + 1) * every
-                     : std::numeric_limits<double>::infinity();
-  };
-  double next_checkpoint = next_checkpoint_after(sim.state().time);
-  for (long long f = o.at.next_frame; f <= frames; ++f) {
-    if (!frame(f, progress)) break;
-    // Every run.checkpoint_every, at a whole frame with steps to the next
-    // (a row right after a restore is the next step's).
-    if (sim.state().time >= next_checkpoint - 1e-9 * every && f < frames &&
-        target_step(f + 1) > target_step(f)) {
-      save();
-      next_checkpoint = next_checkpoint_after(sim.state().time);
-    }
-  }
-  if (progress) std::fprintf(stderr, "\n");
-}
-
-}  // namespace
-
-RunResult run_scene(const Params& p, const fs::path& out, bool progress,
-                    const ResumePoint* resume) {
-  RunResult r;
-  Simulation sim(p);
-  if (resume) try {
-      sim.restore(resume->state);
-    } catch (const std::invalid_argument& e) {
-      throw SceneError(resume->file.string() + ": " + e.what());
-    }
-  if (std::error_code ec; fs::create_directories(out, ec), ec)
-    throw_output_error(out, "cannot make the folder", ec.value());
-  r.started = true;
-  const OutputLock lock(out);
-  RunOutputs o;
-  open_outputs(p, out, sim, resume, o, r);
-  FrameLoop loop{p, out, sim, o, r, o.at.first, o.at.final};
-  loop.run(progress);
-  finish_run(p, out, sim, resume, loop.written_at_step >= 0, loop.start, o, r, loop.first_json,
-             loop.final_json);
-  return r;
-}
-
-void share_cores(std::vector<std::string>& sets, unsigned jobs) {
-  if (overrides_key(sets, "integrator.threads")) return;
-  const unsigned cores = std::max(1u, std::thread::hardware_concurrency());
-  // One run at a time takes all the cores as the step finds them free (0).
-  const unsigned each = jobs <= 1 ? 0 : std::max(1u, cores / jobs);
-  sets.insert(sets.begin(), "integrator.threads=" + std::to_string(each));
-}
-
-std::vector<RunResult> run_all(const std::vector<std::pair<Params, fs::path>>& runs, unsigned jobs,
-                               const std::function<void(std::size_t, const RunResult&)>& done) {
-  std::vector<RunResult> results(runs.size());
-  std::atomic<std::size_t> next{0};
-  std::mutex lock;
-  auto worker = [&] {
-    for (std::size_t i; (i = next++) < runs.size();) {
-      if (const int sig = stop_signal(); sig != 0) {  // interrupted: no case starts
-        results[i].code = 128 + sig;
-        results[i].message = std::string("not run: interrupted by ") + signal_name(sig);
-      } else
-        try {  // an exception must not end the process from a worker thread
-          results[i] = run_scene(runs[i].first, runs[i].second, false);
-        } catch (const std::exception& e) {
-          results[i].code = dynamic_cast<const SceneError*>(&e)    ? kBadInput
-                            : dynamic_cast<const OutputError*>(&e) ? kOutputError
-                                                                   : kError;
-          results[i].message = e.what();
-        }
-      std::lock_guard<std::mutex> hold(lock);
-      done(i, results[i]);
-    }
-  };
-  std::vector<std::thread> pool;
-  for (std::size_t t = 0; t < std::min<std::size_t>(std::max(1u, jobs), runs.size()); ++t)
-    pool.emplace_back(worker);
-  for (auto& t : pool) t.join();
-  return results;
+std::function<int()> add_run_command(CLI::App& app) {
+  auto o = std::make_shared<RunOptions>();
+  auto* cmd = app.add_subcommand("run", "run a scene and write its results into a folder");
+  add_run_options(cmd, *o);
+  return [cmd, o]() -> int { return *cmd ? run_command(*o) : -1; };
 }
 
 }  // namespace wetcloth::cli

@@ -1,54 +1,21 @@
-// The options every scene-running command takes: SCENE, --set, --humidity,
-// --duration, --threads, --grid.
+// The options every scene-running command of the programs (the command line,
+// the viewer) takes: SCENE, --set, --humidity, --duration, --threads, --grid,
+// parsed with CLI11; what they load is the library's (wetcloth/run.hpp).
 #pragma once
 
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <charconv>
-#include <filesystem>
 #include <optional>
 #include <stdexcept>
 #include <string>
 #include <vector>
 
 #include "wetcloth/output.hpp"
+#include "wetcloth/run.hpp"  // load_on_grid, overrides_key
 #include "wetcloth/scene.hpp"
 
 namespace wetcloth::cli {
-
-// Whether one of the KEY=VALUE overrides sets `key`.
-inline bool overrides_key(const std::vector<std::string>& sets, const std::string& key) {
-  for (const auto& s : sets)
-    if (s.rfind(key + "=", 0) == 0) return true;
-  return false;
-}
-
-// SCENE with the overrides; with a grid, the same cloth that many particles
-// wide (wetcloth::at_resolution), keeping a time step the overrides set.
-// `option` names the grid in an error.
-inline Params load_on_grid(const std::string& scene, const std::vector<std::string>& sets,
-                           std::optional<long long> grid, const std::string& option = "--grid",
-                           IntegratorTier tier = IntegratorTier::Accurate) {
-  Params p = load_scene(scene, sets, tier);
-  if (!grid) return p;
-  const double dt = p.integrator.dt;
-  try {
-    p = at_resolution(p, *grid);
-  } catch (const SceneError& e) {
-    throw SceneError(option + ": " + e.what());
-  }
-  if (overrides_key(sets, "integrator.dt")) p.integrator.dt = dt;
-  // What the scaling made of the scene (a handle's patch in grid steps) is
-  // checked here, so that the error names the option before anything runs.
-  try {
-    validate(p);
-  } catch (const SceneError& e) {
-    std::string what = e.what();
-    if (what.rfind("Params: ", 0) == 0) what = what.substr(8);
-    throw SceneError(option + " " + std::to_string(*grid) + ": " + what);
-  }
-  return p;
-}
 
 // A command-line value checked against the range of the scene parameter it
 // sets, so that the error names the option the user typed:
@@ -66,18 +33,6 @@ inline CLI::Validator in_range_of(const std::string& key) {
         return "value " + text + " is out of range " + def->range_text() + " (" + def->key + ")";
       },
       def->range_text());
-}
-
-// A scene's name as one folder under out/ (the default output folder): a name
-// is a label, not a path, so '/', '\\' and control characters become '_', and
-// a leading '.' too (no "..", no hidden folder); an empty name is "scene".
-inline std::string folder_name(const std::string& name) {
-  std::string f;
-  for (const char c : name) {
-    const auto u = static_cast<unsigned char>(c);
-    f += (c == '/' || c == '\\' || u < 0x20 || u == 0x7F || (f.empty() && c == '.')) ? '_' : c;
-  }
-  return f.empty() ? "scene" : f;
 }
 
 // A count such as --grid: digits that fit a long long, nothing else (CLI11
@@ -98,63 +53,6 @@ inline CLI::Validator a_whole_number() {
 inline CLI::Validator a_path() {
   return CLI::Validator(
       [](std::string& text) -> std::string { return text.empty() ? "an empty path" : ""; }, "");
-}
-
-// Throws SceneError (bad input) when `out`, or the nearest part of it that
-// exists, is not a folder: checked before anything runs or is written.
-inline void check_output_folder(const std::filesystem::path& out,
-                                const std::string& option = "--out") {
-  namespace fs = std::filesystem;
-  for (fs::path at = out; !at.empty() && at != at.parent_path(); at = at.parent_path()) {
-    std::error_code ec;
-    const auto st = fs::status(at, ec);
-    if (!fs::exists(st)) continue;
-    if (fs::is_directory(st)) return;
-    throw SceneError(option + " " + out.string() + ": " +
-                     (at == out ? "exists and is not a folder" : at.string() + " is not a folder"));
-  }
-}
-
-// Throws SceneError (bad input) where OUT is the filesystem's root or a
-// system folder (/etc, /proc, /usr, ...), however it is spelt (`..`, a link):
-// no command writes there, --force or not.
-inline void refuse_system_folder(const std::filesystem::path& out,
-                                 const std::string& option = "--out") {
-  namespace fs = std::filesystem;
-  std::error_code ec;
-  fs::path real = fs::absolute(out, ec);
-  if (!ec) {
-    const fs::path through_links = fs::weakly_canonical(real, ec);
-    real = ec ? real.lexically_normal() : through_links;
-  }
-  std::string at = real.lexically_normal().generic_string();
-  while (at.size() > 1 && at.back() == '/') at.pop_back();
-  // Folders of the system and of everyone, whose files are not a run's...
-  static const char* const kExactly[] = {"/",    "/home", "/media", "/mnt", "/opt", "/root",
-                                         "/run", "/snap", "/srv",   "/tmp", "/var"};
-  // ... and those of the system all the way down.
-  static const char* const kUnder[] = {"/bin",   "/boot",   "/dev",  "/etc",  "/lib", "/lib32",
-                                       "/lib64", "/libx32", "/proc", "/sbin", "/sys", "/usr"};
-  bool system = std::find(std::begin(kExactly), std::end(kExactly), at) != std::end(kExactly);
-  for (const std::string u : kUnder) system = system || at == u || at.rfind(u + "/", 0) == 0;
-  if (system)
-    throw SceneError(
-        option + " " + out.string() + ": " +
-        (at == "/" ? std::string("the filesystem's root") : at + " is a system folder") +
-        ": wetcloth writes no outputs there (choose a folder of your own, e.g. out/NAME)");
-}
-
-// check_output_folder, then makes the folder: one that cannot be made (no
-// permission, a read-only place) is bad input too, as is a system folder. (An
-// existing folder that cannot be written into fails as the first file does:
-// exit 4, an output that cannot be written.)
-inline void make_output_folder(const std::filesystem::path& out,
-                               const std::string& option = "--out") {
-  check_output_folder(out, option);
-  refuse_system_folder(out, option);
-  std::error_code ec;
-  std::filesystem::create_directories(out, ec);
-  if (ec) throw SceneError(option + " " + out.string() + ": cannot make it (" + ec.message() + ")");
 }
 
 struct SceneOptions {

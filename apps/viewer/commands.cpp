@@ -42,7 +42,7 @@ namespace fs = std::filesystem;
 bool check_writable_folder(const fs::path& dir, const std::string& option) {
   std::error_code ec;
   const bool existed = fs::exists(dir, ec);
-  cli::make_output_folder(dir, option);
+  make_output_folder(dir, option);
   const fs::path probe = dir / (".wetcloth-probe-" + std::to_string(getpid()));
   const bool ok = static_cast<bool>(std::ofstream(probe));
   const int err = errno;

@@ -189,7 +189,7 @@ class Viewer {
       params_ = opts_.params;
     } else {
       try {
-        params_ = cli::load_on_grid(name, opts_.overrides, opts_.grid, "--grid", opts_.tier);
+        params_ = load_on_grid(name, opts_.overrides, opts_.grid, "--grid", opts_.tier);
       } catch (const SceneError& e) {  // the command line's --set may not fit this scene
         params_ = load_scene(name, {}, opts_.tier);
         status_ = "--set not applied to " + name + ": " + e.what();

@@ -1,6 +1,8 @@
 // wetcloth as a Python module (pybind11): scenes, a Simulation stepped from
-// Python with its state as NumPy arrays, and what wetcloth.sweep runs per
-// case. It binds the public API of include/wetcloth as it is.
+// Python with its state as NumPy arrays, a run into its folder (wetcloth.run)
+// and what wetcloth.sweep plans and runs per case. It binds the public API of
+// include/wetcloth as it is: the run and the sweep are the library's, as the
+// command line's are.
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -9,16 +11,18 @@
 #include <charconv>
 #include <chrono>
 #include <cmath>
+#include <csignal>
 #include <filesystem>
 #include <optional>
 #include <string>
 #include <vector>
 
-#include "sweep_plan.hpp"  // apps/cli: the cases of a sweep, as `wetcloth sweep` makes them
 #include "wetcloth/checkpoint.hpp"
 #include "wetcloth/output.hpp"
+#include "wetcloth/run.hpp"
 #include "wetcloth/scene.hpp"
 #include "wetcloth/simulation.hpp"
+#include "wetcloth/sweep.hpp"
 
 namespace py = pybind11;
 using namespace wetcloth;
@@ -324,36 +328,48 @@ py::array_t<T> copy_of(const std::vector<U>& v) {
   return out;
 }
 
-// What `wetcloth sweep` tabulates for one case, without its files: the frames
-// of run_scene (apps/cli/run.cpp), the same steps.
-py::dict run_case(const py::object& scene, const std::vector<std::string>& sets,
-                  std::optional<long long> grid) {
-  const Params p = load(scene, sets, grid);
-  sweep::Outcome o;
-  std::string message;
-  {
-    py::gil_scoped_release free;
-    Simulation sim(p);
-    const long long frames = last_frame_index(p.run.duration, p.run.fps);
-    const bool pulled = sim.model().measures_a_pull();
-    for (long long f = 0; f <= frames; ++f) {
-      const bool ok = sim.advance_to(frame_time(f, p.run.duration, p.run.fps));
-      const Metrics m = sim.metrics();
-      o.final = m;
-      o.frame_peak_deficit_pa =
-          std::max(o.frame_peak_deficit_pa, p.air.p_atm - m.inner_pressure_pa);
-      if (pulled && o.time_to_5cm_s < 0 && m.handle_height_m >= 0.05) o.time_to_5cm_s = m.time_s;
-      if (!ok) {
-        o.ok = false;
-        message = sim.blow_up_reason();
-        break;
-      }
-    }
-    o.peak_deficit_pa = sim.state().peak_deficit;
+// A run's hooks from Python: Ctrl-C (KeyboardInterrupt, or any exception a
+// signal handler raises) is heard every 0.1 s of the run and stops it at the
+// end of that step, whole, as SIGINT stops `wetcloth run`; the exception is
+// kept to be raised once the run has written its checkpoint. progress(t,
+// duration), where given, is called after each frame. The run's thread holds
+// no GIL: each call takes it.
+struct PyRunHooks {
+  RunHooks hooks;
+  std::optional<py::error_already_set> raised;
+  std::chrono::steady_clock::time_point heard = std::chrono::steady_clock::now();
+
+  explicit PyRunHooks(const py::object& progress) {
+    hooks.stop = [this]() -> int {
+      const auto now = std::chrono::steady_clock::now();
+      if (now - heard < std::chrono::milliseconds(100)) return 0;
+      heard = now;
+      py::gil_scoped_acquire gil;
+      if (PyErr_CheckSignals() == 0) return 0;
+      raised.emplace();  // takes the exception set
+      return SIGINT;
+    };
+    if (!progress.is_none())
+      hooks.progress = [progress](double t, double duration, double) {
+        py::gil_scoped_acquire gil;
+        progress(t, duration);
+      };
   }
+  // After the run, the GIL held: the exception a signal raised, raised now.
+  void raise_if_stopped() {
+    if (raised) {
+      py::error_already_set e = std::move(*raised);
+      raised.reset();
+      throw e;
+    }
+  }
+};
+
+py::dict outcome_dict(const RunResult& r) {
+  const sweep::Outcome o = sweep::outcome_of(r);
   py::dict d;
-  d["status"] = o.ok ? "ok" : "blew_up";
-  d["message"] = message;
+  d["status"] = o.ok ? "ok" : o.interrupted ? "interrupted" : "blew_up";
+  d["message"] = r.message;
   d["peak_deficit_pa"] = o.peak_deficit_pa;
   d["frame_peak_deficit_pa"] = o.frame_peak_deficit_pa;
   d["time_to_5cm_s"] = o.time_to_5cm_s;
@@ -361,12 +377,120 @@ py::dict run_case(const py::object& scene, const std::vector<std::string>& sets,
   return d;
 }
 
+// One case of wetcloth.sweep, run by the library's run: into OUT/<case> with
+// its row of sweep.csv beside it (case: its name, columns, humidity and air
+// model from _plan_sweep; extra: the extra keys), or, without OUT, in memory.
+py::dict run_case(const py::object& scene, const std::vector<std::string>& sets,
+                  std::optional<long long> grid, const py::object& out, const py::object& extra,
+                  const py::object& case_info) {
+  sweep::Plan plan;  // this case alone: its row of sweep.csv
+  sweep::Case c;
+  c.params = load(scene, sets, grid);
+  std::filesystem::path dir;
+  if (!out.is_none()) {
+    plan.extra_keys = extra.cast<std::vector<std::string>>();
+    const py::dict info = case_info.cast<py::dict>();
+    c.name = info["name"].cast<std::string>();
+    c.columns = info["columns"].cast<std::vector<std::string>>();
+    c.humidity = info["humidity"].cast<double>();
+    c.air_model = info["air_model"].cast<std::string>();
+    dir = std::filesystem::path(py::str(out).cast<std::string>()) / c.name;
+  }
+  plan.cases.push_back(c);
+  PyRunHooks hooks{py::none()};
+  RunResult r;
+  {
+    py::gil_scoped_release free;
+    r = run_scene(plan.cases[0].params, dir, hooks.hooks);
+  }
+  hooks.raise_if_stopped();
+  py::dict d = outcome_dict(r);
+  d["row"] = dir.empty() ? std::string() : sweep::finish_case(plan, 0, r, dir);
+  return d;
+}
+
+// wetcloth.run: SCENE (with the overrides of load_scene) into OUT, as
+// `wetcloth run` writes it, or the run in RESUME continued; the summary.
+py::object run(const py::object& scene, const py::object& out, const py::object& exports,
+               const py::object& up, const py::object& checkpoint_every, const py::object& resume,
+               bool force, const py::object& progress, const py::object& overrides,
+               const py::kwargs& kw) {
+  std::optional<double> every;
+  if (!checkpoint_every.is_none()) {
+    every = checkpoint_every.cast<double>();
+    const ParamDef* d = sweep::def_of("run.checkpoint_every");
+    if (!(*every >= d->min && *every <= d->max))  // as the option checks it
+      throw SceneError("checkpoint_every: value " + shortest(*every) + " is out of range " +
+                       d->range_text() + " (run.checkpoint_every)");
+  }
+  Params p;
+  std::filesystem::path dir;
+  std::optional<ResumePoint> from;
+  if (!resume.is_none()) {
+    // The scene is the checkpoint's: what would change it is refused.
+    std::optional<unsigned> threads;
+    for (auto [k, v] : kw)
+      if (k.cast<std::string>() == "threads")
+        threads = v.cast<unsigned>();
+      else
+        throw SceneError("resume: the run continues with its checkpoint's scene; " +
+                         k.cast<std::string>() +
+                         " would change it (threads, checkpoint_every "
+                         "and force may be given)");
+    if (!scene.is_none() || !overrides.is_none() || !out.is_none() || !exports.is_none() ||
+        !up.is_none())
+      throw SceneError(
+          "resume: the run continues in that folder with its checkpoint's scene; "
+          "scene, overrides, out, export and up would change it");
+    dir = py::str(py::module_::import("os").attr("fspath")(resume)).cast<std::string>();
+    from = resume_run(dir, threads, every, force);
+    if (!from)
+      return py::module_::import("json").attr("load")(
+          py::module_::import("builtins").attr("open")((dir / "summary.json").string()));
+    p = from->params;
+  } else {
+    if (scene.is_none()) throw SceneError("run: a scene is needed, or resume=DIR");
+    std::optional<long long> grid;
+    std::vector<std::string> sets = override_texts(overrides, kw, &grid);
+    if (!exports.is_none()) {
+      std::string list;
+      if (py::isinstance<py::str>(exports))
+        list = exports.cast<std::string>();
+      else
+        for (py::handle e : exports) list += (list.empty() ? "" : ",") + e.cast<std::string>();
+      sets.push_back("run.export=" + toml_value("export", py::str(list)));
+    }
+    if (!up.is_none()) sets.push_back("run.up=" + toml_value("up", up));
+    if (every) sets.push_back("run.checkpoint_every=" + format_number(*every));
+    p = load(scene, sets, grid);
+    // As `wetcloth run`: the step's threads all the cores unless chosen.
+    if (!overrides_key(sets, "integrator.threads")) p.integrator.threads = 0;
+    dir = out.is_none()
+              ? std::filesystem::path("out") / folder_name(p.name)
+              : std::filesystem::path(
+                    py::str(py::module_::import("os").attr("fspath")(out)).cast<std::string>());
+    prepare_run(p, dir, force,
+                py::isinstance<Scene>(scene) ? p.name : py::str(scene).cast<std::string>(), "out");
+  }
+  PyRunHooks hooks(progress);
+  RunResult r;
+  {
+    py::gil_scoped_release free;
+    r = run_scene(p, dir, hooks.hooks, from ? &*from : nullptr);
+  }
+  hooks.raise_if_stopped();
+  if (r.code == kBlowUp) throw BlowUpError(r.message + " (results so far: " + dir.string() + ")");
+  return py::module_::import("json").attr("loads")(r.summary);
+}
+
 // SceneError and BlowUp: the library's errors as Python exceptions.
 void bind_errors(py::module_& m) {
   static py::exception<SceneError> scene_error(m, "SceneError", PyExc_ValueError);
   static py::exception<BlowUpError> blow_up(m, "BlowUp", PyExc_RuntimeError);
+  static py::exception<OutputError> output_error(m, "OutputError", PyExc_OSError);
   scene_error.doc() = "A bad scene, key or value (a ValueError); the message names the key.";
   blow_up.doc() = "The simulation blew up; the message names the parameter to look at.";
+  output_error.doc() = "An output could not be written (an OSError): the file and the reason.";
   py::register_exception_translator([](std::exception_ptr e) {
     try {
       if (e) std::rethrow_exception(e);
@@ -374,6 +498,8 @@ void bind_errors(py::module_& m) {
       scene_error(clean_message(x.what()).c_str());
     } catch (const BlowUpError& x) {
       blow_up(x.what());
+    } catch (const OutputError& x) {
+      output_error(x.what());
     }
   });
 }
@@ -653,18 +779,53 @@ py::tuple plan_sweep(const py::object& scene, const py::list& varied,
     d["air_model"] = c.air_model;
     cases.append(d);
   }
-  return py::make_tuple(plan.extra_keys, cases);
+  return py::make_tuple(plan.extra_keys, cases, sweep::csv_header(plan), sweep::cases_csv(plan));
 }
 
-// For wetcloth.sweep: the cases as `wetcloth sweep` plans them, and one run.
-void bind_sweep(py::module_& m) {
+// wetcloth.run, and for wetcloth.sweep: the cases as `wetcloth sweep` plans
+// them, one case run, and the sweep's folder.
+void bind_run(py::module_& m) {
+  m.def("run", &run, py::arg("scene") = py::none(), py::kw_only(), py::arg("out") = py::none(),
+        py::arg("export") = py::none(), py::arg("up") = py::none(),
+        py::arg("checkpoint_every") = py::none(), py::arg("resume") = py::none(),
+        py::arg("force") = false, py::arg("progress") = py::none(),
+        py::arg("overrides") = py::none(),
+        R"doc(Runs SCENE into the folder OUT as `wetcloth run` does, and returns its summary.
+
+scene: a built-in name, a path or a wetcloth.Scene, with overrides as
+load_scene takes them (humidity=0.7, duration=0.5, grid=G, threads=N,
+cloth__humidity=..., or overrides={"cloth.humidity": 0.7}). out: the folder
+(default out/<scene name>); export: caches, any of "usd", "pc2", "vtk" (a
+list or "usd,pc2"); up: "z" or "y"; checkpoint_every: seconds of simulated
+time between checkpoints; force: run where the estimated memory or disk is
+short, or into a folder of files no wetcloth run wrote. resume=DIR continues
+the run in DIR from its checkpoint (threads and checkpoint_every may be
+given). progress: progress(t, duration) after each frame.
+
+The folder is byte for byte the command line's (but for summary.json's
+timings). Ctrl-C stops the run at the end of a step with its outputs whole and
+a checkpoint, then raises KeyboardInterrupt: wetcloth.run(resume=DIR) or
+`wetcloth run --resume DIR` continues it. Raises SceneError on a bad scene or
+folder, BlowUp (the outputs so far kept), OutputError where a file cannot be
+written.)doc");
+  m.def("_make_folder", [](const std::string& out) { make_output_folder(out, "out"); });
+  m.def("_write_shared",
+        [](const std::string& path, const std::string& text) { sweep::write_shared(path, text); });
+  m.def("_write_file",
+        [](const std::string& path, const std::string& text) { write_file_atomic(path, text); });
+  m.def("_plot_sweep", [](const std::string& dir) {
+    py::gil_scoped_release free;
+    std::string why;
+    return sweep::plot(dir, &why) ? std::string() : why;
+  });
   m.def("_plan_sweep", &plan_sweep);
   m.def("_override_texts", [](const py::object& overrides) {
     std::optional<long long> grid;
     auto sets = override_texts(overrides, py::dict(), &grid);
     return py::make_tuple(sets, grid);
   });
-  m.def("_run_case", &run_case);
+  m.def("_run_case", &run_case, py::arg("scene"), py::arg("sets"), py::arg("grid"),
+        py::arg("out") = py::none(), py::arg("extra") = py::none(), py::arg("case") = py::none());
   m.def("_metrics_columns", &metrics_columns);
 }
 
@@ -677,5 +838,5 @@ PYBIND11_MODULE(_wetcloth, m) {
   bind_catalogue(m);
   bind_scene(m);
   bind_simulation(m);
-  bind_sweep(m);
+  bind_run(m);
 }

@@ -7,8 +7,10 @@
     sim.metrics()          # {"time_s": ..., "contact_area_m2": ..., ...}
 
 scenes(), load_scene(name_or_path, **overrides), params() (the table of
-`wetcloth params`), Simulation(scene, overrides=None, **keywords), and
-sweep(scene, vary={...}, client=None) for parameter studies.
+`wetcloth params`), Simulation(scene, overrides=None, **keywords),
+run(scene, out=..., export=[...], ...) to write a run's folder as `wetcloth
+run` does (resume=DIR continues one), and sweep(scene, vary={...},
+client=None, out=None) for parameter studies.
 
 Overrides are given by dotted key ({"cloth.humidity": 0.7}) or keyword
 (humidity=0.7, or cloth__humidity=0.7: "__" stands for the dots); grid=G is
@@ -44,11 +46,11 @@ def _wrong_interpreter(error):
 
 try:
     import numpy  # noqa: F401  (the module's arrays are NumPy's)
-    from ._wetcloth import (BlowUp, Scene, SceneError, Simulation, __version__, load_scene,
-                            params, scenes)
+    from ._wetcloth import (BlowUp, OutputError, Scene, SceneError, Simulation, __version__,
+                            load_scene, params, run, scenes)
 except ImportError as _error:
     raise ImportError(_wrong_interpreter(_error)) from _error
 from ._sweep import sweep
 
-__all__ = ["BlowUp", "Scene", "SceneError", "Simulation", "load_scene", "params", "scenes", "sweep",
-           "__version__"]
+__all__ = ["BlowUp", "OutputError", "Scene", "SceneError", "Simulation", "load_scene", "params",
+           "run", "scenes", "sweep", "__version__"]

@@ -1,4 +1,4 @@
-#include "output_folder.hpp"
+#include "wetcloth/output_folder.hpp"
 
 #include <sys/stat.h>
 #include <unistd.h>
@@ -12,7 +12,7 @@
 #include "wetcloth/output.hpp"
 #include "wetcloth/scene.hpp"
 
-namespace wetcloth::cli {
+namespace wetcloth {
 
 namespace fs = std::filesystem;
 
@@ -87,7 +87,7 @@ std::vector<std::string> older_run_outputs(const fs::path& out) {
 
 }  // namespace
 
-void refuse_foreign_folder(const fs::path& out) {
+void refuse_foreign_folder(const fs::path& out, const std::string& option) {
   std::error_code ec;
   if (!fs::is_directory(out, ec)) return;  // made new, or refused as a file elsewhere
   std::string first;
@@ -98,7 +98,7 @@ void refuse_foreign_folder(const fs::path& out) {
     if (first.empty()) first = name;
   }
   if (first.empty() || holds_older_run(out)) return;
-  throw SceneError("--out " + out.string() + ": holds files no wetcloth run wrote (" + first +
+  throw SceneError(option + " " + out.string() + ": holds files no wetcloth run wrote (" + first +
                    ", ...): a run would mix its outputs with them; choose a new or empty folder, "
                    "or give --force to write beside them (a run removes only what a wetcloth run "
                    "wrote there)");
@@ -152,6 +152,58 @@ void remove_outputs(const fs::path& out, const std::vector<std::string>& files) 
       throw_output_error(out / rel, "cannot remove", errno);
 }
 
+std::string folder_name(const std::string& name) {
+  std::string f;
+  for (const char c : name) {
+    const auto u = static_cast<unsigned char>(c);
+    f += (c == '/' || c == '\\' || u < 0x20 || u == 0x7F || (f.empty() && c == '.')) ? '_' : c;
+  }
+  return f.empty() ? "scene" : f;
+}
+
+void check_output_folder(const fs::path& out, const std::string& option) {
+  for (fs::path at = out; !at.empty() && at != at.parent_path(); at = at.parent_path()) {
+    std::error_code ec;
+    const auto st = fs::status(at, ec);
+    if (!fs::exists(st)) continue;
+    if (fs::is_directory(st)) return;
+    throw SceneError(option + " " + out.string() + ": " +
+                     (at == out ? "exists and is not a folder" : at.string() + " is not a folder"));
+  }
+}
+
+void refuse_system_folder(const fs::path& out, const std::string& option) {
+  std::error_code ec;
+  fs::path real = fs::absolute(out, ec);
+  if (!ec) {
+    const fs::path through_links = fs::weakly_canonical(real, ec);
+    real = ec ? real.lexically_normal() : through_links;
+  }
+  std::string at = real.lexically_normal().generic_string();
+  while (at.size() > 1 && at.back() == '/') at.pop_back();
+  // Folders of the system and of everyone, whose files are not a run's...
+  static const char* const kExactly[] = {"/",    "/home", "/media", "/mnt", "/opt", "/root",
+                                         "/run", "/snap", "/srv",   "/tmp", "/var"};
+  // ... and those of the system all the way down.
+  static const char* const kUnder[] = {"/bin",   "/boot",   "/dev",  "/etc",  "/lib", "/lib32",
+                                       "/lib64", "/libx32", "/proc", "/sbin", "/sys", "/usr"};
+  bool system = std::find(std::begin(kExactly), std::end(kExactly), at) != std::end(kExactly);
+  for (const std::string u : kUnder) system = system || at == u || at.rfind(u + "/", 0) == 0;
+  if (system)
+    throw SceneError(
+        option + " " + out.string() + ": " +
+        (at == "/" ? std::string("the filesystem's root") : at + " is a system folder") +
+        ": wetcloth writes no outputs there (choose a folder of your own, e.g. out/NAME)");
+}
+
+void make_output_folder(const fs::path& out, const std::string& option) {
+  check_output_folder(out, option);
+  refuse_system_folder(out, option);
+  std::error_code ec;
+  std::filesystem::create_directories(out, ec);
+  if (ec) throw SceneError(option + " " + out.string() + ": cannot make it (" + ec.message() + ")");
+}
+
 void write_manifest(const fs::path& out, const std::vector<std::string>& files) {
   std::string text =
       "# wetcloth " WETCLOTH_VERSION
@@ -161,4 +213,4 @@ void write_manifest(const fs::path& out, const std::vector<std::string>& files) 
   write_file_atomic(out / kManifest, text);
 }
 
-}  // namespace wetcloth::cli
+}  // namespace wetcloth

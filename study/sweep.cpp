@@ -1,39 +1,35 @@
-// The cases of a sweep: the cartesian product of the varied keys' values, each
-// case's folder name, overrides and sweep.csv row. Header-only and free of the
-// command line's parser: `wetcloth sweep` and the Python module's
-// wetcloth.sweep both use it, so that both name, order and tabulate cases alike.
-#pragma once
+// A sweep's plan, its cases run and its folder gathered (include/wetcloth/sweep.hpp).
+#include "wetcloth/sweep.hpp"
+
+#include <unistd.h>
 
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
-#include <functional>
+#include <fstream>
 #include <set>
-#include <string>
+#include <sstream>
 #include <variant>
-#include <vector>
 
 #include "wetcloth/output.hpp"
-#include "wetcloth/scene.hpp"
 
 namespace wetcloth::sweep {
 
-// One varied key and its values as TOML text (a bare word is a string, as
-// with --set). `option` names it in errors: "--humidity", "--vary cloth.humidity".
-struct Varied {
-  std::string key;
-  std::vector<std::string> values;
-  std::string option;
-};
+namespace fs = std::filesystem;
 
-inline std::string trim(const std::string& s) {
+namespace {
+
+std::string trim(const std::string& s) {
   const auto a = s.find_first_not_of(" \t"), b = s.find_last_not_of(" \t");
   return a == std::string::npos ? std::string() : s.substr(a, b - a + 1);
 }
 
+}  // namespace
+
 // KEY=V1,V2,...: the values split at the commas outside brackets and quotes,
 // so that arrays may be varied (cloth.resolution=[25,25],[51,51]).
-inline Varied parse_vary(const std::string& text) {
+Varied parse_vary(const std::string& text) {
   const auto eq = text.find('=');
   const std::string key = eq == std::string::npos ? std::string() : trim(text.substr(0, eq));
   if (key.empty())
@@ -69,7 +65,7 @@ inline Varied parse_vary(const std::string& text) {
 
 // The parameter a key names (handle.NAME.KEY: handle.*.KEY; obstacle.NAME.KEY:
 // obstacle.*.KEY), and the NAME.
-inline const ParamDef* def_of(const std::string& key, std::string* name = nullptr) {
+const ParamDef* def_of(const std::string& key, std::string* name) {
   std::string want = key;
   for (const std::string kind : {"handle.", "obstacle."})
     if (key.rfind(kind, 0) == 0) {
@@ -85,15 +81,17 @@ inline const ParamDef* def_of(const std::string& key, std::string* name = nullpt
 
 // Throws SceneError unless p has the handle or obstacle that KEY (of
 // definition d) names.
-inline void check_named(const Params& p, const std::string& key, const ParamDef& d,
-                        const std::string& name) {
+void check_named(const Params& p, const std::string& key, const ParamDef& d,
+                 const std::string& name) {
   if (d.key.rfind("handle.*.", 0) == 0 && !p.handles.count(name))
     throw SceneError(key + ": the scene has no such handle");
   if (d.key.rfind("obstacle.*.", 0) == 0 && !p.obstacles.count(name))
     throw SceneError(key + ": the scene has no such obstacle");
 }
 
-inline std::string value_text(const Params& p, const std::string& key) {
+namespace {
+
+std::string value_text(const Params& p, const std::string& key) {
   std::string name;
   const ParamDef* d = def_of(key, &name);
   if (!d) throw SceneError(key + ": unknown key (wetcloth params lists the keys)");
@@ -120,23 +118,9 @@ inline std::string value_text(const Params& p, const std::string& key) {
       d->get(p, name));
 }
 
-struct Case {
-  std::string name;
-  std::vector<std::string> sets;     // KEY=VALUE for each varied key
-  std::vector<std::string> columns;  // its value of each extra key, as sweep.csv has it
-  double humidity = 0;
-  std::string air_model;
-  Params params;
-};
-
-struct Plan {
-  std::vector<std::string> extra_keys;  // varied keys other than cloth.humidity and air.model
-  std::vector<Case> cases;
-};
-
 // A value as part of a folder name: letters, digits and . + -; an array's
 // numbers joined by x ([25, 25] -> 25x25).
-inline std::string name_part(const std::string& text) {
+std::string name_part(const std::string& text) {
   std::string o;
   for (char c : text) {
     if (std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '+' || c == '-')
@@ -151,7 +135,7 @@ inline std::string name_part(const std::string& text) {
 
 // The number of cases; SceneError on no key, a key varied twice, a key
 // without values, or too many cases.
-inline std::size_t case_count(const std::vector<Varied>& varied) {
+std::size_t case_count(const std::vector<Varied>& varied) {
   if (varied.empty())
     throw SceneError("nothing to vary: give --vary KEY=V1,V2,... (or --humidity, --air-models)");
   std::size_t total = 1;
@@ -167,7 +151,7 @@ inline std::size_t case_count(const std::vector<Varied>& varied) {
 }
 
 // Case c's value of each key, by index (the first key outermost).
-inline std::vector<std::size_t> value_indices(const std::vector<Varied>& varied, std::size_t c) {
+std::vector<std::size_t> value_indices(const std::vector<Varied>& varied, std::size_t c) {
   std::vector<std::size_t> at(varied.size(), 0);
   for (std::size_t k = varied.size(); k-- > 0;) {
     at[k] = c % varied[k].values.size();
@@ -183,12 +167,10 @@ struct ReadBack {
   std::vector<std::vector<double>> omega;
 };
 
-inline bool is_extra_key(const std::string& key) {
-  return key != "cloth.humidity" && key != "air.model";
-}
+bool is_extra_key(const std::string& key) { return key != "cloth.humidity" && key != "air.model"; }
 
 // The decimals that tell the humidities apart, 2 at least.
-inline int humidity_decimals(std::vector<double> w) {
+int humidity_decimals(std::vector<double> w) {
   std::sort(w.begin(), w.end());
   const auto distinct = [&](int d) {
     char a[32], b[32];
@@ -208,7 +190,7 @@ inline int humidity_decimals(std::vector<double> w) {
 // omega_0.70 with the decimals that tell the values apart; an air model as
 // its name; any other key as NAME=VALUE, NAME its last part unless two keys
 // share it); with no such key, every key's part.
-inline void name_cases(const std::vector<Varied>& varied, const ReadBack& read, Plan& plan) {
+void name_cases(const std::vector<Varied>& varied, const ReadBack& read, Plan& plan) {
   std::vector<std::string> shorts;
   for (const auto& v : varied) shorts.push_back(v.key.substr(v.key.rfind('.') + 1));
   std::vector<bool> named(varied.size());
@@ -243,12 +225,14 @@ inline void name_cases(const std::vector<Varied>& varied, const ReadBack& read, 
   }
 }
 
+}  // namespace
+
 // Every case, in the order of the cartesian product (the first key outermost).
 // load(sets) gives the scene with the base overrides and then `sets`; it
 // throws SceneError on a bad value. Throws SceneError on a key given twice, a
 // value given twice (after reading: 0.5 and 0.50 are one) or no key at all.
-inline Plan plan(const std::vector<Varied>& varied,
-                 const std::function<Params(const std::vector<std::string>&)>& load) {
+Plan plan(const std::vector<Varied>& varied,
+          const std::function<Params(const std::vector<std::string>&)>& load) {
   const std::size_t total = case_count(varied);
   Plan plan;
   ReadBack read{std::vector<std::vector<std::string>>(varied.size()),
@@ -289,14 +273,14 @@ inline Plan plan(const std::vector<Varied>& varied,
 }
 
 // A CSV field, quoted when it holds a comma, a quote or a line break.
-inline std::string csv_field(const std::string& s) {
+std::string csv_field(const std::string& s) {
   if (s.find_first_of(",\"\n\r") == std::string::npos) return s;
   std::string o = "\"";
   for (char c : s) o += c == '"' ? std::string("\"\"") : std::string(1, c);
   return o + "\"";
 }
 
-inline std::string csv_header(const Plan& plan) {
+std::string csv_header(const Plan& plan) {
   std::string o = "case";
   for (const auto& k : plan.extra_keys) o += "," + csv_field(k);
   o += ",air_model,humidity,status,peak_deficit_pa,frame_peak_deficit_pa,time_to_5cm_s";
@@ -304,15 +288,7 @@ inline std::string csv_header(const Plan& plan) {
   return o + "\n";
 }
 
-// What a case's run gave, as sweep.csv has it.
-struct Outcome {
-  bool ok = true;
-  bool interrupted = false;  // stopped by a signal at a step's end
-  double peak_deficit_pa = 0, frame_peak_deficit_pa = 0, time_to_5cm_s = -1;
-  Metrics final;
-};
-
-inline std::string csv_row(const Case& c, const Outcome& r) {
+std::string csv_row(const Case& c, const Outcome& r) {
   std::string o = csv_field(c.name);
   for (const auto& v : c.columns) o += "," + csv_field(v);
   o += "," + csv_field(c.air_model) + "," + format_number(c.humidity) + "," +
@@ -323,6 +299,132 @@ inline std::string csv_row(const Case& c, const Outcome& r) {
        format_number(r.time_to_5cm_s);
   for (double v : metrics_values(r.final)) o += "," + format_number(v);
   return o + "\n";
+}
+
+Outcome outcome_of(const RunResult& r) {
+  Outcome o;
+  o.ok = r.code == kOk;
+  o.interrupted = r.code > 128;
+  o.peak_deficit_pa = r.peak_deficit_pa;
+  o.frame_peak_deficit_pa = r.frame_peak_deficit_pa;
+  o.time_to_5cm_s = r.time_to_5cm_s;
+  o.final = r.final;
+  return o;
+}
+
+std::string cases_csv(const Plan& plan) {
+  std::string o = "index,case,overrides\n";
+  for (std::size_t i = 0; i < plan.cases.size(); ++i) {
+    std::string sets;
+    for (const auto& s : plan.cases[i].sets) sets += (sets.empty() ? "" : " ") + s;
+    o += std::to_string(i) + "," + csv_field(plan.cases[i].name) + "," + csv_field(sets) + "\n";
+  }
+  return o;
+}
+
+std::string finish_case(const Plan& plan, std::size_t i, const RunResult& r, const fs::path& dir) {
+  if (!(r.code == kOk || r.code == kBlowUp || (r.code > 128 && r.started))) return {};
+  std::string row = csv_row(plan.cases[i], outcome_of(r));
+  if (!dir.empty()) write_shared(dir / kRowFile, csv_header(plan) + row);
+  return row;
+}
+
+void run_cases(const Plan& plan, const std::vector<std::size_t>& chosen, const fs::path& out,
+               unsigned jobs, const RunHooks& hooks,
+               const std::function<void(std::size_t, const RunResult&, const std::string&)>& done) {
+  std::vector<std::pair<Params, fs::path>> runs;
+  for (std::size_t i : chosen)
+    runs.emplace_back(plan.cases[i].params, out.empty() ? fs::path() : out / plan.cases[i].name);
+  run_all(runs, jobs, hooks, [&](std::size_t k, const RunResult& r) {
+    done(chosen[k], r, finish_case(plan, chosen[k], r, runs[k].second));
+  });
+}
+
+void write_shared(const fs::path& path, const std::string& contents) {
+  const fs::path tmp = path.string() + "." + std::to_string(getpid()) + ".tmp";
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    out << contents;
+    if (!out.flush()) throw std::runtime_error(tmp.string() + ": cannot write");
+  }
+  fs::rename(tmp, path);
+}
+
+namespace {
+
+std::string read_text(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// A case's name from its line of cases.csv (index,case,overrides).
+std::string case_name(const std::string& line) {
+  std::string name = line.substr(line.find(',') + 1);
+  if (name.empty() || name[0] != '"') return name.substr(0, name.find(','));
+  std::string unq;
+  for (std::size_t k = 1; k < name.size(); ++k) {
+    if (name[k] == '"' && k + 1 < name.size() && name[k + 1] == '"')
+      unq += name[++k];
+    else if (name[k] == '"')
+      break;
+    else
+      unq += name[k];
+  }
+  return unq;
+}
+
+}  // namespace
+
+Gathered gather(const fs::path& dir) {
+  if (!fs::exists(dir / kCasesFile))
+    throw SceneError(
+        "--gather " + dir.string() + ": no " + kCasesFile +
+        " (not a sweep folder: `wetcloth sweep ... --out DIR` or `--list`/`--case` writes it)");
+  std::istringstream in(read_text(dir / kCasesFile));
+  std::string line, header, rows;
+  Gathered g;
+  std::getline(in, line);  // its header
+  while (std::getline(in, line)) {
+    if (line.empty()) continue;
+    ++g.total;
+    const std::string name = case_name(line);
+    std::istringstream row(read_text(dir / name / kRowFile));
+    std::string h, r;
+    if (!std::getline(row, h) || !std::getline(row, r) || r.empty()) {
+      g.missing.push_back(line.substr(0, line.find(',')) + " " + name);
+      continue;
+    }
+    if (header.empty()) header = h;
+    if (h != header)
+      throw SceneError(dir.string() + "/" + name + "/" + kRowFile +
+                       ": its header differs from the other cases'");
+    rows += r + "\n";
+    ++g.found;
+  }
+  if (g.found == 0)
+    throw SceneError("--gather " + dir.string() + ": none of its " + std::to_string(g.total) +
+                     " cases has finished");
+  write_file_atomic(dir / "sweep.csv", header + "\n" + rows);
+  return g;
+}
+
+fs::path plot_script() {
+  if (const char* env = std::getenv("WETCLOTH_PLOT_SCRIPT")) return env;
+  std::error_code ec;
+  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
+  const fs::path installed = exe.parent_path().parent_path() / "share/wetcloth/plot_sweep.py";
+  if (!ec && fs::exists(installed)) return installed;
+  return fs::path(WETCLOTH_SOURCE_DIR) / "tools/plot_sweep.py";
+}
+
+bool plot(const fs::path& dir, std::string* why) {
+  const std::string python = fs::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
+  const std::string cmdline = python + " '" + plot_script().string() + "' '" + dir.string() + "'";
+  if (std::system(cmdline.c_str()) == 0) return true;
+  if (why) *why = cmdline;
+  return false;
 }
 
 }  // namespace wetcloth::sweep

@@ -1,4 +1,4 @@
-#include "sweep.hpp"
+#include "wetcloth/sweep.hpp"
 
 #include <unistd.h>
 
@@ -14,9 +14,8 @@
 #include <sstream>
 #include <thread>
 
+#include "cli.hpp"
 #include "common/scene_options.hpp"
-#include "run.hpp"
-#include "sweep_plan.hpp"
 #include "wetcloth/output.hpp"
 #ifdef WETCLOTH_VIEWER
 #include "../viewer/commands.hpp"
@@ -28,67 +27,10 @@ namespace fs = std::filesystem;
 
 namespace {
 
-// The plotting script: next to an installed program, or in the source tree.
-fs::path plot_script() {
-  if (const char* env = std::getenv("WETCLOTH_PLOT_SCRIPT")) return env;
-  std::error_code ec;
-  const fs::path exe = fs::read_symlink("/proc/self/exe", ec);
-  const fs::path installed = exe.parent_path().parent_path() / "share/wetcloth/plot_sweep.py";
-  if (!ec && fs::exists(installed)) return installed;
-  return fs::path(WETCLOTH_SOURCE_DIR) / "tools/plot_sweep.py";
-}
-
-// Several processes (`--case` on a cluster) may write the same file at once:
-// each through a temporary file of its own.
-void write_shared(const fs::path& path, const std::string& contents) {
-  const fs::path tmp = path.string() + "." + std::to_string(getpid()) + ".tmp";
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    out << contents;
-    if (!out.flush()) throw std::runtime_error(tmp.string() + ": cannot write");
-  }
-  fs::rename(tmp, path);
-}
-
-std::string read_text(const fs::path& path) {
-  std::ifstream in(path, std::ios::binary);
-  std::ostringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
-
-// The files a sweep folder holds besides its cases: the cases in order (for
-// --gather), and in each case folder its row of sweep.csv with the header.
-const char* kCasesFile = "cases.csv";
-const char* kRowFile = "sweep_row.csv";
-
-std::string cases_csv(const sweep::Plan& plan) {
-  std::string o = "index,case,overrides\n";
-  for (std::size_t i = 0; i < plan.cases.size(); ++i) {
-    std::string sets;
-    for (const auto& s : plan.cases[i].sets) sets += (sets.empty() ? "" : " ") + s;
-    o += std::to_string(i) + "," + sweep::csv_field(plan.cases[i].name) + "," +
-         sweep::csv_field(sets) + "\n";
-  }
-  return o;
-}
-
-sweep::Outcome outcome_of(const RunResult& r) {
-  sweep::Outcome o;
-  o.ok = r.code == kOk;
-  o.interrupted = r.code > 128;
-  o.peak_deficit_pa = r.peak_deficit_pa;
-  o.frame_peak_deficit_pa = r.frame_peak_deficit_pa;
-  o.time_to_5cm_s = r.time_to_5cm_s;
-  o.final = r.final;
-  return o;
-}
-
-// Runs the plotting script on DIR; false when it failed.
+// Runs the plotting script on DIR; false (said on stderr) when it failed.
 bool plot(const fs::path& out) {
-  const std::string python = fs::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
-  const std::string cmdline = python + " '" + plot_script().string() + "' '" + out.string() + "'";
-  if (std::system(cmdline.c_str()) == 0) return true;
+  std::string cmdline;
+  if (sweep::plot(out, &cmdline)) return true;
   std::fprintf(stderr, "wetcloth: the plots failed (%s)\n", cmdline.c_str());
   return false;
 }
@@ -97,62 +39,18 @@ bool plot(const fs::path& out) {
 // finished, in the sweep's order; the missing ones listed. 0 when none is
 // missing, 1 otherwise.
 int gather(const fs::path& dir, bool no_plots, bool quiet) {
-  if (!fs::exists(dir / kCasesFile))
-    throw SceneError(
-        "--gather " + dir.string() + ": no " + kCasesFile +
-        " (not a sweep folder: `wetcloth sweep ... --out DIR` or `--list`/`--case` writes it)");
-  std::istringstream in(read_text(dir / kCasesFile));
-  std::string line, header, rows;
-  std::vector<std::string> missing;
-  std::size_t total = 0, found = 0;
-  std::getline(in, line);  // its header
-  while (std::getline(in, line)) {
-    if (line.empty()) continue;
-    ++total;
-    const auto a = line.find(',');
-    std::string name = line.substr(a + 1);
-    if (!name.empty() && name[0] == '"') {
-      std::string unq;
-      std::size_t k = 1;
-      for (; k < name.size(); ++k) {
-        if (name[k] == '"' && k + 1 < name.size() && name[k + 1] == '"')
-          unq += name[++k];
-        else if (name[k] == '"')
-          break;
-        else
-          unq += name[k];
-      }
-      name = unq;
-    } else {
-      name = name.substr(0, name.find(','));
-    }
-    std::istringstream row(read_text(dir / name / kRowFile));
-    std::string h, r;
-    if (!std::getline(row, h) || !std::getline(row, r) || r.empty()) {
-      missing.push_back(line.substr(0, a) + " " + name);
-      continue;
-    }
-    if (header.empty()) header = h;
-    if (h != header)
-      throw SceneError(dir.string() + "/" + name + "/" + kRowFile +
-                       ": its header differs from the other cases'");
-    rows += r + "\n";
-    ++found;
-  }
-  if (found == 0)
-    throw SceneError("--gather " + dir.string() + ": none of its " + std::to_string(total) +
-                     " cases has finished");
-  write_file_atomic(dir / "sweep.csv", header + "\n" + rows);
+  const sweep::Gathered g = sweep::gather(dir);
   if (!quiet)
-    std::printf("gathered %zu of %zu cases into %s\n", found, total, (dir / "sweep.csv").c_str());
-  if (!missing.empty()) {
-    std::fprintf(stderr, "wetcloth: missing %zu of %zu cases (index and name):\n", missing.size(),
-                 total);
-    for (const auto& m : missing) std::fprintf(stderr, "  %s\n", m.c_str());
+    std::printf("gathered %zu of %zu cases into %s\n", g.found, g.total,
+                (dir / "sweep.csv").c_str());
+  if (!g.missing.empty()) {
+    std::fprintf(stderr, "wetcloth: missing %zu of %zu cases (index and name):\n", g.missing.size(),
+                 g.total);
+    for (const auto& m : g.missing) std::fprintf(stderr, "  %s\n", m.c_str());
   }
   bool plots_ok = true;
   if (!no_plots) plots_ok = plot(dir);
-  return missing.empty() && plots_ok ? kOk : kError;
+  return g.missing.empty() && plots_ok ? kOk : kError;
 }
 
 // The line `sweep` keeps on a terminal while cases run: done, running, time left.
@@ -338,29 +236,25 @@ struct Ran {
 // of sweep.csv into its folder as it ends.
 Ran run_cases(const Options& o, const sweep::Plan& plan, const std::vector<std::size_t>& chosen,
               const fs::path& out, unsigned jobs) {
-  std::vector<std::pair<Params, fs::path>> runs;
-  for (std::size_t i : chosen) runs.emplace_back(plan.cases[i].params, out / plan.cases[i].name);
   Ran ran{std::vector<RunResult>(plan.cases.size()), std::vector<std::string>(plan.cases.size())};
   // Cases end in any order; each is printed once those before it in the
   // list have been, so that the table reads in the order asked for.
-  std::vector<bool> ended(runs.size(), false);
+  std::vector<bool> ended(plan.cases.size(), false);
   std::size_t printed = 0;
-  ProgressLine progress(runs.size(), jobs, !o.quiet && isatty(STDERR_FILENO));
+  ProgressLine progress(chosen.size(), jobs, !o.quiet && isatty(STDERR_FILENO));
   install_stop_handlers();  // SIGINT / SIGTERM: every case stops at a step's end
-  run_all(runs, jobs, [&](std::size_t k, const RunResult& r) {
-    const std::size_t i = chosen[k];
-    ran.results[i] = r;
-    ended[k] = true;
-    if (r.code == kOk || r.code == kBlowUp || (r.code > 128 && r.started)) {  // it ran: a row
-      ran.rows[i] = sweep::csv_row(plan.cases[i], outcome_of(r));
-      write_shared(out / plan.cases[i].name / kRowFile, sweep::csv_header(plan) + ran.rows[i]);
-    }
-    progress.case_done();
-    for (; printed < runs.size() && ended[printed]; ++printed)
-      if (!o.quiet) print_case(plan.cases[chosen[printed]].name, ran.results[chosen[printed]]);
-    std::fflush(stdout);
-    progress.redraw();
-  });
+  sweep::run_cases(plan, chosen, out, jobs, run_hooks(false),
+                   [&](std::size_t i, const RunResult& r, const std::string& row) {
+                     ran.results[i] = r;
+                     ran.rows[i] = row;
+                     ended[i] = true;
+                     progress.case_done();
+                     for (; printed < chosen.size() && ended[chosen[printed]]; ++printed)
+                       if (!o.quiet)
+                         print_case(plan.cases[chosen[printed]].name, ran.results[chosen[printed]]);
+                     std::fflush(stdout);
+                     progress.redraw();
+                   });
   return ran;
 }
 
@@ -448,7 +342,7 @@ int run_sweep(const Options& o) {
   const fs::path out =
       o.out.empty() ? fs::path("out") / folder_name(scene.name + "-sweep") : fs::path(o.out);
   make_output_folder(out);
-  write_shared(out / kCasesFile, cases_csv(plan));
+  sweep::write_shared(out / sweep::kCasesFile, sweep::cases_csv(plan));
 
   std::vector<std::size_t> chosen;
   for (std::size_t i = 0; i < n; ++i)

@@ -28,7 +28,7 @@ ax = fig.add_subplot(projection="3d")
 
 def draw(f):
     sim.advance_to(f / args.fps)
-    x = sim.positions  # (n, 3), a view: no copy
+    x = sim.positions  # (n, 3), C-contiguous: a copy at each read
     ax.clear()
     ax.plot_trisurf(x[:, 0], x[:, 1], x[:, 2], triangles=sim.triangles, color="tab:blue", alpha=0.8)
     ax.set(xlim=(-0.2, 0.2), ylim=(-0.2, 0.2), zlim=(0.25, 0.8), title=f"t = {sim.time:.2f} s")

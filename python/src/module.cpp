@@ -281,14 +281,29 @@ class PySimulation {
       sim_.set_params(p);
   }
 
-  // x or v as an n x 3 view of the State's columns (every x, then y, then z):
-  // strides (8, 8 n) bytes, no copy. Read-only: assign the property to set it.
-  py::array view(py::object self, bool velocities) {
+  // x or v as the State keeps them, every x, then y, then z: a C-contiguous
+  // 3 x n view, no copy, that follows the simulation as it steps. Read-only:
+  // assign positions or velocities to set them.
+  py::array columns(py::object self, bool velocities) {
     const Vec3Array& a = velocities ? sim_.state().v : sim_.state().x;
     const auto n = static_cast<py::ssize_t>(a.size());
-    py::array out(py::dtype::of<double>(), {n, py::ssize_t{3}},
-                  {py::ssize_t{sizeof(double)}, static_cast<py::ssize_t>(n * sizeof(double))},
+    py::array out(py::dtype::of<double>(), {py::ssize_t{3}, n},
+                  {static_cast<py::ssize_t>(n * sizeof(double)), py::ssize_t{sizeof(double)}},
                   a.column(0), self);
+    out.attr("setflags")(py::arg("write") = false);
+    return out;
+  }
+
+  // x or v as n x 3 rows, C-contiguous (what most array code and C
+  // libraries take): a copy, made at each read. Read-only, as assigning to
+  // it would change nothing: assign the property to set them.
+  py::array rows(bool velocities) const {
+    const Vec3Array& a = velocities ? sim_.state().v : sim_.state().x;
+    const auto n = static_cast<py::ssize_t>(a.size());
+    py::array_t<double> out({n, py::ssize_t{3}});
+    auto r = out.mutable_unchecked<2>();
+    for (py::ssize_t i = 0; i < n; ++i)
+      for (int k = 0; k < 3; ++k) r(i, k) = a.column(k)[i];
     out.attr("setflags")(py::arg("write") = false);
     return out;
   }
@@ -617,16 +632,25 @@ void bind_simulation_params(SimulationClass& cls) {
           "set('handle.NAME.force', [fx, fy, fz])).");
 }
 
-// The state as NumPy arrays: positions and velocities as views, the rest copies.
+// The state as NumPy arrays: copies, and the positions' and velocities' columns as views.
 void bind_simulation_arrays(SimulationClass& cls) {
   cls.def_property(
-         "positions", [](py::object self) { return self.cast<PySimulation&>().view(self, false); },
+         "positions", [](const PySimulation& s) { return s.rows(false); },
          [](PySimulation& s, py::handle v) { s.assign(v, false, "positions"); },
-         "n x 3 positions, m: a read-only view, no copy.")
+         "n x 3 positions, m: a C-contiguous read-only copy (positions_columns: a view).")
       .def_property(
-          "velocities", [](py::object self) { return self.cast<PySimulation&>().view(self, true); },
+          "velocities", [](const PySimulation& s) { return s.rows(true); },
           [](PySimulation& s, py::handle v) { s.assign(v, true, "velocities"); },
-          "n x 3 velocities, m/s: a read-only view, no copy.")
+          "n x 3 velocities, m/s: a C-contiguous read-only copy (velocities_columns: a view).")
+      .def_property_readonly(
+          "positions_columns",
+          [](py::object self) { return self.cast<PySimulation&>().columns(self, false); },
+          "3 x n positions (x, y, z rows), m: a read-only view of the state, no copy, that "
+          "follows the simulation as it steps.")
+      .def_property_readonly(
+          "velocities_columns",
+          [](py::object self) { return self.cast<PySimulation&>().columns(self, true); },
+          "3 x n velocities (x, y, z rows), m/s: a read-only view of the state, no copy.")
       .def_property_readonly(
           "triangles",
           [](const PySimulation& s) {
@@ -723,9 +747,10 @@ path or a wetcloth.Scene; overrides by dotted key ({"cloth.humidity": 0.7})
 or keyword (humidity=0.7, cloth__humidity=0.7, duration=, threads=; grid=G
 is the same cloth G particles wide). A bad key or value raises SceneError.
 
-positions and velocities are read-only views of the state (n x 3 float64,
-strides (8, 8 n): the library keeps x, y, z in columns), no copy: they follow
-the simulation as it steps. Assign the property to set them (a copy in).
+positions and velocities are n x 3 float64 arrays, C-contiguous, copied at
+each read; assign the property to set them (a copy in). positions_columns and
+velocities_columns are 3 x n read-only views of the state as the library keeps
+it (x, y, z rows), no copy: they follow the simulation as it steps.
 triangles, in_contact, pressure and adhesion are copies, made at each read.
 save(path) writes the whole state of the run (a checkpoint), and the static
 Simulation.load(path) continues it with the same numbers.)doc");

@@ -39,14 +39,21 @@ def test_step_arrays_and_metrics():
     assert sim.grid == (9, 9) and n == 81
     x = sim.positions
     assert x.shape == (n, 3) and x.dtype == np.float64 and not x.flags.writeable
+    assert x.flags.c_contiguous and x.strides == (24, 8)
+    columns = sim.positions_columns
+    assert columns.shape == (3, n) and columns.flags.c_contiguous and not columns.flags.writeable
+    assert np.array_equal(columns.T, x)
     z0 = x[:, 2].copy()
     sim.step()
     assert sim.steps == 1 and sim.time == pytest.approx(sim.dt)
     sim.advance_to(0.05)
     assert sim.time == pytest.approx(0.05)
-    assert (x[:, 2] < z0).all()  # the view follows the state: the cloth falls
+    assert (columns[2] < z0).all()  # the view follows the state: the cloth falls
+    assert (x[:, 2] == z0).all()  # the copy does not
+    assert np.array_equal(sim.positions, columns.T)
     assert sim.velocities.shape == (n, 3) and (sim.velocities[:, 2] < 0).all()
-    assert np.shares_memory(x, sim.positions)
+    assert np.array_equal(sim.velocities_columns.T, sim.velocities)
+    assert np.shares_memory(columns, sim.positions_columns)
     tri = sim.triangles
     assert tri.shape == (2 * 8 * 8, 3) and tri.min() == 0 and tri.max() == n - 1
     assert sim.in_contact.dtype == bool and sim.in_contact.shape == (n,)

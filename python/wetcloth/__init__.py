@@ -3,7 +3,8 @@
     import wetcloth
     sim = wetcloth.Simulation("drop-table", humidity=0.7)
     sim.advance_to(0.5)
-    sim.positions          # (n, 3) float64, a read-only view of the state
+    sim.positions          # (n, 3) float64, C-contiguous, a read-only copy
+    sim.positions_columns  # (3, n): a read-only view of the state, no copy
     sim.metrics()          # {"time_s": ..., "contact_area_m2": ..., ...}
 
 scenes(), load_scene(name_or_path, **overrides), params() (the table of

@@ -87,21 +87,30 @@ std::vector<std::string> older_run_outputs(const fs::path& out) {
 
 }  // namespace
 
-void refuse_foreign_folder(const fs::path& out, const std::string& option) {
+void refuse_foreign_folder(const fs::path& out, const std::string& option,
+                           const std::string& what, const std::vector<std::string>& marks) {
   std::error_code ec;
   if (!fs::is_directory(out, ec)) return;  // made new, or refused as a file elsewhere
+  // A mark with a suffix: the temporary file of one being written (a sweep's
+  // cases.csv.PID.tmp, as another task of its job array starts).
+  const auto marked = [&](const std::string& name) {
+    for (const std::string& m : marks)
+      if (name == m || name.rfind(m + ".", 0) == 0) return true;
+    return false;
+  };
   std::string first;
   for (fs::directory_iterator it(out, ec), end; !ec && it != end; it.increment(ec)) {
     const std::string name = it->path().filename().string();
     if (name == ".wetcloth.lock") continue;  // an older run's, or one under way
-    if (name == kManifest) return;
+    if (name == kManifest || marked(name)) return;
     if (first.empty()) first = name;
   }
   if (first.empty() || holds_older_run(out)) return;
-  throw SceneError(option + " " + out.string() + ": holds files no wetcloth run wrote (" + first +
-                   ", ...): a run would mix its outputs with them; choose a new or empty folder, "
-                   "or give --force to write beside them (a run removes only what a wetcloth run "
-                   "wrote there)");
+  throw SceneError(option + " " + out.string() + ": holds files no wetcloth " + what + " wrote (" +
+                   first + ", ...): a " + what +
+                   " would mix its outputs with them; choose a new or empty folder, or give "
+                   "--force to write beside them" +
+                   (what == "run" ? " (a run removes only what a wetcloth run wrote there)" : ""));
 }
 
 void refuse_links(const fs::path& out, const std::vector<std::string>& files) {

@@ -107,5 +107,27 @@ done
 sleep 0.3; kill -TERM $pid; wait $pid; code=$?
 [ $code -eq 143 ] && ok "the folder whole again resumes" || bad "resume after the refusals: exit $code $(cat "$T/err")"
 
+# Sweep, converge and render: a folder of someone else's files is refused
+# (exit 2, nothing written) unless --force; their own earlier folder is not.
+for cmd in "sweep hang --humidity 0.5 --grid 9 --duration 0.01 --jobs 1 --no-plots --quiet" \
+  "converge hang --grid 9 --duration 0.01 --dt 2e-4 --dt 1e-4 --jobs 1 --quiet"; do
+  name=${cmd%% *}; f="$T/their-$name"
+  mkdir -p "$f" && echo mine >"$f/thesis.tex"
+  # shellcheck disable=SC2086
+  refused "$name into a folder of other files" "holds files no wetcloth" $cmd --out "$f"
+  [ "$(ls "$f")" = "thesis.tex" ] && ok "... $name wrote nothing there" || bad "$name wrote: $(ls "$f")"
+  # shellcheck disable=SC2086
+  "$W" $cmd --out "$f" --force >/dev/null 2>"$T/err" && [ "$(cat "$f/thesis.tex")" = mine ] &&
+    ok "$name --force writes beside them" || bad "$name --force: $(cat "$T/err")"
+  # shellcheck disable=SC2086
+  "$W" $cmd --out "$T/own-$name" >/dev/null 2>&1 && "$W" $cmd --out "$T/own-$name" >/dev/null 2>"$T/err" &&
+    ok "$name into its own earlier folder" || bad "$name again: $(cat "$T/err")"
+done
+mkdir -p "$T/their-render" && echo mine >"$T/their-render/thesis.tex"
+refused "render into a folder of other files" "holds files no wetcloth render wrote" \
+  render hang --grid 9 --duration 0.01 --out "$T/their-render"
+[ "$(ls "$T/their-render")" = "thesis.tex" ] && ok "... render wrote nothing there" ||
+  bad "render wrote: $(ls "$T/their-render")"
+
 echo "$passes passed, $fails failed"
 [ $fails -eq 0 ]

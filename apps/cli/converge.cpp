@@ -20,7 +20,7 @@ struct Options {
   std::vector<double> dts;  // default: the scene's step, halved and halved again
   std::string out;
   unsigned jobs = std::max(1u, std::thread::hardware_concurrency());
-  bool quiet = false;
+  bool quiet = false, force = false;
 };
 
 struct Case {
@@ -63,6 +63,8 @@ void add_converge_options(CLI::App* cmd, Options& o) {
   cmd->add_option("--jobs", o.jobs, "runs at once (default: all cores)")
       ->check(CLI::PositiveNumber);
   cmd->add_flag("--quiet", o.quiet, "print nothing but errors");
+  cmd->add_flag("--force", o.force,
+                "write into DIR even where it holds files of no wetcloth convergence study");
   cmd->footer(
       "Writes DIR/dt_<dt>/ (the outputs of `run`) for every step and DIR/converge.csv (one row\n"
       "per step: its final measurements, and slide_m, how far the cloth's centroid moved from\n"
@@ -264,6 +266,12 @@ int run_converge(const Options& o) {
   std::vector<Case> cases = load_cases(o, dts);
   const fs::path out =
       o.out.empty() ? fs::path("out") / (cases.front().params.name + "-converge") : fs::path(o.out);
+  if (!o.force) {  // an earlier study's folder holds its table or its runs
+    std::vector<std::string> marks = {"converge.csv"};
+    for (const Case& c : cases) marks.push_back(c.name);
+    refuse_system_folder(out);
+    refuse_foreign_folder(out, "--out", "convergence study", marks);
+  }
   make_output_folder(out);
   run_cases(o, cases, out);
 

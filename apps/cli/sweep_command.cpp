@@ -119,7 +119,7 @@ struct Options {
   std::string out, gather;
   std::optional<long long> case_index;
   unsigned jobs = std::max(1u, std::thread::hardware_concurrency());
-  bool render = false, quiet = false, no_plots = false, list = false;
+  bool render = false, quiet = false, no_plots = false, list = false, force = false;
 };
 
 // What varies from case to case: SCENE's parameters, with --set in every case.
@@ -174,6 +174,8 @@ void add_output_options(CLI::App* cmd, Options& o) {
                 "also render a contact sheet of the last frames (contact_sheet.png)");
   cmd->add_flag("--no-plots", o.no_plots, "skip the plots");
   cmd->add_flag("--quiet", o.quiet, "print nothing but errors");
+  cmd->add_flag("--force", o.force,
+                "write into DIR even where it holds files of no wetcloth sweep (a user's)");
   cmd->footer(
       "Writes DIR/<case>/ (the outputs of `run`, and its row of sweep.csv) for every case, named\n"
       "from its values (omega_0.70, sealed_omega_0.70, omega_0.70_stretch_stiffness=100),\n"
@@ -341,6 +343,12 @@ int run_sweep(const Options& o) {
                      " (--list prints them)");
   const fs::path out =
       o.out.empty() ? fs::path("out") / folder_name(scene.name + "-sweep") : fs::path(o.out);
+  if (!o.force) {  // an earlier sweep's folder holds its cases or their list
+    std::vector<std::string> marks = {sweep::kCasesFile, "sweep.csv"};
+    for (const auto& c : plan.cases) marks.push_back(c.name);
+    refuse_system_folder(out);
+    refuse_foreign_folder(out, "--out", "sweep", marks);
+  }
   make_output_folder(out);
   sweep::write_shared(out / sweep::kCasesFile, sweep::cases_csv(plan));
 

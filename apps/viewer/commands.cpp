@@ -15,6 +15,7 @@
 
 #include "common/scene_options.hpp"
 #include "programs.hpp"
+#include "wetcloth/output_folder.hpp"
 
 namespace wetcloth::viewer {
 
@@ -91,7 +92,7 @@ struct Commands {
   std::pair<double, std::string> shot;
   std::string out;
   double fps = 0, color_range = 0;
-  bool video = false, quiet = false;
+  bool video = false, quiet = false, force = false;
 
   int run_view() {
     ViewOptions o;
@@ -135,6 +136,11 @@ struct Commands {
     // Everything that would fail after the simulation is checked before it.
     if (video && !on_path("ffmpeg"))
       throw SceneError("--video: ffmpeg is not on PATH (apt-get install ffmpeg)");
+    // An earlier render's folder holds its frames or its video.
+    if (!force) {
+      refuse_system_folder(o.out, "--out");
+      refuse_foreign_folder(o.out, "--out", "render", {"frame_00000.png", "video.mp4"});
+    }
     const bool made = check_writable_folder(o.out, "--out");
     const int code = render_frames(o);
     std::error_code ec;
@@ -189,6 +195,8 @@ std::function<std::optional<int>()> add_commands(CLI::App& app) {
           "an inner particle's share)")
       ->check(kPositive);
   c->render->add_flag("--quiet", c->quiet, "no progress, no summary");
+  c->render->add_flag("--force", c->force,
+                      "write into DIR even where it holds files of no wetcloth render");
   c->render->footer(
       "Writes DIR/frame_00000.png ... one per output frame (EGL, no display needed), with a key\n"
       "to the colours when --color is given, and with\n"

@@ -31,9 +31,13 @@ void refuse_system_folder(const std::filesystem::path& out, const std::string& o
 // exit 4, an output that cannot be written.)
 void make_output_folder(const std::filesystem::path& out, const std::string& option = "--out");
 // Throws SceneError where OUT exists, holds something, and holds no earlier
-// wetcloth run (no manifest, no scene.toml a run wrote): a run would mix its
-// files with someone else's. `force` writes into it all the same.
-void refuse_foreign_folder(const std::filesystem::path& out, const std::string& option = "--out");
+// wetcloth output (no manifest, no scene.toml a run wrote, nothing named as
+// one of `marks`, or one of them and a suffix after a '.'): the command,
+// `what` ("run", "sweep", ...), would mix its files with someone else's.
+// `force` writes into it all the same.
+void refuse_foreign_folder(const std::filesystem::path& out, const std::string& option = "--out",
+                           const std::string& what = "run",
+                           const std::vector<std::string>& marks = {});
 
 // --- what a run writes and removes (study/run.cpp) ---
 

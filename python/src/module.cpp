@@ -833,7 +833,16 @@ a checkpoint, then raises KeyboardInterrupt: wetcloth.run(resume=DIR) or
 `wetcloth run --resume DIR` continues it. Raises SceneError on a bad scene or
 folder, BlowUp (the outputs so far kept), OutputError where a file cannot be
 written.)doc");
-  m.def("_make_folder", [](const std::string& out) { make_output_folder(out, "out"); });
+  // A sweep's folder: made, where it is not a system folder and (unless
+  // force) holds nothing but an earlier sweep's outputs (its `marks`).
+  m.def("_make_sweep_folder", [](const std::string& out, const std::vector<std::string>& marks,
+                                 bool force) {
+    if (!force) {
+      refuse_system_folder(out, "out");
+      refuse_foreign_folder(out, "out", "sweep", marks);
+    }
+    make_output_folder(out, "out");
+  });
   m.def("_write_shared",
         [](const std::string& path, const std::string& text) { sweep::write_shared(path, text); });
   m.def("_write_file",

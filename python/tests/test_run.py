@@ -119,3 +119,15 @@ def test_sweep_writes_the_cli_folder(cli, tmp_path):
         assert filecmp.cmp(tmp_path / "cli" / rel, tmp_path / "py" / rel, shallow=False), rel
     # The plots the command line makes, by the same script.
     assert (tmp_path / "py" / "fig7.png").is_file()
+    # A folder of someone else's files is refused, as the command line refuses
+    # it, and left as it was; force=True writes beside them.
+    theirs = tmp_path / "theirs"
+    theirs.mkdir()
+    (theirs / "thesis.tex").write_text("mine")
+    small = dict(grid=9, overrides={"duration": 0.02}, processes=1, plots=False)
+    with pytest.raises(wetcloth.SceneError, match="holds files no wetcloth sweep wrote"):
+        wetcloth.sweep("hang", {"cloth.humidity": [0.5]}, out=theirs, **small)
+    assert [p.name for p in theirs.iterdir()] == ["thesis.tex"]
+    wetcloth.sweep("hang", {"cloth.humidity": [0.5]}, out=theirs, force=True, **small)
+    assert (theirs / "thesis.tex").read_text() == "mine" and (theirs / "sweep.csv").is_file()
+    wetcloth.sweep("hang", {"cloth.humidity": [0.5]}, out=theirs, **small)  # its own folder now

@@ -15,7 +15,7 @@ def _run(scene, sets, grid, out, extra, case):
 
 
 def sweep(scene, vary, client=None, overrides=None, grid=None, processes=None, out=None,
-          plots=True):
+          plots=True, force=False):
     """Runs SCENE over the cartesian product of `vary` ({"key": [values], ...},
     the first key outermost, as `wetcloth sweep --vary` orders the cases) and
     returns the table `wetcloth sweep` writes as sweep.csv: a NumPy structured
@@ -31,7 +31,9 @@ def sweep(scene, vary, client=None, overrides=None, grid=None, processes=None, o
     run's outputs in out/<case>/ with its row (sweep_row.csv), cases.csv,
     sweep.csv and, unless plots=False, the plots (tools/plot_sweep.py; a
     failure of the plots raises RuntimeError once sweep.csv is written). The
-    workers write into it: on a cluster, a folder they all see.
+    workers write into it: on a cluster, a folder they all see. A folder that
+    holds files of no earlier wetcloth sweep raises SceneError, as `wetcloth
+    sweep` refuses it, unless force=True.
     """
     if not isinstance(vary, dict) or not vary:
         raise TypeError("vary: expected a dict {\"key\": [values], ...}")
@@ -43,7 +45,8 @@ def sweep(scene, vary, client=None, overrides=None, grid=None, processes=None, o
     extra, cases, header, cases_csv = _wetcloth._plan_sweep(scene, list(vary.items()), base, grid)
     if out is not None:
         out = os.fspath(out)
-        _wetcloth._make_folder(out)
+        marks = ["cases.csv", "sweep.csv"] + [c["name"] for c in cases]
+        _wetcloth._make_sweep_folder(out, marks, force)
         _wetcloth._write_shared(os.path.join(out, "cases.csv"), cases_csv)
     jobs = [(scene, base + c["sets"], grid, out, extra, c) for c in cases]
     if client is not None:

@@ -302,6 +302,7 @@ BendingMatrix build_bending_matrix(const std::vector<Vec3>& rest,
                                    const std::vector<std::uint8_t>& on_border, double rigidity);
 BendingMatrix build_bending_matrix(const Model& m, double rigidity);
 void add_bending_forces(const Model& m, const State& s, Vec3Array& f);
+void bending_forces(const Model& m, const State& s, Vec3Array& f);  // f = -Q x
 // y_i += scale Σ_j≠i Q_ij x_j for i in [a0, a1): implicit Euler's product.
 void add_bending_off_diagonal(const Model& m, const double* x, double* y, double scale, int a0,
                               int a1);

@@ -348,7 +348,7 @@ BendingMatrix build_bending_matrix(const Model& m, double rigidity) {
 // A grid's stencil: the 5 x 5 particles about one, but itself.
 constexpr int kGridStencil = 24;
 
-template <bool Difference>
+template <bool Difference, bool Assign = false>
 void bending_rows(const Model& m, const double* __restrict x, double* __restrict out, double scale,
                   int a0, int a1) {
   const BendingMatrix& b = m.topology->bending;
@@ -359,7 +359,10 @@ void bending_rows(const Model& m, const double* __restrict x, double* __restrict
       double sum = 0;
       for (int e = start[i]; e < start[i + 1]; ++e)
         sum += value[e] * (Difference ? x[column[e]] - x[i] : x[column[e]]);
-      out[i] += scale * sum;
+      if constexpr (Assign)
+        out[i] = scale * sum;
+      else
+        out[i] += scale * sum;
     }
   };
   const BendingMatrix::Stencil& st = b.stencil;
@@ -382,6 +385,9 @@ void bending_rows(const Model& m, const double* __restrict x, double* __restrict
         double sum = 0;
         for (int e = 0; e < size; ++e)
           sum += coefficient[e] * (Difference ? x[i + offset[e]] - x[i] : x[i + offset[e]]);
+        if constexpr (Assign)
+        out[i] = scale * sum;
+      else
         out[i] += scale * sum;
       }
       a = to;
@@ -399,7 +405,10 @@ void bending_rows(const Model& m, const double* __restrict x, double* __restrict
 #pragma GCC unroll 24
       for (int e = 0; e < kGridStencil; ++e)
         sum += c[e] * (Difference ? x[i + o[e]] - x[i] : x[i + o[e]]);
-      out[i] += scale * sum;
+      if constexpr (Assign)
+        out[i] = scale * sum;
+      else
+        out[i] += scale * sum;
     }
     a = to;
   }
@@ -410,6 +419,14 @@ void add_bending_forces(const Model& m, const State& s, Vec3Array& f) {
   if (m.topology->bending.start.empty()) return;
   for_each_particle_block(m, [&](int first, int end) {
     for (int k = 0; k < 3; ++k) bending_rows<true>(m, s.x.column(k), f.column(k), -1.0, first, end);
+  });
+}
+
+// f = -Q x, every particle's row written: xpbd's own array, no zeroing pass.
+void bending_forces(const Model& m, const State& s, Vec3Array& f) {
+  for_each_particle_block(m, [&](int first, int end) {
+    for (int k = 0; k < 3; ++k)
+      bending_rows<true, true>(m, s.x.column(k), f.column(k), -1.0, first, end);
   });
 }
 

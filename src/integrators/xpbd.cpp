@@ -485,8 +485,7 @@ void xpbd_step(const Model& m, State& s, Workspace& w) {
       // xpbd's alone: made at its first step (an integrator set later included).
       if (w.bending_force.size() != static_cast<std::size_t>(m.n))
         w.bending_force.assign(m.n, Vec3::Zero());
-      for_each_particle(m, [&](int i) { put(w.bending_force[i], Vec3::Zero()); });
-      add_bending_forces(m, s, w.bending_force);
+      bending_forces(m, s, w.bending_force);
     }
     add_external_velocity(m, s, w, h);
     move_from_substep_start(m, s, w, h);  // the air term implicit, then x += h v

@@ -4,7 +4,7 @@
 // within h_th of the contact surface), pressure (the trapped air's P_in under
 // the vertex, Pa; p_atm where none is trapped; in USD also as
 // primvars:pressure_deficit, p_atm - P_in, Pa), adhesion (|F_adh|, N) and
-// humidity (ω); USD has the velocities too (m/s).
+// humidity (each vertex's ω); USD has the velocities too (m/s).
 //
 //   cloth.usda                one Mesh, time-sampled points, normals, velocities, extent and
 //                             primvars, UVs (primvars:st), the obstacles as static
@@ -47,7 +47,7 @@ struct CacheFrame {
   double time = 0;
   std::vector<Vec3> points, normals, velocities;
   std::vector<float> contact, pressure, adhesion;
-  double humidity = 0;
+  std::vector<float> humidity;  // ω per vertex (the humidity field)
 };
 CacheFrame cache_frame(const Simulation& sim, UpAxis up);
 

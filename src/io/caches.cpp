@@ -44,7 +44,7 @@ CacheFrame cache_frame(const Simulation& sim, UpAxis up) {
   compute_normals(m, s.x, normal);
   CacheFrame f;
   f.time = s.time;
-  f.humidity = m.params.cloth.humidity;
+  f.humidity.assign(m.n, static_cast<float>(m.params.cloth.humidity));
   f.points.resize(m.n);
   f.normals.resize(m.n);
   f.velocities.resize(m.n);
@@ -60,6 +60,7 @@ CacheFrame cache_frame(const Simulation& sim, UpAxis up) {
     f.contact[i] = s.contact[i] ? 1.0f : 0.0f;
     if (pressure) f.pressure[i] = static_cast<float>(s.pocket_pressure[i]);
     if (adhesion) f.adhesion[i] = static_cast<float>(sim.adhesion()[i]);
+    if (s.humidity.size() == std::size_t(m.n)) f.humidity[i] = static_cast<float>(s.humidity[i]);
   }
   return f;
 }
@@ -222,7 +223,7 @@ constexpr const char* kAttributes[][2] = {{"point3f[] points", "points"},
                                           {"float[] primvars:contact", "contact"},
                                           {"float[] primvars:pressure", "pressure"},
                                           {"float[] primvars:adhesion", "adhesion"},
-                                          {"float primvars:humidity", "humidity"},
+                                          {"float[] primvars:humidity", "humidity"},
                                           {"vector3f[] velocities", "velocities"},
                                           {"float[] primvars:pressure_deficit", "deficit"}};
 
@@ -372,8 +373,7 @@ void CacheWriter::add_frame(const Simulation& sim, double frame_code) {
         arrays.add("Float32", "contact", 1, f.contact) +
         arrays.add("Float32", "pressure_pa", 1, f.pressure) +
         arrays.add("Float32", "adhesion_n", 1, f.adhesion) +
-        arrays.add("Float32", "humidity", 1,
-                   std::vector<float>(f.points.size(), static_cast<float>(f.humidity))) +
+        arrays.add("Float32", "humidity", 1, f.humidity) +
         "</PointData>\n";
     write_file_atomic(dir_ / "vtk" / name, polydata(f.points, model_.triangles, fields, arrays));
     vtk_times_.push_back(f.time);
@@ -393,9 +393,7 @@ void CacheWriter::add_frame(const Simulation& sim, double frame_code) {
     spools_[3]->add(code, "[" + join(f.contact, ", ") + "]");
     spools_[4]->add(code, "[" + join(f.pressure, ", ") + "]");
     spools_[5]->add(code, "[" + join(f.adhesion, ", ") + "]");
-    std::string h;
-    put(h, f.humidity);
-    spools_[6]->add(code, h);
+    spools_[6]->add(code, "[" + join(f.humidity, ", ") + "]");
     spools_[7]->add(code, "[" + tuples(f.velocities) + "]");
     std::vector<float> deficit(f.pressure.size());
     for (std::size_t i = 0; i < deficit.size(); ++i)
@@ -439,11 +437,11 @@ void CacheWriter::finish() {
        {std::pair{"contact", "1 where the vertex is within the liquid bridge of the surface"},
         {"pressure", "the trapped air's pressure under the vertex, Pa (p_atm where none)"},
         {"pressure_deficit", "p_atm - pressure: the suction under the vertex, Pa"},
-        {"adhesion", "the liquid bridge's adhesion force on the vertex, N"}})
+        {"adhesion", "the liquid bridge's adhesion force on the vertex, N"},
+        {"humidity", "the water saturation ω of the cloth at the vertex, 0 to 1"}})
     o += std::string("        float[] primvars:") + name + " (\n            doc = \"" + doc +
          "\"\n            interpolation = \"vertex\"\n        )\n";
   o += "        vector3f[] velocities (\n            doc = \"m/s\"\n        )\n";
-  o += "        float primvars:humidity (\n            interpolation = \"constant\"\n        )\n";
   const fs::path path = dir_ / "cloth.usda", tmp = path.string() + ".tmp";
   const TemporaryFile record(tmp.string());  // a second signal removes it
   {

@@ -154,7 +154,10 @@ Metrics Simulation::metrics() const {
     r.humidity_min = std::min(r.humidity_min, w);
     r.humidity_max = std::max(r.humidity_max, w);
   }
-  r.humidity_mean = area > 0 ? weighted / area : 0.0;
+  // A uniform field's mean is its ω (the weighted sum would round it).
+  r.humidity_mean = r.humidity_min == r.humidity_max ? r.humidity_min
+                    : area > 0                         ? weighted / area
+                                                       : 0.0;
   r.water_kg = capacity * weighted;
   for (const double f : s.film) r.film_water_kg += f;
   r.evaporated_kg = s.water_evaporated;

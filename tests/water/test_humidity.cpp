@@ -217,6 +217,28 @@ TEST(LocalHumidity, MassAndAdhesionFollowEachParticlesOmega) {
   }
 }
 
+// A mesh cloth (drape-disc's rings of triangles): the cotangent weights,
+// none negative, keep the water and the bounds.
+TEST(Wicking, OnAMeshClothWithCotangentWeights) {
+  const Model m = build_model(load_scene("drape-disc"));
+  ASSERT_FALSE(m.grid);
+  ASSERT_FALSE(m.topology->wick_w.empty());
+  for (const double w : m.topology->wick_w) EXPECT_GT(w, 0.0);
+  std::vector<double> c(m.n);
+  for (int k = 0; k < m.n; ++k) c[k] = m.rest_position[k].x() > 0 ? 1.0 : 0.2;
+  const double before = water(m, c);
+  HumidityScratch h;
+  for (int s = 0; s < 50; ++s) detail::wick(m, c, h, 1e-5 * 0.1);
+  EXPECT_NEAR(water(m, c), before, 1e-13 * before);
+  for (const double w : c) {
+    EXPECT_GE(w, 0.2 - 1e-12);
+    EXPECT_LE(w, 1.0);
+  }
+  std::vector<double> uniform(m.n, 0.4);
+  detail::wick(m, uniform, h, 1.0);
+  EXPECT_TRUE(same_bits(uniform, std::vector<double>(m.n, 0.4)));
+}
+
 // A uniform field with wicking on gives the bits of one without (nothing to
 // spread): today's results are kept.
 TEST(LocalHumidity, AUniformFieldRunsAsTheUniformModel) {

@@ -23,8 +23,9 @@ void add_adhesion(const Model& m, const State& s, Workspace& w) {
   if ((!field || w.humidity.uniform) &&
       c.pressure_per_omega(omega0) == 0 && c.tension_per_omega(omega0) == 0)
     return;
+  // A uniform field: eq. 13's two parts once, as before the field.
+  const bool per_particle = field && !w.humidity.uniform;
   const double* omega = field ? s.humidity.data() : nullptr;
-  const auto omega_at = [&](int i) { return omega ? omega[i] : omega0; };
   const double s_now = ordered_sum(m, w, [&](int j) {
     double sum = 0;
     for (int i = j * m.nu; i < (j + 1) * m.nu; ++i) sum += s.contact[i] ? m.area[i] : 0.0;
@@ -36,6 +37,8 @@ void add_adhesion(const Model& m, const State& s, Workspace& w) {
     return static_cast<double>(count);
   });
   const double two_root_s = 2.0 * std::sqrt(s_now);
+  const double pressure0 = c.pressure_per_omega(omega0),
+               edge0 = border > 0 ? two_root_s * c.tension_per_omega(omega0) / border : 0.0;
   for_each_particle_block(m, [&](int first, int end) {
     const double *__restrict nx = w.surface_normal.column(0),
                              *__restrict ny = w.surface_normal.column(1),
@@ -44,7 +47,8 @@ void add_adhesion(const Model& m, const State& s, Workspace& w) {
                        *__restrict fz = w.force.column(2), *__restrict adhesion = w.adhesion.data();
     const auto force = [&](int i) {  // zero off the contact region
       if (!s.contact[i]) return 0.0;
-      const double o = omega_at(i);
+      if (!per_particle) return pressure0 * m.area[i] + (w.border[i] ? edge0 : 0.0);
+      const double o = omega[i];
       return c.pressure_per_omega(o) * m.area[i] +
              (w.border[i] && border > 0 ? two_root_s * c.tension_per_omega(o) / border : 0.0);
     };

@@ -36,6 +36,31 @@ void check_cloth_mesh(const Params& p, const std::string& source);
 
 namespace wetcloth::detail {
 
+// water/humidity.cpp: the humidity field (docs/model.md "Humidity field").
+// ω at t = 0 per particle (cloth.humidity, cloth.humidity_map, [wet.NAME]);
+// the wicking's Laplacian into t; cloth.humidity_map read to check it
+// (throws SceneError naming source, the file and the key).
+std::vector<double> initial_humidity(const Model& m, const Params& p);
+void build_wicking(const Model& m, Topology& t);
+void check_humidity_map(const Params& p, const std::string& source);
+// Wicking runs every wicking_steps(dt) steps (a step of at least
+// kWickingInterval, 1 ms, measured within 1e-4 of wicking every step).
+constexpr double kWickingInterval = 1e-3;
+long long wicking_steps(double dt);
+// One backward-Euler step of wicking over τ = D Δt on the field c (ω), in place.
+void wick(const Model& m, std::vector<double>& c, HumidityScratch& h, double tau);
+// The contact surface's film depth, m (table.water_film, ball.water_film).
+double film_depth(const Model& m);
+// The field and the film at the start; the scratch's note of a uniform field
+// (after the field is set from outside).
+void start_humidity(const Model& m, State& s, Workspace& w);
+// The film alone: ρ_w h A_i of water under each particle (none with h = 0).
+void start_film(const Model& m, State& s);
+void note_humidity_changed(const State& s, Workspace& w);
+// Once a step of dt: uptake from the film, drying, wicking; the masses follow.
+// Returns whether the field changed.
+bool update_humidity(Model& m, State& s, Workspace& w, double dt);
+
 // A simulation's scratch, for the library's stages, its tests and benchmarks.
 inline Workspace& workspace(const Simulation& sim) { return detail_workspace(sim); }
 // Its state, to change (the public API reads it; tests set up cases in it).

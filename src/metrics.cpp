@@ -142,6 +142,25 @@ Metrics Simulation::metrics() const {
   }
   r.wrinkle_rad = m.contact_surface == SurfaceKind::None ? 0.0 : wrinkle_angle(m, s);
   r.front_pull_n = front_pull(m, s, ws_->surface_normal);
+  // The humidity field (docs/model.md "Humidity field").
+  const double capacity = p.cloth.areal_density * p.cloth.water_ratio;  // kg/m² at ω = 1
+  double weighted = 0, area = 0;
+  r.humidity_min = kInf;
+  r.humidity_max = -kInf;
+  for (int i = 0; i < m.n; ++i) {
+    const double w = s.humidity.empty() ? p.cloth.humidity : s.humidity[i];
+    weighted += w * m.area[i];
+    area += m.area[i];
+    r.humidity_min = std::min(r.humidity_min, w);
+    r.humidity_max = std::max(r.humidity_max, w);
+  }
+  // A uniform field's mean is its ω (the weighted sum would round it).
+  r.humidity_mean = r.humidity_min == r.humidity_max ? r.humidity_min
+                    : area > 0                         ? weighted / area
+                                                       : 0.0;
+  r.water_kg = capacity * weighted;
+  for (const double f : s.film) r.film_water_kg += f;
+  r.evaporated_kg = s.water_evaporated;
   return r;
 }
 
@@ -151,7 +170,9 @@ std::vector<std::string> metrics_columns() {
           "base_diagonal_m", "outer_diagonal_m", "inner_pressure_pa",
           "trapped_air_m3",  "air_volume_m3",    "kinetic_energy_j",
           "max_strain",      "wrinkle_rad",      "centroid_x_m",
-          "centroid_y_m",    "front_pull_n"};
+          "centroid_y_m",    "front_pull_n",     "humidity_mean",
+          "humidity_min",    "humidity_max",     "water_kg",
+          "film_water_kg",   "evaporated_kg"};
 }
 
 std::vector<double> metrics_values(const Metrics& r) {
@@ -160,7 +181,9 @@ std::vector<double> metrics_values(const Metrics& r) {
           r.base_diagonal_m, r.outer_diagonal_m, r.inner_pressure_pa,
           r.trapped_air_m3,  r.air_volume_m3,    r.kinetic_energy_j,
           r.max_strain,      r.wrinkle_rad,      r.centroid_x_m,
-          r.centroid_y_m,    r.front_pull_n};
+          r.centroid_y_m,    r.front_pull_n,     r.humidity_mean,
+          r.humidity_min,    r.humidity_max,     r.water_kg,
+          r.film_water_kg,   r.evaporated_kg};
 }
 
 }  // namespace wetcloth

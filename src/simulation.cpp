@@ -94,6 +94,10 @@ void Simulation::reset() {
   state_.pocket.assign(n, -1);
   ws_->colliding.assign(n, 0);
   ws_->touched.assign(n, 0);
+  // The humidity field at its start, and the masses it gives (a run may have
+  // changed them).
+  start_humidity(model_, state_, *ws_);
+  set_masses(model_, state_.humidity);
   release();
   place_surfaces(model_, *ws_, 0.0);
   update_contact(model_, state_, *ws_);
@@ -108,7 +112,14 @@ void Simulation::restore(const State& s) {
     throw std::invalid_argument("restore: a state of " + std::to_string(s.x.size()) +
                                 " particles, the scene has " + std::to_string(n));
   reset();
+  const std::vector<double> film = state_.film;
   state_ = s;
+  // A state of before the humidity field (a format-3 checkpoint): the field
+  // the scene starts with, and its film.
+  if (state_.humidity.size() != n) state_.humidity = model_.initial_humidity;
+  if (state_.film.size() != film.size()) state_.film = film;
+  note_humidity_changed(state_, *ws_);
+  set_masses(model_, state_.humidity);
   // What each step's end leaves for the next, made from the state again (the
   // surfaces' poses are a function of its time).
   place_surfaces(model_, *ws_, state_.time);
@@ -141,6 +152,40 @@ void Simulation::set_humidity(double omega) {
   p.cloth.humidity = omega;
   validate(p);
   wetcloth::set_humidity(model_, omega);
+  state_.humidity.assign(model_.n, omega);
+  note_humidity_changed(state_, *ws_);
+}
+
+void Simulation::set_humidity_field(const std::vector<double>& omega) {
+  if (omega.size() != static_cast<std::size_t>(model_.n))
+    throw std::invalid_argument("set_humidity_field: " + std::to_string(omega.size()) +
+                                " values, the scene has " + std::to_string(model_.n) +
+                                " particles");
+  for (std::size_t k = 0; k < omega.size(); ++k)
+    if (!(omega[k] >= 0 && omega[k] <= 1))
+      throw std::invalid_argument("set_humidity_field: particle " + std::to_string(k) +
+                                  "'s ω is " + std::to_string(omega[k]) +
+                                  ", out of range [0, 1]");
+  state_.humidity = omega;
+  note_humidity_changed(state_, *ws_);
+  set_masses(model_, state_.humidity);
+}
+
+int Simulation::wet_near(const Vec3& x, double radius, double omega) {
+  omega = std::clamp(omega, 0.0, 1.0);
+  int changed = 0;
+  for (int k = 0; k < model_.n; ++k) {
+    if ((state_.x[k] - x).squaredNorm() > radius * radius) continue;
+    const double before = state_.humidity[k];
+    // Wetting raises ω to the brush's, drying (ω = 0) lowers it.
+    state_.humidity[k] = omega > 0 ? std::max(before, omega) : 0.0;
+    changed += state_.humidity[k] != before;
+  }
+  if (changed) {
+    note_humidity_changed(state_, *ws_);
+    set_masses(model_, state_.humidity);
+  }
+  return changed;
 }
 
 void Simulation::set_params(const Params& p) {
@@ -148,9 +193,31 @@ void Simulation::set_params(const Params& p) {
   const bool same_grid = p.cloth.resolution == model_.params.cloth.resolution &&
                          p.cloth.mesh == model_.params.cloth.mesh &&
                          p.cloth.mesh_scale == model_.params.cloth.mesh_scale;
+  const Params before = model_.params;
   model_ = build_model(p);
   start_thread_choice();
-  if (!same_grid) reset();
+  if (!same_grid) {
+    reset();
+  } else {
+    // The field runs on unless its start changed; the film restarts with a new depth.
+    const auto region = [](const WetRegionParams& a, const WetRegionParams& b) {
+      return a.at == b.at && a.radius == b.radius && a.humidity == b.humidity;
+    };
+    const bool same_start =
+        p.cloth.humidity == before.cloth.humidity &&
+        p.cloth.humidity_map == before.cloth.humidity_map && p.wet.size() == before.wet.size() &&
+        std::equal(p.wet.begin(), p.wet.end(), before.wet.begin(), [&](const auto& a, const auto& b) {
+          return a.first == b.first && region(a.second, b.second);
+        });
+    if (!same_start || state_.humidity.size() != static_cast<std::size_t>(model_.n))
+      state_.humidity = model_.initial_humidity;
+    if (p.table.water_film != before.table.water_film ||
+        p.ball.water_film != before.ball.water_film ||
+        p.contact.surface != before.contact.surface)
+      start_film(model_, state_);
+    note_humidity_changed(state_, *ws_);
+    set_masses(model_, state_.humidity);
+  }
   ws_->strain_springs.clear();  // their lengths may have changed: ordered again next step
   ws_->mesh_cache.clear();      // an obstacle may have moved: its last answers bound nothing
   place_surfaces(model_, *ws_, state_.time);
@@ -299,12 +366,16 @@ void Simulation::step() {
   ThreadChoice& c = ws_->threads;
   if (!c.automatic) {
     take_step(model_, state_, *ws_);
+    update_humidity(model_, state_, *ws_, model_.params.integrator.dt);
     return;
   }
   (model_.threads == 1 ? c.steps_on_one : c.steps_on_most)++;
   const auto start = std::chrono::steady_clock::now();
   const long long substeps = ws_->substeps;
   take_step(model_, state_, *ws_);
+  // The humidity field, once a step (docs/model.md "Humidity field"): the
+  // masses follow it into the next step.
+  update_humidity(model_, state_, *ws_, model_.params.integrator.dt);
   c.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   c.substeps += ws_->substeps - substeps;
   // A trial times each count for 2 ms (two substeps at least); the faster is

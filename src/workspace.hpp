@@ -60,8 +60,17 @@ struct SurfacePoses {
 };
 
 // Scratch arrays, reused every step: nothing is allocated per step.
+// The humidity field's scratch (water/humidity.cpp): the wicking solve's
+// vectors, and whether the field is uniform (then wicking has nothing to do).
+struct HumidityScratch {
+  std::vector<double> delta, r, z, p, q, diagonal, flux;
+  bool uniform = true;
+  int cg_iterations = 0;  // the last wicking solve's
+};
+
 struct Workspace {
   SurfacePoses surfaces;
+  HumidityScratch humidity;
   Vec3Array force, normal, surface_normal;
   Vec3Array bending_force;  // xpbd: the quadratic bending's, apart (add_external_velocity)
   std::vector<Vec3> x_before;

@@ -48,9 +48,20 @@ Legend cloth_mesh(const Simulation& sim, ColorBy mode, float& scale, ClothMesh& 
   mesh.triangles = m.triangles;
 
   Legend legend;
+  const bool field = s.humidity.size() == static_cast<std::size_t>(n);
+  const auto omega = [&](int i) {
+    return static_cast<float>(field ? s.humidity[i] : m.params.cloth.humidity);
+  };
   switch (mode) {
     case ColorBy::Fabric:
+      for (int i = 0; i < n; ++i) mesh.color[i] = wet_fabric_color(omega(i));
       break;
+    case ColorBy::Humidity: {
+      const float top = range > 0 ? range : 1.0f;
+      legend = {"humidity ω", 0, top, false, false};
+      for (int i = 0; i < n; ++i) mesh.color[i] = colormap(omega(i) / top, false);
+      break;
+    }
     case ColorBy::Contact: {
       legend = {"contact with the surface", 0, 1, false, true};
       for (int i = 0; i < n; ++i)
@@ -109,6 +120,18 @@ Legend cloth_mesh(const Simulation& sim, ColorBy mode, float& scale, ClothMesh& 
     }
   }
   return legend;
+}
+
+float fabric_wetness(const Simulation& sim) {
+  const std::vector<double>& w = sim.state().humidity;
+  if (w.empty()) return static_cast<float>(sim.model().params.cloth.humidity);
+  double sum = 0;
+  for (const double x : w) sum += x;
+  return static_cast<float>(sum / static_cast<double>(w.size()));
+}
+
+Vec3f wet_fabric_color(float omega) {
+  return kClothColor * std::sqrt(1.0f - 0.45f * std::clamp(omega, 0.0f, 1.0f));
 }
 
 std::string key_number(float v) {

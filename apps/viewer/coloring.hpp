@@ -11,9 +11,9 @@
 
 namespace wetcloth::viewer {
 
-enum class ColorBy { Fabric, Contact, Pressure, Strain, Adhesion };
-inline constexpr std::array<const char*, 5> kColorByNames{"none", "contact", "pressure", "strain",
-                                                          "adhesion"};
+enum class ColorBy { Fabric, Contact, Pressure, Strain, Adhesion, Humidity };
+inline constexpr std::array<const char*, 6> kColorByNames{"none",     "contact",  "pressure",
+                                                          "strain",   "adhesion", "humidity"};
 
 // The legend of the current colouring.
 struct Legend {
@@ -32,11 +32,20 @@ inline const Vec3f kContactColor{0.95f, 0.55f, 0.15f}, kFreeColor{0.55f, 0.60f, 
 // fixed by the scene, so that a colour means the same value all along a run:
 // pressure +-air.breakthrough_pressure (the deficit at which air breaks
 // through), strain 0 to strain_limit.tau, adhesion 0 to twice an inner
-// particle's share of eq. 13. range > 0 sets the top of the scale instead.
+// particle's share of eq. 13, humidity 0 to 1 (each particle's ω). range > 0
+// sets the top of the scale instead. The fabric's own colour (ColorBy::Fabric)
+// is darkened by each particle's ω, as water darkens cloth (the shader's
+// gloss follows the mean ω: fabric_wetness).
 // Only without adhesion (a scale of 0) is there an automatic one: scale grows
 // at once and shrinks slowly, so that colours do not flicker; keep it between calls.
 Legend cloth_mesh(const Simulation& sim, ColorBy mode, float& scale, ClothMesh& mesh,
                   float range = 0);
+
+// The mean ω over the particles (the fabric shader's gloss).
+float fabric_wetness(const Simulation& sim);
+// The fabric's colour at humidity ω: its albedo (the colour squared) times
+// 1 - 0.45 ω.
+Vec3f wet_fabric_color(float omega);
 
 // Draws the legend as a key into the bottom-left corner of a picture (what the
 // viewer's panel shows): a colour bar with its numbers, or the two contact colours.

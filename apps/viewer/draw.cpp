@@ -176,8 +176,8 @@ void main() {
   float ks = 0.04, shininess = 24.0;
 #if MATERIAL == 1
   if (back) albedo *= 0.72;                 // the underside, a shade darker
-  albedo *= mix(1.0, 0.55, u_wetness);      // water darkens fabric...
-  ks = mix(0.03, 0.20, u_wetness);          // ...and makes it glossy
+  // Water darkens fabric (each vertex's colour, by its own ω: wet_fabric_color)
+  ks = mix(0.03, 0.20, u_wetness);          // ...and makes it glossy (the mean ω)
   shininess = mix(10.0, 60.0, u_wetness);
 #elif MATERIAL == 2
   bool on_table = u_table.w > 0.5 && all(lessThan(abs(v_pos.xy - u_table.xy), vec2(u_table.z)));

@@ -171,6 +171,7 @@ struct Pending {
   long long frame;
   ClothMesh mesh;
   Legend legend;  // its own: the adhesion scale may follow the frames
+  float wetness = 0;  // the mean ω then (the fabric's gloss)
 };
 
 // What a render did: its frames, and the time drawing and writing them took.
@@ -195,6 +196,7 @@ struct FrameDrawer {
   bool write(const Pending& f, const Camera& cam, bool timed, RenderStats& stats) {
     auto t0 = Clock::now();
     target.bind();
+    opt.wetness = f.wetness;
     renderer.draw(f.mesh, stage, cam, o.width, o.height, opt);
     Image img = target.read();
     if (o.color != ColorBy::Fabric) draw_key(img, f.legend);
@@ -234,7 +236,7 @@ int draw_frames(const RenderOptions& o, double fps, FrameDrawer& drawer, RenderS
     // particles would zoom out every frame the camera looks ahead from.
     if (ok || f == 0) content_box(p, mesh.position, lo, hi);
     follow.add(t, lo, hi);
-    pending.push_back({f, std::move(mesh), stats.legend});
+    pending.push_back({f, std::move(mesh), stats.legend, fabric_wetness(sim)});
     while (!pending.empty() &&
            (!ok || f == frames || follow.time(pending.front().frame) + follow.reach() <= t)) {
       const long long g = pending.front().frame;
@@ -328,6 +330,8 @@ bool render_contact_sheet(const std::vector<std::pair<std::string, fs::path>>& c
     const fs::path frame = last_frame(dir);
     if (frame.empty()) return fail(label + ": no frames/frame_*.obj in " + dir.string());
     if (!read_cloth_obj(frame, t.mesh)) return fail(label + ": cannot read " + frame.string());
+    // The run's last frame holds no field: the fabric wet as the case's humidity.
+    for (auto& c : t.mesh.color) c = wet_fabric_color(static_cast<float>(t.params.cloth.humidity));
     for (const auto& p : t.mesh.position) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
     const Stage s = stage_from(t.params);
     if (s.table) lo.z() = std::min(lo.z(), s.ground_z);

@@ -294,6 +294,13 @@ class Viewer {
     if (ImGui::GetIO().WantCaptureMouse) return;
     glfwGetCursorPos(window_, &last_x_, &last_y_);
     drag_ = button == GLFW_MOUSE_BUTTON_MIDDLE ? Drag::Pan : Drag::Orbit;
+    const bool shift = glfwGetKey(window_, GLFW_KEY_LEFT_SHIFT) == GLFW_PRESS ||
+                       glfwGetKey(window_, GLFW_KEY_RIGHT_SHIFT) == GLFW_PRESS;
+    if (button == GLFW_MOUSE_BUTTON_LEFT && shift) {  // the brush: wets where it is dragged
+      drag_ = Drag::Brush;
+      brush(last_x_, last_y_);
+      return;
+    }
     if (button == GLFW_MOUSE_BUTTON_LEFT) {
       const int p = pick(last_x_, last_y_);
       if (p >= 0) {
@@ -306,10 +313,19 @@ class Viewer {
     }
   }
 
+  // Shift + left button: the particles within the brush's radius of the one
+  // under the cursor get its ω (wetter only; ω 0 dries them).
+  void brush(double x, double y) {
+    const int p = pick(x, y);
+    if (p >= 0) sim_->wet_near(sim_->state().x[p], brush_radius_cm_ / 100.0, brush_omega_);
+  }
+
   void on_cursor(double x, double y) {
     const double dx = x - last_x_, dy = y - last_y_;
     last_x_ = x, last_y_ = y;
-    if (drag_ == Drag::Orbit) {
+    if (drag_ == Drag::Brush) {
+      brush(x, y);
+    } else if (drag_ == Drag::Orbit) {
       camera_.yaw_deg -= static_cast<float>(dx) * 0.3f;
       camera_.pitch_deg =
           std::clamp(camera_.pitch_deg + static_cast<float>(dy) * 0.3f, -89.0f, 89.0f);
@@ -611,6 +627,9 @@ class Viewer {
     }
     ImGui::SliderFloat("grab stiffness, N/m", &grab_k_, 1, 2000, "%.0f",
                        ImGuiSliderFlags_Logarithmic);
+    ImGui::SliderFloat("brush radius, cm", &brush_radius_cm_, 0.5f, 20, "%.1f");
+    ImGui::SliderFloat("brush humidity", &brush_omega_, 0, 1, "%.2f", ImGuiSliderFlags_AlwaysClamp);
+    ImGui::TextUnformatted("Shift + drag: the brush wets the cloth (humidity 0: dries it)");
     ImGui::SliderFloat("physics ms/frame", &budget_ms_, 1, 200, "%.0f",
                        ImGuiSliderFlags_Logarithmic);
   }
@@ -714,7 +733,7 @@ class Viewer {
       const auto t0 = Clock::now();
       legend_ = cloth_mesh(*sim_, color_, color_scale_, mesh_);
       draw_.fabric = color_ == ColorBy::Fabric;
-      draw_.wetness = static_cast<float>(params_.cloth.humidity);
+      draw_.wetness = fabric_wetness(*sim_);
       draw_.grab_particle = grab_;
       draw_.grab_target = grab_target_;
       const int samples = antialias_ ? 4 : 0;
@@ -762,7 +781,7 @@ class Viewer {
     return 0;
   }
 
-  enum class Drag { None, Orbit, Pan, Grab };
+  enum class Drag { None, Orbit, Pan, Grab, Brush };
   static constexpr float kPanelWidth = 400;
   static constexpr double kSampleInterval = 0.005;  // s of simulated time between plot samples
 
@@ -801,6 +820,7 @@ class Viewer {
   double last_x_ = 0, last_y_ = 0;
   int grab_ = -1;
   float grab_k_ = 50;
+  float brush_radius_cm_ = 3, brush_omega_ = 1;  // Shift + drag: the wetting brush
   Vec3f grab_point_{0, 0, 0}, grab_normal_{0, 0, 1}, grab_target_{0, 0, 0};
 };
 

@@ -4,7 +4,7 @@
 // within h_th of the contact surface), pressure (the trapped air's P_in under
 // the vertex, Pa; p_atm where none is trapped; in USD also as
 // primvars:pressure_deficit, p_atm - P_in, Pa), adhesion (|F_adh|, N) and
-// humidity (ω); USD has the velocities too (m/s).
+// humidity (each vertex's ω); USD has the velocities too (m/s).
 //
 //   cloth.usda                one Mesh, time-sampled points, normals, velocities, extent and
 //                             primvars, UVs (primvars:st), the obstacles as static
@@ -16,6 +16,9 @@
 //   cloth.pc2, cloth_rest.obj Blender's Mesh Cache modifier, Houdini; one sample a
 //                             frame. The header's count follows every frame, so
 //                             a run cut short leaves a readable cache.
+//   cloth_fields.pc2          its side file, the same layout: each point's
+//                             (humidity ω, contact 0 or 1, pressure deficit Pa)
+//                             in place of (x, y, z).
 //   vtk/cloth_NNNNN.vtp       a PolyData a frame (ParaView), its arrays binary,
 //                             zlib-compressed and appended; vtk/obstacles.vtp;
 //                             cloth.pvd the collection with each frame's time,
@@ -47,7 +50,7 @@ struct CacheFrame {
   double time = 0;
   std::vector<Vec3> points, normals, velocities;
   std::vector<float> contact, pressure, adhesion;
-  double humidity = 0;
+  std::vector<float> humidity;  // ω per vertex (the humidity field)
 };
 CacheFrame cache_frame(const Simulation& sim, UpAxis up);
 
@@ -99,7 +102,7 @@ class CacheWriter {
   long long frames_ = 0;
   double last_code_ = 0;  // USD time code of the last frame
   bool finished_ = false;
-  std::fstream pc2_;
+  std::fstream pc2_, pc2_fields_;
   std::vector<double> vtk_times_;
   std::vector<std::unique_ptr<Spool>> spools_;
 };

@@ -123,6 +123,15 @@ struct ObstacleParams {
   Vec3d pivot{0, 0, 0};  // the point the motion turns about, in the file's coordinates
 };
 
+// A wet region of the cloth at the start ([wet.NAME], docs/model.md "Humidity
+// field"): the particles within `radius` (m, in the rest shape) of the one
+// nearest to `at` (u, v), as a handle's, start at ω = humidity.
+struct WetRegionParams {
+  Vec2d at{0.5, 0.5};    // (u, v) of its centre
+  double radius = 0.05;  // m
+  double humidity = 1;   // ω inside it
+};
+
 struct Params {
   std::string name = "scene";
   std::string description;
@@ -151,7 +160,10 @@ struct Params {
       return up != UpAxis::Z || translate != Vec3d{0, 0, 0} || rotate != Vec3d{0, 0, 0} ||
              scale != Vec3d{1, 1, 1};
     }
-    double humidity = 0.0;        // water saturation by weight ω, 0..1
+    double humidity = 0.0;        // water saturation by weight ω, 0..1 (the uniform start)
+    // A grayscale image over the cloth's (u, v): ω = its value (black 0, white
+    // 1) at the start, instead of `humidity` ("": none). Relative to the scene file.
+    std::string humidity_map;
     double areal_density = 0.12;  // dry ρ_A, kg/m²
     double water_ratio = 1.0;     // water held at ω = 1 per unit dry mass r_w
   } cloth;
@@ -173,6 +185,11 @@ struct Params {
     // (quadratic); Provot's bending springs get B / l².
     double bending_rigidity = 2e-5;
     double bending_damping = 3.6e-7;  // N·s·m: Provot's bending springs get it / l²
+    // The humidity field (docs/model.md "Humidity field").
+    double wicking_diffusivity = 5e-6;  // D, m²/s: water spreading in the fabric's plane (0: none)
+    double drying_rate = 0;             // k_e, 1/s: dω/dt = -k_e (1 - RH) ω (0: no drying)
+    double drying_contact_factor = 0.5;  // the rate on the contact surface, times k_e
+    double uptake_rate = 1;  // k_u, 1/s: from a wet surface's film, dω/dt = k_u (1 - ω)
   } material;
 
   // Spring constants set directly (the blog's way): the same at every grid.
@@ -204,6 +221,7 @@ struct Params {
   struct Table {
     bool enabled = true;
     double height = 0.0;  // z of the plane, m
+    double water_film = 0;  // depth of water on it under the cloth, m (wets what touches it)
   } table;
 
   struct Ball {
@@ -211,6 +229,7 @@ struct Params {
     Vec3d center{0, 0, 0.1};
     double radius = 0.1;
     Motion motion;  // about its centre
+    double water_film = 0;  // depth of water on it under the cloth, m
   } ball;
 
   struct Contact {
@@ -242,6 +261,7 @@ struct Params {
     AirForceDirection force_direction = AirForceDirection::Surface;
     bool paper_update_rule = false;
     double paper_threshold = 0.0;  // m³ of growth per step that triggers an update
+    double relative_humidity = 0.5;  // RH of the room's air, 0..1 (drying stops at 1)
   } air;
 
   struct SelfCollision {
@@ -276,14 +296,28 @@ struct Params {
 
   std::map<std::string, HandleParams> handles;      // [handle.NAME]
   std::map<std::string, ObstacleParams> obstacles;  // [obstacle.NAME]
+  std::map<std::string, WetRegionParams> wet;       // [wet.NAME]
 };
 
 // Humidity-dependent quantities (docs/model.md sections 1, 4, 6).
 double particle_areal_mass(const Params& p);  // ρ_A (1 + r_w ω), kg/m²
 double permeability(const Params& p);         // δ(ω), eq. 5, m/(s·Pa)
+double permeability(const Params& p, double omega);  // δ at a given ω
 double adhesion_pressure(const Params& p);  // ω γ (cos θa + cos θb) / h, Pa (eq. 13, area part)
 double adhesion_edge_tension(const Params& p);  // ω γ sin θa, N/m (eq. 13, edge part per √S)
 double adhesion_total(const Params& p, double contact_area);  // eq. 13, N
+// Eq. 13's constants, for a particle's own ω: pressure_per_omega(ω) is
+// adhesion_pressure at that ω, tension_per_omega(ω) adhesion_edge_tension,
+// to the bit.
+struct AdhesionConstants {
+  bool enabled = false;
+  double gamma = 0, cos_sum = 0, sin_a = 0, h = 1;
+  double pressure_per_omega(double omega) const {
+    return enabled ? omega * gamma * cos_sum / h : 0.0;
+  }
+  double tension_per_omega(double omega) const { return enabled ? omega * gamma * sin_a : 0.0; }
+};
+AdhesionConstants adhesion_constants(const Params& p);
 
 // The constants of every spring of the grid (docs/model.md section 1), from the
 // material and the spacing du x dv, or from [springs] where a scene sets them.

@@ -129,6 +129,10 @@ struct Model {
   std::vector<double> area, mass, inv_mass;
   std::vector<std::uint8_t> on_border;  // on the cloth's border
   std::vector<std::uint8_t> driven;     // pinned or moved from t = 0: dynamics never moves it
+  // ω of each particle at t = 0: cloth.humidity, or cloth.humidity_map's
+  // value, then each [wet.NAME] region's (docs/model.md "Humidity field").
+  // The field then lives in State::humidity; mass and inv_mass follow it.
+  std::vector<double> initial_humidity;
   std::vector<std::uint8_t> in_wind;    // inside the wind region
   SpringSet structural, shear, bending;
   int threads =
@@ -175,7 +179,10 @@ double explicit_step_limit(const Model& m);
 // Where grid particle (i, j) starts: cloth.center, orientation and tilt.
 Vec3 cloth_start_position(const Params& p, int i, int j);
 // Humidity drives mass (section 1), permeability (eq. 5) and adhesion (eq. 13).
+// A uniform ω: the start's field and every particle's mass.
 void set_humidity(Model& m, double omega);
+// Each particle's mass (and inverse) from its own ω, m_i = ρ_A (1 + r_w ω_i) A_i.
+void set_masses(Model& m, const std::vector<double>& omega);
 
 // How a pocket's deficit answers a change of V_sum over a step of Δt (src/air/air.cpp):
 // dΔP/dV_sum = gas + spring (1 - e^(-Δt/τ)) τ/Δt, with 1/τ the seep rate.
@@ -213,6 +220,13 @@ struct State {
   // from v + h times it; empty: from v).
   int halvings = 0;
   Vec3Array acceleration;
+  // The humidity field (docs/model.md "Humidity field"): ω of each particle,
+  // moved by wicking, drying and uptake from a wet surface once a step; the
+  // water (kg) left in the contact surface's film under each particle (empty
+  // with no film); the water (kg) evaporated since the start.
+  std::vector<double> humidity;
+  std::vector<double> film;
+  double water_evaporated = 0;
 };
 
 // The step's scratch arrays (src/workspace.hpp): private to the library.
@@ -243,6 +257,11 @@ struct Metrics {
   // springs' elastic forces on the contact particles (at a peel front, what
   // their adhesion holds; negative where the lifted cloth presses them down).
   double front_pull_n = 0;
+  // The humidity field: ω's area-weighted mean, least and greatest; the water
+  // the cloth holds, Σ ρ_A r_w ω_i A_i; the water left in the contact
+  // surface's film under it; the water evaporated since the start.
+  double humidity_mean = 0, humidity_min = 0, humidity_max = 0;
+  double water_kg = 0, film_water_kg = 0, evaporated_kg = 0;
 };
 std::vector<std::string> metrics_columns();
 std::vector<double> metrics_values(const Metrics& m);
@@ -273,8 +292,15 @@ class Simulation {
   // step starts from them). Throws std::invalid_argument on another count.
   void set_positions(const Vec3Array& x);
   void set_velocities(const Vec3Array& v);
-  // Live: mass, permeability and adhesion follow. Throws SceneError outside [0, 1].
+  // Live: the whole field uniform at ω; mass, permeability and adhesion
+  // follow. Throws SceneError outside [0, 1].
   void set_humidity(double omega);
+  // Live: each particle's ω (a value per particle, each in [0, 1]); throws
+  // std::invalid_argument on another count or a value outside [0, 1].
+  void set_humidity_field(const std::vector<double>& omega);
+  // Wets (or dries) the particles within `radius` (m) of x to at least
+  // (most) ω: the viewer's brush. Returns how many it changed.
+  int wet_near(const Vec3& x, double radius, double omega);
   // New parameters, live: the state is kept when the grid is the same size.
   // Throws SceneError on parameters a scene file could not give (validate).
   void set_params(const Params& p);

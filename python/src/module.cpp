@@ -709,7 +709,22 @@ void bind_simulation_arrays(SimulationClass& cls) {
           "n inner pressures P_in under each particle, Pa (p_atm where no pocket), a copy.")
       .def_property_readonly(
           "adhesion", [](const PySimulation& s) { return copy_of<double>(s.sim_.adhesion()); },
-          "n adhesion forces |F|, N, of the last step, a copy.");
+          "n adhesion forces |F|, N, of the last step, a copy.")
+      .def_property(
+          "humidity",
+          [](const PySimulation& s) { return copy_of<double>(s.sim_.state().humidity); },
+          [](PySimulation& s, const py::array_t<double, py::array::c_style | py::array::forcecast>& v) {
+            if (v.ndim() != 1) throw py::value_error("humidity: expected n values, one a particle");
+            const std::vector<double> omega(v.data(), v.data() + v.size());
+            try {
+              s.sim_.set_humidity_field(omega);
+            } catch (const std::invalid_argument& e) {
+              throw py::value_error(e.what());
+            }
+          },
+          "n humidities ω, one a particle (the humidity field: wicking, drying and uptake "
+          "change it), a copy; set it to an array of n values in [0, 1] (mass, adhesion and "
+          "permeability follow).");
 }
 
 // A Simulation written to a file and continued from it, with the same bits.

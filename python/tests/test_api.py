@@ -278,3 +278,20 @@ def test_advance_to_releases_the_gil():
     worker.join()
     assert seen_busy
     assert sim.time >= 0.2
+
+
+def test_humidity_field_reads_and_sets():
+    sim = wetcloth.Simulation("wet-patch", **SMALL)
+    w = sim.humidity
+    assert w.shape == (sim.n,) and w.max() == 1.0 and w.min() == 0.0
+    half = np.where(np.arange(sim.n) % 9 < 4, 1.0, 0.0)
+    sim.humidity = half
+    assert (sim.humidity == half).all()
+    m = sim.metrics()
+    assert m["humidity_max"] == 1.0 and m["humidity_min"] == 0.0 and m["water_kg"] > 0
+    sim.advance_to(0.05)  # wicking spreads it, keeping the water
+    assert sim.metrics()["water_kg"] == pytest.approx(m["water_kg"], rel=1e-12)
+    with pytest.raises(ValueError):
+        sim.humidity = np.full(sim.n, 1.5)
+    with pytest.raises(ValueError):
+        sim.humidity = np.zeros(3)

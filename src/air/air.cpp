@@ -36,9 +36,8 @@ double air_gap(const Model& m, double d) {
 // new value for the whole step would let a step much longer than τ, the
 // implicit one, seep away the whole lag, and with it the suction.) Then lets
 // air break through the wet pores when the deficit exceeds P_b.
-double exchange(const Params& p, double v_atm, double v_old, double v_sum, double a_sum, double dt,
-                bool breakthrough) {
-  const double delta = permeability(p);
+double exchange(const Params& p, double delta, double v_atm, double v_old, double v_sum,
+                double a_sum, double dt, bool breakthrough) {
   if (v_sum <= 0) return 0.0;
   if (delta > 0 && a_sum > 0 && dt > 0) {
     const double tau = v_sum / (p.air.p_atm * delta * a_sum);
@@ -66,9 +65,9 @@ double pressure(const Params& p, double v_atm, double v_sum) {
 // (air seeping through as fast as the tent grows), so that large implicit steps
 // keep the suction that slows a lifting cloth. Sealed air is a pure gas spring
 // (1/τ = 0); at the breakthrough cap the deficit cannot grow.
-PocketAir pocket_air(const Params& p, double v_atm, double v_sum, double a_sum, bool leaks) {
+PocketAir pocket_air(const Params& p, double delta, double v_atm, double v_sum, double a_sum,
+                     bool leaks) {
   if (v_sum <= 0) return {};
-  const double delta = permeability(p);
   if (!leaks || delta <= 0 || a_sum <= 0)
     return {p.air.p_atm * (v_atm - v_sum) / (v_sum * v_sum), p.air.p_atm / v_sum, 0.0};
   if (p.air.p_atm - pressure(p, v_atm, v_sum) >= p.air.breakthrough_pressure * (1 - 1e-12))
@@ -83,6 +82,30 @@ double stiffness(const PocketAir& a, double dt) {
   return a.gas + a.spring * seep;
 }
 
+// Eq. 5 with the humidity field: a pocket's air seeps through each of its
+// lifted particles at that particle's δ(ω_i), so the pocket's permeability is
+// their area-weighted mean, Σ δ(ω_i) A_i / Σ A_i (conductance over area).
+// With a uniform field, δ(ω) itself (the same bits as before the field).
+struct PocketPermeability {
+  const Model& m;
+  const State& s;
+  bool field;
+  double uniform;  // δ where the field is uniform
+  PocketPermeability(const Model& model, const State& state, const Workspace& w)
+      : m(model),
+        s(state),
+        field(state.humidity.size() == static_cast<std::size_t>(model.n) && !w.humidity.uniform),
+        uniform(permeability(model.params, state.humidity.size() == static_cast<std::size_t>(model.n)
+                                               ? state.humidity[0]
+                                               : model.params.cloth.humidity)) {}
+  double conductance(int i) const {  // δ(ω_i) A_i, m³/(s·Pa)
+    return field ? permeability(m.params, s.humidity[i]) * m.area[i] : 0.0;
+  }
+  double of(double conductance_sum, double a_sum) const {
+    return field && a_sum > 0 ? conductance_sum / a_sum : uniform;
+  }
+};
+
 // `vented`: each connected lifted region is its own pocket; one that reaches the
 // cloth's border is open to the room. Around the ball a region runs on
 // through its particles beyond the band, which hold no air of their own: a
@@ -91,6 +114,7 @@ double stiffness(const PocketAir& a, double dt) {
 // falling cloth's middle into a cushion from the first step).
 void update_vented(const Model& m, State& s, Workspace& w, double dt) {
   const Params& p = m.params;
+  const PocketPermeability perm(m, s, w);
   // Not in a pocket: in contact (or not reached yet), or lifted beyond the band
   // (in a region, but holding no air).
   constexpr int kNone = -1, kBeyondBand = -2;
@@ -109,7 +133,7 @@ void update_vented(const Model& m, State& s, Workspace& w, double dt) {
     w.queue.clear();
     mark(seed, id);
     bool open = false;
-    double v_atm = 0, v_old = 0, v_sum = 0, a_sum = 0;
+    double v_atm = 0, v_old = 0, v_sum = 0, a_sum = 0, conductance = 0;
     for (std::size_t q = 0; q < w.queue.size(); ++q) {
       const int k = w.queue[q];
       open = open || m.on_border[k];
@@ -118,6 +142,7 @@ void update_vented(const Model& m, State& s, Workspace& w, double dt) {
         v_old += s.air_gap[k];
         v_sum += m.area[k] * air_gap(m, w.distance[k]);
         a_sum += m.area[k];
+        conductance += perm.conductance(k);
       }
       if (!m.grid) {  // a mesh cloth: along its edges
         for (int e = m.topology->edge_start[k]; e < m.topology->edge_start[k + 1]; ++e) {
@@ -134,8 +159,9 @@ void update_vented(const Model& m, State& s, Workspace& w, double dt) {
         if (s.pocket[kk] == kNone && !s.contact[kk]) mark(kk, id);
       }
     }
-    v_atm = open ? v_sum : exchange(p, v_atm, v_old, v_sum, a_sum, dt, true);
-    s.pocket_air.push_back(open ? PocketAir{} : pocket_air(p, v_atm, v_sum, a_sum, true));
+    const double delta = perm.of(conductance, a_sum);
+    v_atm = open ? v_sum : exchange(p, delta, v_atm, v_old, v_sum, a_sum, dt, true);
+    s.pocket_air.push_back(open ? PocketAir{} : pocket_air(p, delta, v_atm, v_sum, a_sum, true));
     // Open: P_atm exactly (P_atm V / V may round an ulp off it).
     const double pin = open ? p.air.p_atm : pressure(p, v_atm, v_sum);
     for (int k : w.queue) {
@@ -178,16 +204,21 @@ void update_air(const Model& m, State& s, Workspace& w, double dt) {
   if (model == AirModel::Vented) {
     update_vented(m, s, w, dt);
   } else {
-    const auto [v_sum, a_sum, s_now] = ordered_sums<3>(m, w, [&](int j) {
-      std::array<double, 3> sum{};
+    const PocketPermeability perm(m, s, w);
+    const auto [v_sum, a_sum, s_now, conductance] = ordered_sums<4>(m, w, [&](int j) {
+      std::array<double, 4> sum{};
       for (int i = j * m.nu; i < (j + 1) * m.nu; ++i) {
         s.pocket[i] = holds_air(m, w.distance[i]) ? 0 : -1;  // one pocket under the whole cloth
         sum[0] += m.area[i] * air_gap(m, w.distance[i]);
-        if (s.pocket[i] >= 0 && !s.contact[i]) sum[1] += m.area[i];
+        if (s.pocket[i] >= 0 && !s.contact[i]) {
+          sum[1] += m.area[i];
+          sum[3] += perm.conductance(i);
+        }
         if (s.contact[i]) sum[2] += m.area[i];
       }
       return sum;
     });
+    const double delta = perm.of(conductance, a_sum);
     const double grown = v_sum - s.air_volume;
     if (model == AirModel::Off || s_now == 0) {
       // Nothing is trapped while no part of the cloth touches the surface: the
@@ -196,7 +227,7 @@ void update_air(const Model& m, State& s, Workspace& w, double dt) {
     } else if (model == AirModel::Exchange) {
       const bool update = !p.air.paper_update_rule || grown > p.air.paper_threshold;
       s.air_atm_volume =
-          exchange(p, s.air_atm_volume, s.air_volume, v_sum, update ? a_sum : 0, dt, true);
+          exchange(p, delta, s.air_atm_volume, s.air_volume, v_sum, update ? a_sum : 0, dt, true);
     }
     // `sealed` (Yamada et al. 2013): the amount of air never changes.
     // With no lifted cloth over the surface there is no pocket to hold air
@@ -210,7 +241,7 @@ void update_air(const Model& m, State& s, Workspace& w, double dt) {
       s.air_atm_volume = std::min(s.air_atm_volume, v_sum);
     const bool trapped = model != AirModel::Off && s_now > 0;
     s.pocket_air.push_back(
-        trapped ? pocket_air(p, s.air_atm_volume, v_sum, a_sum, model == AirModel::Exchange)
+        trapped ? pocket_air(p, delta, s.air_atm_volume, v_sum, a_sum, model == AirModel::Exchange)
                 : PocketAir{});
     s.air_volume = v_sum;
     s.inner_pressure = pressure(p, s.air_atm_volume, v_sum);

@@ -6,15 +6,26 @@
 namespace wetcloth::detail {
 
 // eq. 13 shared out per particle: every contact particle gets the area part
-// ω γ (cos θa + cos θb) / h · A_i, and the border of the contact region shares
-// the edge part 2 √S_now ω γ sin θa, so the forces sum to eq. 13 exactly. The
+// ω_i γ (cos θa + cos θb) / h · A_i, and each of the B particles on the border
+// of the contact region 2 √S_now ω_i γ sin θa / B, each with its own ω_i (the
+// humidity field), so that with a uniform ω the forces sum to eq. 13 exactly
+// (with a field, eq. 13 with the border's mean ω in its edge part). The
 // force points along -n_s, toward the surface.
 void add_adhesion(const Model& m, const State& s, Workspace& w) {
   if (m.contact_surface == SurfaceKind::None) return;  // w.adhesion stays zero, as reset left it
   std::fill(w.adhesion.begin(), w.adhesion.end(), 0.0);
-  const double pressure = adhesion_pressure(m.params);
-  const double tension = adhesion_edge_tension(m.params);
-  if (pressure == 0 && tension == 0) return;
+  // Each particle's own ω (the humidity field); a state without a field (made
+  // by hand) has cloth.humidity's everywhere.
+  const bool field = s.humidity.size() == static_cast<std::size_t>(m.n);
+  const double omega0 = field ? s.humidity[0] : m.params.cloth.humidity;
+  const AdhesionConstants c = adhesion_constants(m.params);
+  if (!c.enabled) return;
+  if ((!field || w.humidity.uniform) &&
+      c.pressure_per_omega(omega0) == 0 && c.tension_per_omega(omega0) == 0)
+    return;
+  // A uniform field: eq. 13's two parts once, as before the field.
+  const bool per_particle = field && !w.humidity.uniform;
+  const double* omega = field ? s.humidity.data() : nullptr;
   const double s_now = ordered_sum(m, w, [&](int j) {
     double sum = 0;
     for (int i = j * m.nu; i < (j + 1) * m.nu; ++i) sum += s.contact[i] ? m.area[i] : 0.0;
@@ -25,7 +36,9 @@ void add_adhesion(const Model& m, const State& s, Workspace& w) {
     for (int i = j * m.nu; i < (j + 1) * m.nu; ++i) count += s.contact[i] && w.border[i];
     return static_cast<double>(count);
   });
-  const double edge_each = border > 0 ? 2.0 * std::sqrt(s_now) * tension / border : 0.0;
+  const double two_root_s = 2.0 * std::sqrt(s_now);
+  const double pressure0 = c.pressure_per_omega(omega0),
+               edge0 = border > 0 ? two_root_s * c.tension_per_omega(omega0) / border : 0.0;
   for_each_particle_block(m, [&](int first, int end) {
     const double *__restrict nx = w.surface_normal.column(0),
                              *__restrict ny = w.surface_normal.column(1),
@@ -33,7 +46,11 @@ void add_adhesion(const Model& m, const State& s, Workspace& w) {
     double *__restrict fx = w.force.column(0), *__restrict fy = w.force.column(1),
                        *__restrict fz = w.force.column(2), *__restrict adhesion = w.adhesion.data();
     const auto force = [&](int i) {  // zero off the contact region
-      return s.contact[i] ? pressure * m.area[i] + (w.border[i] ? edge_each : 0.0) : 0.0;
+      if (!s.contact[i]) return 0.0;
+      if (!per_particle) return pressure0 * m.area[i] + (w.border[i] ? edge0 : 0.0);
+      const double o = omega[i];
+      return c.pressure_per_omega(o) * m.area[i] +
+             (w.border[i] && border > 0 ? two_root_s * c.tension_per_omega(o) / border : 0.0);
     };
     for_each_chunk(first, end, force, [&](int i0, int count, const double* f) {
 #pragma omp simd

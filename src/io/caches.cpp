@@ -44,7 +44,7 @@ CacheFrame cache_frame(const Simulation& sim, UpAxis up) {
   compute_normals(m, s.x, normal);
   CacheFrame f;
   f.time = s.time;
-  f.humidity = m.params.cloth.humidity;
+  f.humidity.assign(m.n, static_cast<float>(m.params.cloth.humidity));
   f.points.resize(m.n);
   f.normals.resize(m.n);
   f.velocities.resize(m.n);
@@ -60,6 +60,7 @@ CacheFrame cache_frame(const Simulation& sim, UpAxis up) {
     f.contact[i] = s.contact[i] ? 1.0f : 0.0f;
     if (pressure) f.pressure[i] = static_cast<float>(s.pocket_pressure[i]);
     if (adhesion) f.adhesion[i] = static_cast<float>(sim.adhesion()[i]);
+    if (s.humidity.size() == std::size_t(m.n)) f.humidity[i] = static_cast<float>(s.humidity[i]);
   }
   return f;
 }
@@ -180,6 +181,9 @@ std::string mesh_topology(const std::vector<std::array<int, 3>>& tris, const std
          "int[] faceVertexIndices = [" + indices + "]\n";
 }
 
+constexpr const char* kPc2 = "cloth.pc2";
+constexpr const char* kPc2Fields = "cloth_fields.pc2";
+
 void write_pc2_header(std::fstream& f, int points, long long samples) {
   char header[32] = "POINTCACHE2";
   const std::int32_t version = 1, n = points, count = static_cast<std::int32_t>(samples);
@@ -222,7 +226,7 @@ constexpr const char* kAttributes[][2] = {{"point3f[] points", "points"},
                                           {"float[] primvars:contact", "contact"},
                                           {"float[] primvars:pressure", "pressure"},
                                           {"float[] primvars:adhesion", "adhesion"},
-                                          {"float primvars:humidity", "humidity"},
+                                          {"float[] primvars:humidity", "humidity"},
                                           {"vector3f[] velocities", "velocities"},
                                           {"float[] primvars:pressure_deficit", "deficit"}};
 
@@ -262,10 +266,12 @@ CacheWriter::CacheWriter(const fs::path& dir, const Simulation& sim, ExportForma
   const Model& m = model_;
   if (formats.pc2) {
     write_file_atomic(dir / "cloth_rest.obj", cloth_obj(m, sim.state(), up));
-    ::unlink((dir / "cloth.pc2").c_str());  // a new file, not one a link names
-    pc2_.open(dir / "cloth.pc2", std::ios::binary | std::ios::in | std::ios::out | std::ios::trunc);
-    if (!pc2_) throw_output_error(dir / "cloth.pc2", "cannot write", errno);
-    write_pc2_header(pc2_, m.n, 0);
+    for (auto [file, name] : {std::pair{&pc2_, kPc2}, std::pair{&pc2_fields_, kPc2Fields}}) {
+      ::unlink((dir / name).c_str());  // a new file, not one a link names
+      file->open(dir / name, std::ios::binary | std::ios::in | std::ios::out | std::ios::trunc);
+      if (!*file) throw_output_error(dir / name, "cannot write", errno);
+      write_pc2_header(*file, m.n, 0);
+    }
   }
   if (formats.vtk) {
     if (std::error_code ec; fs::create_directories(dir / "vtk", ec), ec)
@@ -289,22 +295,24 @@ CacheWriter::CacheWriter(const fs::path& dir, const Simulation& sim, ExportForma
     : dir_(dir), formats_(formats), up_(up), fps_(fps), model_(sim.model()) {
   frames_ = at.frames;
   last_code_ = at.last_code;
-  if (formats.pc2) {
-    const fs::path path = dir / "cloth.pc2";
-    const auto bytes = static_cast<std::uintmax_t>(32 + at.frames * 3LL * model_.n * 4);
-    std::error_code ec;
-    const auto size = fs::file_size(path, ec);
-    if (ec || size < bytes)
-      throw SceneError(
-          path.string() + ": " + (ec ? ec.message() : "shorter than the checkpoint says") +
-          ": the " + std::to_string(at.frames) + " frames the checkpoint continues are not there");
-    if (fs::resize_file(path, bytes, ec); ec)
-      throw_output_error(path, "cannot cut back", ec.value());
-    pc2_.open(path, std::ios::binary | std::ios::in | std::ios::out);
-    if (!pc2_) throw_output_error(path, "cannot write", errno);
-    write_pc2_header(pc2_, model_.n, at.frames);
-    if (!pc2_.flush()) throw_output_error(path, "cannot write", errno);
-  }
+  if (formats.pc2)
+    for (auto [file, name] : {std::pair{&pc2_, kPc2}, std::pair{&pc2_fields_, kPc2Fields}}) {
+      const fs::path path = dir / name;
+      const auto bytes = static_cast<std::uintmax_t>(32 + at.frames * 3LL * model_.n * 4);
+      std::error_code ec;
+      const auto size = fs::file_size(path, ec);
+      if (ec || size < bytes)
+        throw SceneError(path.string() + ": " +
+                         (ec ? ec.message() : "shorter than the checkpoint says") + ": the " +
+                         std::to_string(at.frames) +
+                         " frames the checkpoint continues are not there");
+      if (fs::resize_file(path, bytes, ec); ec)
+        throw_output_error(path, "cannot cut back", ec.value());
+      file->open(path, std::ios::binary | std::ios::in | std::ios::out);
+      if (!*file) throw_output_error(path, "cannot write", errno);
+      write_pc2_header(*file, model_.n, at.frames);
+      if (!file->flush()) throw_output_error(path, "cannot write", errno);
+    }
   if (formats.vtk) {
     if (static_cast<long long>(frame_times.size()) != at.frames)
       throw std::logic_error("CacheWriter: a frame time a frame kept");
@@ -318,10 +326,11 @@ CachePosition CacheWriter::position(bool durable) {
   CachePosition p;
   p.frames = frames_;
   p.last_code = last_code_;
-  if (formats_.pc2) {
-    if (!pc2_.flush()) throw_output_error(dir_ / "cloth.pc2", "cannot write", errno);
-    if (durable) sync_file(dir_ / "cloth.pc2");
-  }
+  if (formats_.pc2)
+    for (auto [file, name] : {std::pair{&pc2_, kPc2}, std::pair{&pc2_fields_, kPc2Fields}}) {
+      if (!file->flush()) throw_output_error(dir_ / name, "cannot write", errno);
+      if (durable) sync_file(dir_ / name);
+    }
   for (const auto& spool : spools_) {
     if (std::fflush(spool->file) != 0) throw_output_error(spool->path, "cannot write", errno);
     if (durable && ::fsync(fileno(spool->file)) != 0)
@@ -352,14 +361,23 @@ void CacheWriter::add_frame(const Simulation& sim, double frame_code) {
   const CacheFrame f = cache_frame(sim, up_);
   const long long k = frames_++;
   if (formats_.pc2) {
-    std::vector<float> xyz(3 * f.points.size());
-    for (std::size_t i = 0; i < f.points.size(); ++i)
+    // cloth.pc2 the points; cloth_fields.pc2, its side file, each point's
+    // (humidity ω, contact 0 or 1, pressure deficit p_atm - P_in in Pa).
+    std::vector<float> xyz(3 * f.points.size()), fields(3 * f.points.size());
+    for (std::size_t i = 0; i < f.points.size(); ++i) {
       for (int q = 0; q < 3; ++q) xyz[3 * i + q] = static_cast<float>(f.points[i][q]);
-    pc2_.seekp(32 + k * static_cast<long long>(xyz.size() * sizeof(float)));
-    pc2_.write(reinterpret_cast<const char*>(xyz.data()),
-               static_cast<std::streamsize>(xyz.size() * sizeof(float)));
-    write_pc2_header(pc2_, static_cast<int>(f.points.size()), k + 1);
-    if (!pc2_.flush()) throw_output_error(dir_ / "cloth.pc2", "cannot write", errno);
+      fields[3 * i] = f.humidity[i];
+      fields[3 * i + 1] = f.contact[i];
+      fields[3 * i + 2] = static_cast<float>(model_.params.air.p_atm - f.pressure[i]);
+    }
+    for (auto [file, name, values] : {std::tuple{&pc2_, kPc2, &xyz},
+                                      std::tuple{&pc2_fields_, kPc2Fields, &fields}}) {
+      file->seekp(32 + k * static_cast<long long>(values->size() * sizeof(float)));
+      file->write(reinterpret_cast<const char*>(values->data()),
+                  static_cast<std::streamsize>(values->size() * sizeof(float)));
+      write_pc2_header(*file, static_cast<int>(f.points.size()), k + 1);
+      if (!file->flush()) throw_output_error(dir_ / name, "cannot write", errno);
+    }
   }
   if (formats_.vtk) {
     char name[32];
@@ -372,8 +390,7 @@ void CacheWriter::add_frame(const Simulation& sim, double frame_code) {
         arrays.add("Float32", "contact", 1, f.contact) +
         arrays.add("Float32", "pressure_pa", 1, f.pressure) +
         arrays.add("Float32", "adhesion_n", 1, f.adhesion) +
-        arrays.add("Float32", "humidity", 1,
-                   std::vector<float>(f.points.size(), static_cast<float>(f.humidity))) +
+        arrays.add("Float32", "humidity", 1, f.humidity) +
         "</PointData>\n";
     write_file_atomic(dir_ / "vtk" / name, polydata(f.points, model_.triangles, fields, arrays));
     vtk_times_.push_back(f.time);
@@ -393,9 +410,7 @@ void CacheWriter::add_frame(const Simulation& sim, double frame_code) {
     spools_[3]->add(code, "[" + join(f.contact, ", ") + "]");
     spools_[4]->add(code, "[" + join(f.pressure, ", ") + "]");
     spools_[5]->add(code, "[" + join(f.adhesion, ", ") + "]");
-    std::string h;
-    put(h, f.humidity);
-    spools_[6]->add(code, h);
+    spools_[6]->add(code, "[" + join(f.humidity, ", ") + "]");
     spools_[7]->add(code, "[" + tuples(f.velocities) + "]");
     std::vector<float> deficit(f.pressure.size());
     for (std::size_t i = 0; i < deficit.size(); ++i)
@@ -439,11 +454,11 @@ void CacheWriter::finish() {
        {std::pair{"contact", "1 where the vertex is within the liquid bridge of the surface"},
         {"pressure", "the trapped air's pressure under the vertex, Pa (p_atm where none)"},
         {"pressure_deficit", "p_atm - pressure: the suction under the vertex, Pa"},
-        {"adhesion", "the liquid bridge's adhesion force on the vertex, N"}})
+        {"adhesion", "the liquid bridge's adhesion force on the vertex, N"},
+        {"humidity", "the water saturation ω of the cloth at the vertex, 0 to 1"}})
     o += std::string("        float[] primvars:") + name + " (\n            doc = \"" + doc +
          "\"\n            interpolation = \"vertex\"\n        )\n";
   o += "        vector3f[] velocities (\n            doc = \"m/s\"\n        )\n";
-  o += "        float primvars:humidity (\n            interpolation = \"constant\"\n        )\n";
   const fs::path path = dir_ / "cloth.usda", tmp = path.string() + ".tmp";
   const TemporaryFile record(tmp.string());  // a second signal removes it
   {

@@ -1,6 +1,7 @@
 // Layout: "WETCLOTH-STATE\0\0", the format version (u32), the scene as TOML
 // (u64 length, bytes), then the State's fields in declaration order (arrays
-// as a u64 count and their elements; Vec3Arrays x, y, z columns), then
+// as a u64 count and their elements; Vec3Arrays x, y, z columns; format 4
+// adds the humidity field, its film and the water evaporated), then
 // (format 2) the run's own record (u64 length, bytes), then the FNV-1a 64
 // hash of everything before it. Little-endian, as the machines we
 // run on.
@@ -20,7 +21,8 @@ namespace wetcloth {
 namespace {
 
 constexpr char kMagic[16] = "WETCLOTH-STATE";
-constexpr std::uint32_t kVersion = 3;  // 1 had no run record, 2 no scene folder: still read
+// 1 had no run record, 2 no scene folder, 3 no humidity field: still read
+constexpr std::uint32_t kVersion = 4;
 
 std::uint64_t fnv1a(const std::string& bytes) {
   std::uint64_t h = 1469598103934665603ULL;
@@ -89,7 +91,7 @@ struct Reader {
 
 // Every field of State, in one place for both directions.
 template <class IO>
-void fields(IO& io, State& s) {
+void fields(IO& io, State& s, std::uint32_t version) {
   const auto scalar = [&](auto& v) {
     if constexpr (std::is_same_v<IO, Writer>)
       io.pod(v);
@@ -116,6 +118,10 @@ void fields(IO& io, State& s) {
   io.vec(s.pocket_air);
   scalar(s.halvings);
   io.vec3(s.acceleration);
+  if (version < 4) return;  // no field: restore starts the scene's
+  io.vec(s.humidity);
+  io.vec(s.film);
+  scalar(s.water_evaporated);
 }
 
 }  // namespace
@@ -131,7 +137,7 @@ void save_checkpoint(const std::filesystem::path& path, const Params& params, co
   // Where the scene's meshes are found (Params::scene_dir): not a key.
   w.pod(static_cast<std::uint64_t>(params.scene_dir.size()));
   w.out += params.scene_dir;
-  fields(w, const_cast<State&>(state));  // the writer only reads
+  fields(w, const_cast<State&>(state), kVersion);  // the writer only reads
   w.pod(static_cast<std::uint64_t>(run.size()));
   w.out += run;
   w.pod(fnv1a(w.out));
@@ -167,7 +173,7 @@ Checkpoint load_checkpoint(const std::filesystem::path& path) {
     c.params.scene_dir.assign(bytes, r.at, dir);
     r.at += dir;
   }
-  fields(r, c.state);
+  fields(r, c.state, version);
   if (version >= 2) {
     const std::size_t run = r.count(1);
     if (run > bytes.size() - 8 - r.at) r.bad("the checkpoint is cut short");

@@ -21,23 +21,30 @@ double particle_areal_mass(const Params& p) {
 }
 
 // eq. 5: permeability falls linearly with humidity, never below zero.
-double permeability(const Params& p) {
-  return std::max(0.0, p.air.d_delta - p.air.k_delta * p.cloth.humidity);
+double permeability(const Params& p, double omega) {
+  return std::max(0.0, p.air.d_delta - p.air.k_delta * omega);
+}
+double permeability(const Params& p) { return permeability(p, p.cloth.humidity); }
+
+AdhesionConstants adhesion_constants(const Params& p) {
+  const auto& a = p.adhesion;
+  AdhesionConstants c;
+  c.enabled = a.enabled;
+  c.gamma = a.surface_tension;
+  c.cos_sum = std::cos(deg(a.theta_a_deg)) + std::cos(deg(a.theta_b_deg));
+  c.sin_a = std::sin(deg(a.theta_a_deg));
+  c.h = a.film_height;
+  return c;
 }
 
 // eq. 13, the part proportional to the contact area: ω γ (cos θa + cos θb) / h.
 double adhesion_pressure(const Params& p) {
-  const auto& a = p.adhesion;
-  if (!a.enabled) return 0.0;
-  return p.cloth.humidity * a.surface_tension *
-         (std::cos(deg(a.theta_a_deg)) + std::cos(deg(a.theta_b_deg))) / a.film_height;
+  return adhesion_constants(p).pressure_per_omega(p.cloth.humidity);
 }
 
 // eq. 13, the border part per unit of 2√S_now: ω γ sin θa.
 double adhesion_edge_tension(const Params& p) {
-  const auto& a = p.adhesion;
-  if (!a.enabled) return 0.0;
-  return p.cloth.humidity * a.surface_tension * std::sin(deg(a.theta_a_deg));
+  return adhesion_constants(p).tension_per_omega(p.cloth.humidity);
 }
 
 double adhesion_total(const Params& p, double s_now) {
@@ -283,7 +290,9 @@ Model build_model(const Params& p) {
   }
   // With pins alone the metrics follow the first: the force it holds the cloth up with.
   if (m.measured_handle < 0 && !m.handles.empty()) m.measured_handle = 0;
-  set_humidity(m, p.cloth.humidity);
+  detail::build_wicking(m, *topology);
+  m.initial_humidity = detail::initial_humidity(m, p);
+  set_masses(m, m.initial_humidity);
   return m;
 }
 
@@ -379,11 +388,18 @@ void build_grid(Model& m, Topology& t, const Params& p) {
 
 void set_humidity(Model& m, double omega) {
   m.params.cloth.humidity = omega;
-  const double rho = particle_areal_mass(m.params);
+  m.initial_humidity.assign(m.n, omega);
+  set_masses(m, m.initial_humidity);
+}
+
+// m_i = ρ_A (1 + r_w ω_i) A_i: with a uniform ω the same bits as
+// particle_areal_mass(p) A_i.
+void set_masses(Model& m, const std::vector<double>& omega) {
+  const double rho_a = m.params.cloth.areal_density, r_w = m.params.cloth.water_ratio;
   m.mass.resize(m.n);
   m.inv_mass.resize(m.n);
   for (int k = 0; k < m.n; ++k) {
-    m.mass[k] = rho * m.area[k];
+    m.mass[k] = rho_a * (1.0 + r_w * omega[k]) * m.area[k];
     m.inv_mass[k] = m.driven[k] ? 0.0 : 1.0 / m.mass[k];
   }
 }

@@ -117,6 +117,10 @@ template <class... A>
 ParamDef obstacle_field(A&&... a) {
   return named_field<&Params::obstacles>("obstacle", std::forward<A>(a)...);
 }
+template <class... A>
+ParamDef wet_field(A&&... a) {
+  return named_field<&Params::wet>("wet", std::forward<A>(a)...);
+}
 
 // A number that may be left unset (std::optional<double>): get gives NaN then.
 template <class F>
@@ -198,6 +202,8 @@ ParamDef vertices_field(std::string meaning) {
   [](HandleParams & h) -> auto& { return h.path; }
 #define O(path) \
   [](ObstacleParams & o) -> auto& { return o.path; }
+#define W(path) \
+  [](WetRegionParams & r) -> auto& { return r.path; }
 
 // Positions: at 1e14 m a double's step is 0.02 m, and metrics.csv got inf.
 constexpr double kFar = 1e4;
@@ -251,8 +257,15 @@ std::vector<ParamDef> cloth_defs() {
       field("cloth.scale", "1", 1e-6, 1e6,
             "cloth.mesh: scales it along x, y, z (times cloth.mesh_scale) before turning it",
             P(cloth.scale)),
-      field("cloth.humidity", "1", 0, 1, "water saturation by weight ω = (w − w0)/(w100 − w0)",
+      field("cloth.humidity", "1", 0, 1,
+            "water saturation by weight ω = (w − w0)/(w100 − w0), the same everywhere at the "
+            "start (then each particle's own: wicking, drying and uptake change it)",
             P(cloth.humidity)),
+      field("cloth.humidity_map", "", 1, 0,
+            "a grayscale image (PNG, JPEG, BMP, TGA, PGM; relative to the scene file) over the "
+            "cloth's (u, v): ω at the start is its value, black 0 to white 1, instead of "
+            "cloth.humidity (u along the image's rows, v up; \"\": none)",
+            P(cloth.humidity_map)),
       field("cloth.areal_density", "kg/m²", 1e-6, 100, "dry areal density ρ_A",
             P(cloth.areal_density)),
       field("cloth.water_ratio", "1", 0, 100, "water held at ω = 1, per unit dry mass (r_w)",
@@ -291,6 +304,23 @@ std::vector<ParamDef> cloth_defs() {
             "damping of Provot's bending springs: they get it / l² (0.01 N·s/m at 6 mm); the "
             "quadratic bending is undamped",
             P(material.bending_damping)),
+      field("material.wicking_diffusivity", "m²/s", 0, 1,
+            "wicking: water spreads through the fabric by diffusion of its water content, "
+            "∂c/∂t = D ∇²c, taken implicitly once a step (0: none; 5e-6, a cotton woven's "
+            "in-plane wicking, docs/model.md \"Humidity field\")",
+            P(material.wicking_diffusivity)),
+      field("material.drying_rate", "1/s", 0, 1e3,
+            "drying: dω/dt = −k_e (1 − air.relative_humidity) ω where the cloth is lifted (0: none; "
+            "5e-4 dries a wet cotton cloth in room air in about 2 h)",
+            P(material.drying_rate)),
+      field("material.drying_contact_factor", "1", 0, 1,
+            "drying where the cloth lies on the contact surface, times material.drying_rate (one "
+            "face of two open to the air)",
+            P(material.drying_contact_factor)),
+      field("material.uptake_rate", "1/s", 0, 1e6,
+            "uptake from a wet surface (table.water_film, ball.water_film): a particle in contact "
+            "takes up water as dω/dt = k_u (1 − ω) while the film under it lasts",
+            P(material.uptake_rate)),
       optional_field("springs.structural_k", "N/m", 0, 1e7,
                      "every structural spring's constant at any grid, set directly (the blog's "
                      "way); unset, from material.stretch_stiffness",
@@ -334,9 +364,16 @@ std::vector<ParamDef> force_defs() {
             P(strain_limit.passes)),
       field("table.enabled", "", 0, 0, "the table: the plane z = table.height", P(table.enabled)),
       field("table.height", "m", -kFar, kFar, "height of the table", P(table.height)),
+      field("table.water_film", "m", 0, 1,
+            "water standing on the table, as a depth: a cloth on it (the contact surface) takes "
+            "it up (material.uptake_rate), each particle from the film under it, ρ_w h A_i",
+            P(table.water_film)),
       field("ball.enabled", "", 0, 0, "a ball (fixed, or moving by ball.motion)", P(ball.enabled)),
       field("ball.center", "m", -kFar, kFar, "centre of the ball", P(ball.center)),
       field("ball.radius", "m", 1e-4, 100, "radius of the ball", P(ball.radius)),
+      field("ball.water_film", "m", 0, 1,
+            "water on the ball as a depth, as table.water_film (when it is the contact surface)",
+            P(ball.water_film)),
       motion_field("ball.motion",
                    "keyframes [[t, [x, y, z], [rx, ry, rz]], ...]: at time t (s) the ball is "
                    "moved by [x, y, z] (m) from ball.center and turned by rx, ry, rz degrees "
@@ -390,6 +427,10 @@ std::vector<ParamDef> solver_defs() {
             P(air.paper_update_rule)),
       field("air.paper_threshold", "m³", 0, 1, "growth per step that triggers that update",
             P(air.paper_threshold)),
+      field("air.relative_humidity", "1", 0, 1,
+            "the room air's relative humidity RH, for drying (material.drying_rate); at 1 "
+            "nothing dries",
+            P(air.relative_humidity)),
       field("self_collision.enabled", "", 0, 0,
             "repulsion between non-neighbouring particles (eq. 15)", P(self_collision.enabled)),
       field("self_collision.distance", "m", 1e-6, 1, "repulsion distance d_t",
@@ -522,6 +563,18 @@ std::vector<ParamDef> named_defs() {
                      "the point the motion turns the mesh about, in the file's coordinates "
                      "(placed with the mesh): a shoulder, a hinge",
                      O(pivot)),
+      wet_field("at", "1", 0, 1,
+                "[wet.NAME]: a wet region at the start, its centre the particle nearest this "
+                "(u, v), as a handle's at",
+                W(at)),
+      wet_field("radius", "m", 1e-6, 100,
+                "its particles: those within this distance of the centre, in metres in the rest "
+                "shape",
+                W(radius)),
+      wet_field("humidity", "1", 0, 1,
+                "their ω at the start (over cloth.humidity and cloth.humidity_map; regions in "
+                "name order, a later one over an earlier)",
+                W(humidity)),
   };
 }
 
@@ -535,6 +588,7 @@ std::vector<ParamDef> make_defs() {
 #undef P
 #undef H
 #undef O
+#undef W
 
 // Bounds on a scene's text (guard_toml_text).
 constexpr std::size_t kMaxSceneBytes = 1 << 20;
@@ -925,7 +979,7 @@ ParamValue convert(const toml::node& n, const ParamDef& d, const std::string& ke
 }
 
 // The tables a scene names: [handle.NAME] and [obstacle.NAME].
-constexpr std::array<std::string_view, 2> kNamedKinds = {"handle", "obstacle"};
+constexpr std::array<std::string_view, 3> kNamedKinds = {"handle", "obstacle", "wet"};
 
 // The kind of a key `KIND.*.LEAF` ("" for any other key).
 std::string named_kind(const std::string& key) {
@@ -939,6 +993,8 @@ std::vector<std::string> table_names(const Params& p, const std::string& kind) {
   std::vector<std::string> names;
   if (kind == "handle")
     for (const auto& [name, unused] : p.handles) names.push_back(name);
+  else if (kind == "wet")
+    for (const auto& [name, unused] : p.wet) names.push_back(name);
   else
     for (const auto& [name, unused] : p.obstacles) names.push_back(name);
   return names;
@@ -955,7 +1011,7 @@ const ParamDef* find_def(const std::string& key) {
 std::string unknown_key(const std::string& key) {
   // A handle's or obstacle's keys compare by their part after its name.
   std::string kind;  // "handle." or "obstacle.", or none
-  for (const std::string k : {"handle.", "obstacle."})
+  for (const std::string k : {"handle.", "obstacle.", "wet."})
     if (key.rfind(k, 0) == 0 && key.find('.', k.size()) != std::string::npos) kind = k;
   const bool in_handle = !kind.empty();
   const std::string prefix = in_handle ? key.substr(0, key.find('.', kind.size()) + 1) : "";
@@ -980,7 +1036,7 @@ void apply_table(const toml::table& t, const std::string& prefix, Params& p, boo
   for (const auto& [k, node] : t) {
     const std::string key =
         prefix.empty() ? std::string(k.str()) : prefix + "." + std::string(k.str());
-    if (prefix.empty() && (k.str() == "handle" || k.str() == "obstacle")) {
+    if (prefix.empty() && (k.str() == "handle" || k.str() == "obstacle" || k.str() == "wet")) {
       // [handle.NAME] and [obstacle.NAME]: tables of keys `handle.*.KEY`, `obstacle.*.KEY`.
       const std::string kind(k.str());
       const auto* tables = node.as_table();
@@ -996,7 +1052,8 @@ void apply_table(const toml::table& t, const std::string& prefix, Params& p, boo
             }))
           fail(h, hkey,
                "a " + kind + "'s name is letters, digits, _ and - (it is part of keys such as " +
-                   kind + ".NAME." + (kind == "handle" ? "force" : "mesh") + ")");
+                   kind + ".NAME." +
+                   (kind == "handle" ? "force" : kind == "wet" ? "radius" : "mesh") + ")");
         const bool is_handle = kind == "handle";
         const std::vector<std::string> known = table_names(p, kind);
         if (!new_handles && std::find(known.begin(), known.end(), nm) == known.end()) {
@@ -1005,11 +1062,14 @@ void apply_table(const toml::table& t, const std::string& prefix, Params& p, boo
           fail(h, hkey,
                "the scene has no such " + kind + " (" +
                    (names.empty() ? "it has none" : "its " + kind + "s: " + names) + "); add " +
-                   (is_handle ? "a handle" : "an obstacle") + " in a scene file");
+                   (is_handle ? "a handle" : kind == "wet" ? "a wet region" : "an obstacle") +
+                   " in a scene file");
         }
         // A table with every key at its default, where it is new.
         if (is_handle)
           p.handles[std::string(nm)];
+        else if (kind == "wet")
+          p.wet[std::string(nm)];
         else
           p.obstacles[std::string(nm)];
         for (const auto& [hk, hv] : *ht) {
@@ -1311,6 +1371,17 @@ void check_consistency(const Params& p, const std::string& source,
   check_handles(p, bad);
 }
 
+// ":LINE" of a key a scene's text sets ("" where it does not: an override set it).
+std::string line_of(const std::string& text, const std::string& source, const std::string& key) {
+  try {
+    const toml::table root = toml::parse(guard_toml_text(text, source), source);
+    if (const toml::node* n = root.at_path(key).node())
+      return ":" + std::to_string(n->source().begin.line);
+  } catch (const toml::parse_error&) {
+  }
+  return "";
+}
+
 std::string read_file(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw SceneError(path + ": cannot read the file");
@@ -1498,11 +1569,13 @@ Params load_scene(const std::string& scene, const std::vector<std::string>& over
     throw SceneError(scene + ": cannot read the file (" + ec.message() + ")");
   std::ifstream probe(std::filesystem::is_regular_file(st) ? scene : std::string());
   if (probe.good()) {
-    Params p = parse_scene(read_file(scene), scene, overrides, tier);
+    const std::string text = read_file(scene);
+    Params p = parse_scene(text, scene, overrides, tier);
     p.scene_dir = std::filesystem::absolute(scene).parent_path().lexically_normal().string();
     check_cloth_mesh(p, scene);
     check_obstacle_meshes(p, scene);
     check_handle_vertices(p, scene);
+    detail::check_humidity_map(p, scene + line_of(text, scene, "cloth.humidity_map"));
     return p;
   }
   for (const auto& b : builtin_scenes())
@@ -1512,6 +1585,8 @@ Params load_scene(const std::string& scene, const std::vector<std::string>& over
       check_cloth_mesh(p, "scenes/" + b.name + ".toml");
       check_obstacle_meshes(p, "scenes/" + b.name + ".toml");
       check_handle_vertices(p, "scenes/" + b.name + ".toml");
+      detail::check_humidity_map(p, "scenes/" + b.name + ".toml" +
+                                        line_of(b.text, b.name, "cloth.humidity_map"));
       return p;
     }
   if (scene.find('/') != std::string::npos || scene.find(".toml") != std::string::npos)

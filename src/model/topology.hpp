@@ -73,6 +73,12 @@ struct Topology {
   int along = 0;
   std::vector<std::array<int, 2>> triangle_pairs;  // triangles sharing an edge
   BendingMatrix bending;
+  // The wicking's Laplacian (water/humidity.cpp): edge e joins wick_a[e] and
+  // wick_b[e] with weight wick_w[e] (its dual edge over its length: the
+  // grid's 5-point stencil with the Voronoi areas, a mesh's cotangent weights,
+  // negative ones taken as zero), in increasing (a, b).
+  std::vector<int> wick_a, wick_b;
+  std::vector<double> wick_w;
 };
 
 }  // namespace wetcloth

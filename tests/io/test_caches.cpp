@@ -77,6 +77,46 @@ TEST(Caches, ExportListIsParsedAndAnUnknownFormatNamed) {
   }
 }
 
+// The humidity field per vertex: cloth_fields.pc2 (ω, contact, deficit) a
+// frame, and USD's primvars:humidity an array a frame.
+TEST(Caches, Pc2SideFileAndUsdHoldEachVertexsHumidity) {
+  const fs::path dir = fs::temp_directory_path() / "wetcloth_caches_humidity";
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  Params p = load_scene("drop-table", {"cloth.resolution=[9,9]", "cloth.center=[0,0,0.01]"});
+  p.wet["spot"] = {{0.25, 0.25}, 0.05, 1.0};
+  Simulation sim(p);
+  std::vector<CacheFrame> frames;
+  {
+    CacheWriter caches(dir, sim, parse_export_formats("usd,pc2"), UpAxis::Z, 20);
+    for (int f = 0; f <= 2; ++f) {
+      EXPECT_TRUE(sim.advance_to(0.05 * f));
+      caches.add_frame(sim);
+      frames.push_back(cache_frame(sim, UpAxis::Z));
+    }
+    caches.finish();
+  }
+  const std::string data = slurp(dir / "cloth_fields.pc2");
+  ASSERT_EQ(data.size(), 32u + 3u * 81u * 12u);
+  EXPECT_EQ(std::string(data.c_str()), "POINTCACHE2");
+  bool varies = false;
+  for (int f = 0; f < 3; ++f)
+    for (int i = 0; i < 81; ++i) {
+      float v[3];
+      std::memcpy(v, data.data() + 32 + (f * 81 + i) * 12, 12);
+      EXPECT_EQ(v[0], frames[f].humidity[i]);
+      EXPECT_EQ(v[1], frames[f].contact[i]);
+      EXPECT_EQ(v[2], static_cast<float>(p.air.p_atm - frames[f].pressure[i]));
+      varies = varies || v[0] != frames[f].humidity[0];
+    }
+  EXPECT_TRUE(varies);
+  EXPECT_EQ(frames[2].humidity[0], static_cast<float>(sim.state().humidity[0]));
+  const std::string usd = slurp(dir / "cloth.usda");
+  EXPECT_NE(usd.find("float[] primvars:humidity ("), std::string::npos);
+  EXPECT_NE(usd.find("float[] primvars:humidity.timeSamples"), std::string::npos);
+  fs::remove_all(dir);
+}
+
 TEST(Caches, Pc2HoldsEveryFrameAsFloats) {
   const CachedRun r = run_with_caches("pc2", UpAxis::Z);
   const std::string data = slurp(r.dir / "cloth.pc2");

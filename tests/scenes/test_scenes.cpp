@@ -244,3 +244,27 @@ TEST(Scenes, ArmSwingWetSleeveRidesAlongDryOneSlides) {
   EXPECT_LT(along[1], 0.24 - 0.03);
   EXPECT_GT(contact[0], 1.2 * contact[1]);
 }
+
+// wet-patch (issue 39's humidity field): a dry cloth with a soaked patch,
+// lifted by its far edge. The patch clings to the table while the dry cloth
+// between it and the hand lifts; its water spreads into the dry cloth around
+// it and none is made or lost.
+TEST(Scenes, WetPatchClingsWhileTheDryPartLiftsAndSpreads) {
+  const Params p = load_scene("wet-patch", {"cloth.resolution=[25,25]"});
+  Simulation sim(p);
+  const Model& m = sim.model();
+  const double water = sim.metrics().water_kg;
+  ASSERT_TRUE(sim.advance_to(p.run.duration)) << sim.blow_up_reason();
+  const State& s = sim.state();
+  const int centre = m.index(7, 12);  // the patch's, at (0.3, 0.5)
+  EXPECT_EQ(m.initial_humidity[centre], 1.0);
+  EXPECT_TRUE(s.contact[centre]);
+  // Dry cloth at the patch's edge toward the hand (u = 0.55) and beyond is up.
+  for (int i = 13; i < 25; ++i) EXPECT_FALSE(s.contact[m.index(i, 12)]) << i;
+  // The first dry particle beside the patch took up water.
+  double outside = 0;
+  for (int k = 0; k < m.n; ++k)
+    if (m.initial_humidity[k] == 0) outside = std::max(outside, s.humidity[k]);
+  EXPECT_GT(outside, 0.02);
+  EXPECT_NEAR(sim.metrics().water_kg, water, 1e-12 * water);
+}

@@ -156,8 +156,8 @@ Metrics Simulation::metrics() const {
   }
   // A uniform field's mean is its ω (the weighted sum would round it).
   r.humidity_mean = r.humidity_min == r.humidity_max ? r.humidity_min
-                    : area > 0                         ? weighted / area
-                                                       : 0.0;
+                    : area > 0                       ? weighted / area
+                                                     : 0.0;
   r.water_kg = capacity * weighted;
   for (const double f : s.film) r.film_water_kg += f;
   r.evaporated_kg = s.water_evaporated;

@@ -82,8 +82,7 @@ void Simulation::reset() {
   ws_->grab_particle = grab_particle_;
   ws_->grab_target = grab_target_;
   ws_->grab_k = grab_k_;
-  for (auto* a :
-       {&ws_->force, &ws_->normal, &ws_->surface_normal, &ws_->air_direction})
+  for (auto* a : {&ws_->force, &ws_->normal, &ws_->surface_normal, &ws_->air_direction})
     a->assign(n, Vec3::Zero());
   ws_->x_before.assign(n, Vec3::Zero());
   ws_->row_sums.assign(model_.nv, 0.0);
@@ -163,9 +162,8 @@ void Simulation::set_humidity_field(const std::vector<double>& omega) {
                                 " particles");
   for (std::size_t k = 0; k < omega.size(); ++k)
     if (!(omega[k] >= 0 && omega[k] <= 1))
-      throw std::invalid_argument("set_humidity_field: particle " + std::to_string(k) +
-                                  "'s ω is " + std::to_string(omega[k]) +
-                                  ", out of range [0, 1]");
+      throw std::invalid_argument("set_humidity_field: particle " + std::to_string(k) + "'s ω is " +
+                                  std::to_string(omega[k]) + ", out of range [0, 1]");
   state_.humidity = omega;
   note_humidity_changed(state_, *ws_);
   set_masses(model_, state_.humidity);
@@ -203,17 +201,17 @@ void Simulation::set_params(const Params& p) {
     const auto region = [](const WetRegionParams& a, const WetRegionParams& b) {
       return a.at == b.at && a.radius == b.radius && a.humidity == b.humidity;
     };
-    const bool same_start =
-        p.cloth.humidity == before.cloth.humidity &&
-        p.cloth.humidity_map == before.cloth.humidity_map && p.wet.size() == before.wet.size() &&
-        std::equal(p.wet.begin(), p.wet.end(), before.wet.begin(), [&](const auto& a, const auto& b) {
-          return a.first == b.first && region(a.second, b.second);
-        });
+    const bool same_start = p.cloth.humidity == before.cloth.humidity &&
+                            p.cloth.humidity_map == before.cloth.humidity_map &&
+                            p.wet.size() == before.wet.size() &&
+                            std::equal(p.wet.begin(), p.wet.end(), before.wet.begin(),
+                                       [&](const auto& a, const auto& b) {
+                                         return a.first == b.first && region(a.second, b.second);
+                                       });
     if (!same_start || state_.humidity.size() != static_cast<std::size_t>(model_.n))
       state_.humidity = model_.initial_humidity;
     if (p.table.water_film != before.table.water_film ||
-        p.ball.water_film != before.ball.water_film ||
-        p.contact.surface != before.contact.surface)
+        p.ball.water_film != before.ball.water_film || p.contact.surface != before.contact.surface)
       start_film(model_, state_);
     note_humidity_changed(state_, *ws_);
     set_masses(model_, state_.humidity);

@@ -87,8 +87,8 @@ std::vector<std::string> older_run_outputs(const fs::path& out) {
 
 }  // namespace
 
-void refuse_foreign_folder(const fs::path& out, const std::string& option,
-                           const std::string& what, const std::vector<std::string>& marks) {
+void refuse_foreign_folder(const fs::path& out, const std::string& option, const std::string& what,
+                           const std::vector<std::string>& marks) {
   std::error_code ec;
   if (!fs::is_directory(out, ec)) return;  // made new, or refused as a file elsewhere
   // A mark with a suffix: the temporary file of one being written (a sweep's

@@ -182,8 +182,7 @@ std::vector<std::string> run_outputs(const Params& p) {
       files.push_back(frame_file("frames", "frame_", f, ".obj"));
   }
   const ExportFormats formats = parse_export_formats(p.run.exports);
-  if (formats.pc2)
-    files.insert(files.end(), {"cloth.pc2", "cloth_fields.pc2", "cloth_rest.obj"});
+  if (formats.pc2) files.insert(files.end(), {"cloth.pc2", "cloth_fields.pc2", "cloth_rest.obj"});
   if (formats.vtk) {
     files.insert(files.end(), {"cloth.pvd", "vtk/", "vtk/obstacles.vtp"});
     for (long long f = 0; f <= last; ++f) files.push_back(frame_file("vtk", "cloth_", f, ".vtp"));

@@ -1,5 +1,3 @@
-#include "wetcloth/sweep.hpp"
-
 #include <unistd.h>
 
 #include <algorithm>
@@ -17,6 +15,7 @@
 #include "cli.hpp"
 #include "common/scene_options.hpp"
 #include "wetcloth/output.hpp"
+#include "wetcloth/sweep.hpp"
 #ifdef WETCLOTH_VIEWER
 #include "../viewer/commands.hpp"
 #endif

@@ -12,8 +12,8 @@
 namespace wetcloth::viewer {
 
 enum class ColorBy { Fabric, Contact, Pressure, Strain, Adhesion, Humidity };
-inline constexpr std::array<const char*, 6> kColorByNames{"none",     "contact",  "pressure",
-                                                          "strain",   "adhesion", "humidity"};
+inline constexpr std::array<const char*, 6> kColorByNames{"none",   "contact",  "pressure",
+                                                          "strain", "adhesion", "humidity"};
 
 // The legend of the current colouring.
 struct Legend {

@@ -170,7 +170,7 @@ void clear_render_folder(const fs::path& out) {
 struct Pending {
   long long frame;
   ClothMesh mesh;
-  Legend legend;  // its own: the adhesion scale may follow the frames
+  Legend legend;      // its own: the adhesion scale may follow the frames
   float wetness = 0;  // the mean ω then (the fabric's gloss)
 };
 

@@ -719,8 +719,7 @@ class Viewer {
                        s.time, *opts_.screenshot_after, rtf_);
           next_progress = run_wall + 1.0;
         }
-      } else if (const double wall =
-                     std::chrono::duration<double>(Clock::now() - rtf_wall).count();
+      } else if (const double wall = std::chrono::duration<double>(Clock::now() - rtf_wall).count();
                  wall > 0.5 || s.time < rtf_sim) {  // over about half a second of wall time
         rtf_ = std::max(0.0, s.time - rtf_sim) / wall;
         rtf_sim = s.time;

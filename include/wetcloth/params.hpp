@@ -149,7 +149,7 @@ struct Params {
     Vec2d size{0.3, 0.3};      // width (u) and height (v), m
     Vec3d center{0, 0, 0};     // centre of the cloth at t = 0, m
     Orientation orientation = Orientation::Horizontal;
-    double tilt = 0;              // then turned about the x axis, degrees
+    double tilt = 0;  // then turned about the x axis, degrees
     // A mesh placed as obstacles are (instead of center, orientation, tilt):
     // the file's points, turned z-up when `up` is y, become R (S p) + translate.
     UpAxis up = UpAxis::Z;
@@ -160,7 +160,7 @@ struct Params {
       return up != UpAxis::Z || translate != Vec3d{0, 0, 0} || rotate != Vec3d{0, 0, 0} ||
              scale != Vec3d{1, 1, 1};
     }
-    double humidity = 0.0;        // water saturation by weight ω, 0..1 (the uniform start)
+    double humidity = 0.0;  // water saturation by weight ω, 0..1 (the uniform start)
     // A grayscale image over the cloth's (u, v): ω = its value (black 0, white
     // 1) at the start, instead of `humidity` ("": none). Relative to the scene file.
     std::string humidity_map;
@@ -220,7 +220,7 @@ struct Params {
 
   struct Table {
     bool enabled = true;
-    double height = 0.0;  // z of the plane, m
+    double height = 0.0;    // z of the plane, m
     double water_film = 0;  // depth of water on it under the cloth, m (wets what touches it)
   } table;
 
@@ -228,7 +228,7 @@ struct Params {
     bool enabled = false;
     Vec3d center{0, 0, 0.1};
     double radius = 0.1;
-    Motion motion;  // about its centre
+    Motion motion;          // about its centre
     double water_film = 0;  // depth of water on it under the cloth, m
   } ball;
 
@@ -260,7 +260,7 @@ struct Params {
     double film = 1e-4;                   // air film a resting cloth keeps under it, m
     AirForceDirection force_direction = AirForceDirection::Surface;
     bool paper_update_rule = false;
-    double paper_threshold = 0.0;  // m³ of growth per step that triggers an update
+    double paper_threshold = 0.0;    // m³ of growth per step that triggers an update
     double relative_humidity = 0.5;  // RH of the room's air, 0..1 (drying stops at 1)
   } air;
 
@@ -300,8 +300,8 @@ struct Params {
 };
 
 // Humidity-dependent quantities (docs/model.md sections 1, 4, 6).
-double particle_areal_mass(const Params& p);  // ρ_A (1 + r_w ω), kg/m²
-double permeability(const Params& p);         // δ(ω), eq. 5, m/(s·Pa)
+double particle_areal_mass(const Params& p);         // ρ_A (1 + r_w ω), kg/m²
+double permeability(const Params& p);                // δ(ω), eq. 5, m/(s·Pa)
 double permeability(const Params& p, double omega);  // δ at a given ω
 double adhesion_pressure(const Params& p);  // ω γ (cos θa + cos θb) / h, Pa (eq. 13, area part)
 double adhesion_edge_tension(const Params& p);  // ω γ sin θa, N/m (eq. 13, edge part per √S)

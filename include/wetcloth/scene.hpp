@@ -20,7 +20,8 @@ struct SceneError : std::runtime_error {
 // A list of numbers: a motion's keyframes, 7 numbers each (time, translate,
 // rotate), or a handle's particle indices (ParamDef::list says which).
 using NumberList = std::vector<double>;
-using ParamValue = std::variant<bool, long long, double, std::string, Vec2i, Vec2d, Vec3d, NumberList>;
+using ParamValue =
+    std::variant<bool, long long, double, std::string, Vec2i, Vec2d, Vec3d, NumberList>;
 
 // One scene parameter. Keys under a handle read `handle.*.KEY`.
 struct ParamDef {

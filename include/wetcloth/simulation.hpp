@@ -133,7 +133,7 @@ struct Model {
   // value, then each [wet.NAME] region's (docs/model.md "Humidity field").
   // The field then lives in State::humidity; mass and inv_mass follow it.
   std::vector<double> initial_humidity;
-  std::vector<std::uint8_t> in_wind;    // inside the wind region
+  std::vector<std::uint8_t> in_wind;  // inside the wind region
   SpringSet structural, shear, bending;
   int threads =
       1;  // threads of the step (integrator.threads resolved; the bits do not depend on it)

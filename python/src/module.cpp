@@ -713,7 +713,8 @@ void bind_simulation_arrays(SimulationClass& cls) {
       .def_property(
           "humidity",
           [](const PySimulation& s) { return copy_of<double>(s.sim_.state().humidity); },
-          [](PySimulation& s, const py::array_t<double, py::array::c_style | py::array::forcecast>& v) {
+          [](PySimulation& s,
+             const py::array_t<double, py::array::c_style | py::array::forcecast>& v) {
             if (v.ndim() != 1) throw py::value_error("humidity: expected n values, one a particle");
             const std::vector<double> omega(v.data(), v.data() + v.size());
             try {
@@ -850,14 +851,14 @@ folder, BlowUp (the outputs so far kept), OutputError where a file cannot be
 written.)doc");
   // A sweep's folder: made, where it is not a system folder and (unless
   // force) holds nothing but an earlier sweep's outputs (its `marks`).
-  m.def("_make_sweep_folder", [](const std::string& out, const std::vector<std::string>& marks,
-                                 bool force) {
-    if (!force) {
-      refuse_system_folder(out, "out");
-      refuse_foreign_folder(out, "out", "sweep", marks);
-    }
-    make_output_folder(out, "out");
-  });
+  m.def("_make_sweep_folder",
+        [](const std::string& out, const std::vector<std::string>& marks, bool force) {
+          if (!force) {
+            refuse_system_folder(out, "out");
+            refuse_foreign_folder(out, "out", "sweep", marks);
+          }
+          make_output_folder(out, "out");
+        });
   m.def("_write_shared",
         [](const std::string& path, const std::string& text) { sweep::write_shared(path, text); });
   m.def("_write_file",

@@ -95,9 +95,10 @@ struct PocketPermeability {
       : m(model),
         s(state),
         field(state.humidity.size() == static_cast<std::size_t>(model.n) && !w.humidity.uniform),
-        uniform(permeability(model.params, state.humidity.size() == static_cast<std::size_t>(model.n)
-                                               ? state.humidity[0]
-                                               : model.params.cloth.humidity)) {}
+        uniform(
+            permeability(model.params, state.humidity.size() == static_cast<std::size_t>(model.n)
+                                           ? state.humidity[0]
+                                           : model.params.cloth.humidity)) {}
   double conductance(int i) const {  // δ(ω_i) A_i, m³/(s·Pa)
     return field ? permeability(m.params, s.humidity[i]) * m.area[i] : 0.0;
   }

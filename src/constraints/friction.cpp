@@ -53,32 +53,32 @@ void apply_friction(const Model& m, State& s, const Workspace& w,
       slow_down(m, s, i, n, load, mu, dt, &surface);
     });
   } else {
-  // On the contact surface, slow_down's arithmetic without a branch (a factor
-  // of zero where it does not apply), over columns: a loop that vectorises.
-  // w.force holds the step's forces, adhesion included (it is -adhesion·n_s).
-  for_each_particle_block(m, [&](int first, int end) {
-    const double *__restrict nx = w.surface_normal.column(0),
+    // On the contact surface, slow_down's arithmetic without a branch (a factor
+    // of zero where it does not apply), over columns: a loop that vectorises.
+    // w.force holds the step's forces, adhesion included (it is -adhesion·n_s).
+    for_each_particle_block(m, [&](int first, int end) {
+      const double *__restrict nx = w.surface_normal.column(0),
                              *__restrict ny = w.surface_normal.column(1),
                              *__restrict nz = w.surface_normal.column(2);
-    const double *__restrict fx = w.force.column(0), *__restrict fy = w.force.column(1),
+      const double *__restrict fx = w.force.column(0), *__restrict fy = w.force.column(1),
                              *__restrict fz = w.force.column(2);
-    double* __restrict vx = s.v.column(0), * __restrict vy = s.v.column(1), * __restrict vz = s.v.column(2);
-    double* __restrict xx = s.x.column(0), * __restrict xy = s.x.column(1), * __restrict xz = s.x.column(2);
-    const double* __restrict adhesion = w.adhesion.data(), * __restrict inv_mass =
-                                                               m.inv_mass.data();
-    const auto acts = [&](int i) { return s.contact[i] && !m.driven[i] ? 1.0 : 0.0; };
-    for_each_chunk(first, end, acts, [&](int i0, int count, const double* gate) {
+      double* __restrict vx = s.v.column(0), * __restrict vy = s.v.column(1), * __restrict vz = s.v.column(2);
+      double* __restrict xx = s.x.column(0), * __restrict xy = s.x.column(1), * __restrict xz = s.x.column(2);
+      const double* __restrict adhesion = w.adhesion.data(), * __restrict inv_mass =
+                                                                 m.inv_mass.data();
+      const auto acts = [&](int i) { return s.contact[i] && !m.driven[i] ? 1.0 : 0.0; };
+      for_each_chunk(first, end, acts, [&](int i0, int count, const double* gate) {
 #pragma omp simd
-      for (int k = 0; k < count; ++k) {
-        const int i = i0 + k;
-        const double pressing = -((fx[i] * nx[i] + fy[i] * ny[i] + fz[i] * nz[i]) + adhesion[i]);
-        const double load = adhesion[i] + (with_load && pressing > 0 ? pressing : 0.0);
-        const double dv = mu * load * dt * inv_mass[i];
-        coulomb_clamp(vx[i], vy[i], vz[i], xx[i], xy[i], xz[i], nx[i], ny[i], nz[i], dv,
-                      (gate[k] != 0) & (load > 0), dt);
-      }
+        for (int k = 0; k < count; ++k) {
+          const int i = i0 + k;
+          const double pressing = -((fx[i] * nx[i] + fy[i] * ny[i] + fz[i] * nz[i]) + adhesion[i]);
+          const double load = adhesion[i] + (with_load && pressing > 0 ? pressing : 0.0);
+          const double dv = mu * load * dt * inv_mass[i];
+          coulomb_clamp(vx[i], vy[i], vz[i], xx[i], xy[i], xz[i], nx[i], ny[i], nz[i], dv,
+                        (gate[k] != 0) & (load > 0), dt);
+        }
+      });
     });
-  });
   }
   // Off the contact surface, a particle pushed out of another obstacle this
   // step: its load is the part of the forces that presses it in.

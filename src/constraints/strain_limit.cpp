@@ -115,18 +115,17 @@ void update_strain_order(const Model& m, State& s, Workspace& w) {
     const double h_th = m.params.contact.bridge_height;
     for (int i = 0; i < m.n; ++i) {
       const SurfacePoses& at = w.surfaces;  // where the surfaces are now
-      const bool near =
-          (m.params.table.enabled &&
-           query_surface(m.params, SurfaceKind::Table, s.x[i]).distance < h_th) ||
-          (m.params.ball.enabled &&
-           query_surface(m.params, at, SurfaceKind::Ball, s.x[i]).distance < h_th) ||
-          std::any_of(m.obstacles.begin(), m.obstacles.end(), [&](const auto& o) {
-            const int k = static_cast<int>(&o - m.obstacles.data());
-            const RigidPose* pose = pose_of(at, kMeshCode + k);
-            const Vec3 x = pose ? pose->to_body(s.x[i]) : Vec3(s.x[i]);
-            // (a search within the bridge alone: the cloth is outside)
-            return o->query_within(x, h_th + o->half_thickness).distance < h_th;
-          });
+      const bool near = (m.params.table.enabled &&
+                         query_surface(m.params, SurfaceKind::Table, s.x[i]).distance < h_th) ||
+                        (m.params.ball.enabled &&
+                         query_surface(m.params, at, SurfaceKind::Ball, s.x[i]).distance < h_th) ||
+                        std::any_of(m.obstacles.begin(), m.obstacles.end(), [&](const auto& o) {
+                          const int k = static_cast<int>(&o - m.obstacles.data());
+                          const RigidPose* pose = pose_of(at, kMeshCode + k);
+                          const Vec3 x = pose ? pose->to_body(s.x[i]) : Vec3(s.x[i]);
+                          // (a search within the bridge alone: the cloth is outside)
+                          return o->query_within(x, h_th + o->half_thickness).distance < h_th;
+                        });
       if (near) sources.push_back(i);
     }
   }

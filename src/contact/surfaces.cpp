@@ -103,7 +103,8 @@ void collide_with_meshes(const Model& m, State& s, Workspace& w) {
     if (m.driven[i]) return;
     for (std::size_t k = 0; k < m.obstacles.size(); ++k) {
       const RigidPose* pose = pose_of(w.surfaces, kMeshCode + static_cast<int>(k));
-      const MeshObstacle::Hit h = query_mesh(*m.obstacles[k], pose, s.x[i], 0.0, &w.mesh_cache[k], i);
+      const MeshObstacle::Hit h =
+          query_mesh(*m.obstacles[k], pose, s.x[i], 0.0, &w.mesh_cache[k], i);
       if (h.distance >= 0) continue;
       sub(s.x[i], h.distance * h.normal);
       const Vec3 v = pose ? Vec3(s.v[i] - pose->velocity_at(s.x[i])) : Vec3(s.v[i]);

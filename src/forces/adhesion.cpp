@@ -20,8 +20,8 @@ void add_adhesion(const Model& m, const State& s, Workspace& w) {
   const double omega0 = field ? s.humidity[0] : m.params.cloth.humidity;
   const AdhesionConstants c = adhesion_constants(m.params);
   if (!c.enabled) return;
-  if ((!field || w.humidity.uniform) &&
-      c.pressure_per_omega(omega0) == 0 && c.tension_per_omega(omega0) == 0)
+  if ((!field || w.humidity.uniform) && c.pressure_per_omega(omega0) == 0 &&
+      c.tension_per_omega(omega0) == 0)
     return;
   // A uniform field: eq. 13's two parts once, as before the field.
   const bool per_particle = field && !w.humidity.uniform;

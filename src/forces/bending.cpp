@@ -298,10 +298,10 @@ void find_stencil(const Model& m, BendingMatrix& b, const std::vector<std::uint8
       for (int e = b.start[j]; e < b.start[j + 1]; ++e) {
         const int k = b.column[e];
         column.push_back(k);
-        value.push_back(b.in_stencil(k) ? st.value[std::lower_bound(st.offset.begin(),
-                                                                    st.offset.end(), j - k) -
-                                                   st.offset.begin()]
-                                        : b.value[e]);
+        value.push_back(b.in_stencil(k)
+                            ? st.value[std::lower_bound(st.offset.begin(), st.offset.end(), j - k) -
+                                       st.offset.begin()]
+                            : b.value[e]);
       }
     start.push_back(static_cast<int>(column.size()));
   }
@@ -386,9 +386,9 @@ void bending_rows(const Model& m, const double* __restrict x, double* __restrict
         for (int e = 0; e < size; ++e)
           sum += coefficient[e] * (Difference ? x[i + offset[e]] - x[i] : x[i + offset[e]]);
         if constexpr (Assign)
-        out[i] = scale * sum;
-      else
-        out[i] += scale * sum;
+          out[i] = scale * sum;
+        else
+          out[i] += scale * sum;
       }
       a = to;
       continue;

@@ -287,11 +287,12 @@ void check_obstacle_meshes(const Params& p, const std::string& source) {
         axis = std::string(". The file seems to be ") + other + "-up: with cloth.up = \"" + other +
                "\" the cloth would start outside it";
       }
-      throw SceneError(source + ": cloth.center: the cloth starts " + std::string(mm) +
-                       " mm inside obstacle." + name + " (cloth.center, cloth.tilt, cloth.up, " +
-                       "cloth.translate, obstacle." + name + ".translate" +
-                       (p.obstacles.at(name).motion.moves() ? ", obstacle." + name + ".motion" : "") +
-                       ")" + axis);
+      throw SceneError(
+          source + ": cloth.center: the cloth starts " + std::string(mm) + " mm inside obstacle." +
+          name + " (cloth.center, cloth.tilt, cloth.up, " + "cloth.translate, obstacle." + name +
+          ".translate" +
+          (p.obstacles.at(name).motion.moves() ? ", obstacle." + name + ".motion" : "") + ")" +
+          axis);
     }
   }
 }

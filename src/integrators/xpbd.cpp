@@ -368,52 +368,53 @@ void collide_with_friction(const Model& m, State& s, Workspace& w,
     w.surface_velocity.assign(s.x.size(), Vec3::Zero());
     for_each_particle(m, [&](int i) {
       const int code = touched[i] != 0 ? touched[i] : surface;
-      if (pose_of(w.surfaces, code)) put(w.surface_velocity[i], surface_velocity(w.surfaces, code, s.x[i]));
+      if (pose_of(w.surfaces, code))
+        put(w.surface_velocity[i], surface_velocity(w.surfaces, code, s.x[i]));
     });
   }
   const auto clamp_all = [&]<bool relative>() {
-  for_each_particle_block(m, [&](int first, int end) {
-    double* __restrict xx = s.x.column(0), * __restrict xy = s.x.column(1), * __restrict xz = s.x.column(2);
-    double* __restrict vx = s.v.column(0), * __restrict vy = s.v.column(1), * __restrict vz = s.v.column(2);
-    const double *__restrict bx = w.x_before_collide.column(0),
+    for_each_particle_block(m, [&](int first, int end) {
+      double* __restrict xx = s.x.column(0), * __restrict xy = s.x.column(1), * __restrict xz = s.x.column(2);
+      double* __restrict vx = s.v.column(0), * __restrict vy = s.v.column(1), * __restrict vz = s.v.column(2);
+      const double *__restrict bx = w.x_before_collide.column(0),
                              *__restrict by = w.x_before_collide.column(1),
                              *__restrict bz = w.x_before_collide.column(2);
-    const double *__restrict nx = w.surface_normal.column(0),
+      const double *__restrict nx = w.surface_normal.column(0),
                              *__restrict ny = w.surface_normal.column(1),
                              *__restrict nz = w.surface_normal.column(2);
-    const double *__restrict adhesion = w.adhesion.data(), *__restrict mass = m.mass.data(),
+      const double *__restrict adhesion = w.adhesion.data(), *__restrict mass = m.mass.data(),
                              *__restrict inv_mass = m.inv_mass.data();
-    const double *svx = relative ? w.surface_velocity.column(0) : nullptr,
-                 *svy = relative ? w.surface_velocity.column(1) : nullptr,
-                 *svz = relative ? w.surface_velocity.column(2) : nullptr;
-    for_each_chunk(first, end, kind, [&](int i0, int count, const double* how) {
+      const double *svx = relative ? w.surface_velocity.column(0) : nullptr,
+                   *svy = relative ? w.surface_velocity.column(1) : nullptr,
+                   *svz = relative ? w.surface_velocity.column(2) : nullptr;
+      for_each_chunk(first, end, kind, [&](int i0, int count, const double* how) {
 #pragma omp simd
-      for (int k = 0; k < count; ++k) {
-        const int i = i0 + k;
-        // The surface's push: its depth and direction (the contact surface's
-        // normal where it did not push).
-        const double px = xx[i] - bx[i], py = xy[i] - by[i], pz = xz[i] - bz[i];
-        const double pushed = std::sqrt(px * px + py * py + pz * pz);
-        const double inv_p = pushed > 0 ? 1.0 / pushed : 0.0;
-        const double ux = pushed > 0 ? px * inv_p : nx[i], uy = pushed > 0 ? py * inv_p : ny[i],
-                     uz = pushed > 0 ? pz * inv_p : nz[i];
-        const double ad = how[k] > 1.5 ? adhesion[i] : 0.0;
-        const double pressing = mass[i] * pushed * load_scale;
-        const double load = ad > pressing ? ad : pressing;
-        const double dv = dv_scale * load * inv_mass[i];
-        if constexpr (relative) {
-          const double sx = svx[i], sy = svy[i], sz = svz[i];
-          double rx = vx[i] - sx, ry = vy[i] - sy, rz = vz[i] - sz;
-          coulomb_clamp(rx, ry, rz, xx[i], xy[i], xz[i], ux, uy, uz, dv,
-                        (how[k] > 0.5) & (load > 0), h);
-          vx[i] = rx + sx, vy[i] = ry + sy, vz[i] = rz + sz;
-        } else {
-          coulomb_clamp(vx[i], vy[i], vz[i], xx[i], xy[i], xz[i], ux, uy, uz, dv,
-                        (how[k] > 0.5) & (load > 0), h);
+        for (int k = 0; k < count; ++k) {
+          const int i = i0 + k;
+          // The surface's push: its depth and direction (the contact surface's
+          // normal where it did not push).
+          const double px = xx[i] - bx[i], py = xy[i] - by[i], pz = xz[i] - bz[i];
+          const double pushed = std::sqrt(px * px + py * py + pz * pz);
+          const double inv_p = pushed > 0 ? 1.0 / pushed : 0.0;
+          const double ux = pushed > 0 ? px * inv_p : nx[i], uy = pushed > 0 ? py * inv_p : ny[i],
+                       uz = pushed > 0 ? pz * inv_p : nz[i];
+          const double ad = how[k] > 1.5 ? adhesion[i] : 0.0;
+          const double pressing = mass[i] * pushed * load_scale;
+          const double load = ad > pressing ? ad : pressing;
+          const double dv = dv_scale * load * inv_mass[i];
+          if constexpr (relative) {
+            const double sx = svx[i], sy = svy[i], sz = svz[i];
+            double rx = vx[i] - sx, ry = vy[i] - sy, rz = vz[i] - sz;
+            coulomb_clamp(rx, ry, rz, xx[i], xy[i], xz[i], ux, uy, uz, dv,
+                          (how[k] > 0.5) & (load > 0), h);
+            vx[i] = rx + sx, vy[i] = ry + sy, vz[i] = rz + sz;
+          } else {
+            coulomb_clamp(vx[i], vy[i], vz[i], xx[i], xy[i], xz[i], ux, uy, uz, dv,
+                          (how[k] > 0.5) & (load > 0), h);
+          }
         }
-      }
+      });
     });
-  });
   };
   if (moving)
     clamp_all.template operator()<true>();

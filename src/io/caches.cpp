@@ -370,8 +370,8 @@ void CacheWriter::add_frame(const Simulation& sim, double frame_code) {
       fields[3 * i + 1] = f.contact[i];
       fields[3 * i + 2] = static_cast<float>(model_.params.air.p_atm - f.pressure[i]);
     }
-    for (auto [file, name, values] : {std::tuple{&pc2_, kPc2, &xyz},
-                                      std::tuple{&pc2_fields_, kPc2Fields, &fields}}) {
+    for (auto [file, name, values] :
+         {std::tuple{&pc2_, kPc2, &xyz}, std::tuple{&pc2_fields_, kPc2Fields, &fields}}) {
       file->seekp(32 + k * static_cast<long long>(values->size() * sizeof(float)));
       file->write(reinterpret_cast<const char*>(values->data()),
                   static_cast<std::streamsize>(values->size() * sizeof(float)));
@@ -390,8 +390,7 @@ void CacheWriter::add_frame(const Simulation& sim, double frame_code) {
         arrays.add("Float32", "contact", 1, f.contact) +
         arrays.add("Float32", "pressure_pa", 1, f.pressure) +
         arrays.add("Float32", "adhesion_n", 1, f.adhesion) +
-        arrays.add("Float32", "humidity", 1, f.humidity) +
-        "</PointData>\n";
+        arrays.add("Float32", "humidity", 1, f.humidity) + "</PointData>\n";
     write_file_atomic(dir_ / "vtk" / name, polydata(f.points, model_.triangles, fields, arrays));
     vtk_times_.push_back(f.time);
     write_pvd();

@@ -488,9 +488,9 @@ std::vector<int> handle_vertex_indices(const Params& p, const std::string& name,
     // Whitespace-separated 0-based indices; # starts a comment. An error
     // names the file and the line.
     const std::string text = scene_file_text(p, key, list.file);
-    const std::string source =
-        p.scene_dir == "builtin:" ? "scenes/" + list.file
-                                  : resolve_scene_path(p, key, list.file).string();
+    const std::string source = p.scene_dir == "builtin:"
+                                   ? "scenes/" + list.file
+                                   : resolve_scene_path(p, key, list.file).string();
     std::istringstream lines(text);
     std::string line;
     for (int number = 1; std::getline(lines, line); ++number) {

@@ -309,10 +309,11 @@ std::vector<ParamDef> cloth_defs() {
             "∂c/∂t = D ∇²c, taken implicitly once a step (0: none; 5e-6, a cotton woven's "
             "in-plane wicking, docs/model.md \"Humidity field\")",
             P(material.wicking_diffusivity)),
-      field("material.drying_rate", "1/s", 0, 1e3,
-            "drying: dω/dt = −k_e (1 − air.relative_humidity) ω where the cloth is lifted (0: none; "
-            "5e-4 dries a wet cotton cloth in room air in about 2 h)",
-            P(material.drying_rate)),
+      field(
+          "material.drying_rate", "1/s", 0, 1e3,
+          "drying: dω/dt = −k_e (1 − air.relative_humidity) ω where the cloth is lifted (0: none; "
+          "5e-4 dries a wet cotton cloth in room air in about 2 h)",
+          P(material.drying_rate)),
       field("material.drying_contact_factor", "1", 0, 1,
             "drying where the cloth lies on the contact surface, times material.drying_rate (one "
             "face of two open to the air)",
@@ -546,15 +547,14 @@ std::vector<ParamDef> named_defs() {
                      "this obstacle is the contact surface (with contact.surface = "
                      "\"obstacle\"): adhesion, friction's wet load and trapped air act on it",
                      O(contact)),
-      motion_field("obstacle.*.motion",
-                   "keyframes [[t, [x, y, z], [rx, ry, rz]], ...]: at time t (s) the placed mesh "
-                   "is turned by rx, ry, rz degrees (about x, then y, then z) about its pivot and "
-                   "moved by [x, y, z] (m); times increasing; held before the first and after "
-                   "the last ([]: fixed). Contact, friction and the trapped air follow its "
-                   "surface and its velocity",
-                   [](Params& p, const std::string& name) -> Motion& {
-                     return p.obstacles[name].motion;
-                   }),
+      motion_field(
+          "obstacle.*.motion",
+          "keyframes [[t, [x, y, z], [rx, ry, rz]], ...]: at time t (s) the placed mesh "
+          "is turned by rx, ry, rz degrees (about x, then y, then z) about its pivot and "
+          "moved by [x, y, z] (m); times increasing; held before the first and after "
+          "the last ([]: fixed). Contact, friction and the trapped air follow its "
+          "surface and its velocity",
+          [](Params& p, const std::string& name) -> Motion& { return p.obstacles[name].motion; }),
       obstacle_field("motion_interpolation", "", 1, 0,
                      "between keyframes: linear, or smooth (a cubic Hermite spline with "
                      "Catmull-Rom tangents, starting and stopping at rest)",
@@ -890,8 +890,9 @@ double number_in(const toml::node& n, double lo, double hi, const std::string& k
     fail(n, key, what + ": expected a number");
   if (!std::isfinite(v)) fail(n, key, what + ": value is not finite");
   if (v < lo || v > hi)
-    fail(n, key, what + ": value " + shortest(v) + " is out of range [" + shortest(lo) + ", " +
-                     shortest(hi) + "]");
+    fail(n, key,
+         what + ": value " + shortest(v) + " is out of range [" + shortest(lo) + ", " +
+             shortest(hi) + "]");
   return v;
 }
 
@@ -916,8 +917,8 @@ NumberList keyframes(const toml::node& n, const std::string& key) {
                "'s, " + shortest(out[out.size() - 7]) + " s: the times must increase");
     out.push_back(t);
     for (int c = 0; c < 3; ++c)
-      out.push_back(number_in(*k->get(1)->as_array()->get(c), -kFar, kFar, key,
-                              what + "'s translation"));
+      out.push_back(
+          number_in(*k->get(1)->as_array()->get(c), -kFar, kFar, key, what + "'s translation"));
     for (int c = 0; c < 3; ++c)
       out.push_back(
           number_in(*k->get(2)->as_array()->get(c), -1e6, 1e6, key, what + "'s rotation"));
@@ -928,7 +929,8 @@ NumberList keyframes(const toml::node& n, const std::string& key) {
 // Particle indices [i, ...] (0-based integers), or a string: a file of them.
 ParamValue index_list(const toml::node& n, const std::string& key) {
   if (const auto* file = n.as_string()) {
-    if (file->get().empty()) fail(n, key, "is empty: name a file of particle indices, or list them");
+    if (file->get().empty())
+      fail(n, key, "is empty: name a file of particle indices, or list them");
     return file->get();
   }
   const auto* a = n.as_array();
@@ -1053,7 +1055,10 @@ void apply_table(const toml::table& t, const std::string& prefix, Params& p, boo
           fail(h, hkey,
                "a " + kind + "'s name is letters, digits, _ and - (it is part of keys such as " +
                    kind + ".NAME." +
-                   (kind == "handle" ? "force" : kind == "wet" ? "radius" : "mesh") + ")");
+                   (kind == "handle" ? "force"
+                    : kind == "wet"  ? "radius"
+                                     : "mesh") +
+                   ")");
         const bool is_handle = kind == "handle";
         const std::vector<std::string> known = table_names(p, kind);
         if (!new_handles && std::find(known.begin(), known.end(), nm) == known.end()) {
@@ -1062,7 +1067,9 @@ void apply_table(const toml::table& t, const std::string& prefix, Params& p, boo
           fail(h, hkey,
                "the scene has no such " + kind + " (" +
                    (names.empty() ? "it has none" : "its " + kind + "s: " + names) + "); add " +
-                   (is_handle ? "a handle" : kind == "wet" ? "a wet region" : "an obstacle") +
+                   (is_handle       ? "a handle"
+                    : kind == "wet" ? "a wet region"
+                                    : "an obstacle") +
                    " in a scene file");
         }
         // A table with every key at its default, where it is new.
@@ -1303,7 +1310,8 @@ void check_motions(const Params& p, const Complain& bad) {
       bool finite = std::isfinite(f.time);
       for (int c = 0; c < 3; ++c)
         finite = finite && std::isfinite(f.translate[c]) && std::isfinite(f.rotate[c]);
-      if (!finite) bad(key, "keyframe " + std::to_string(k + 1) + " holds a value that is not finite");
+      if (!finite)
+        bad(key, "keyframe " + std::to_string(k + 1) + " holds a value that is not finite");
       if (k > 0 && !(f.time > m.keys[k - 1].time))
         bad(key, "keyframe " + std::to_string(k + 1) + "'s time " + shortest(f.time) +
                      " s is not after keyframe " + std::to_string(k) + "'s, " +
@@ -1585,8 +1593,8 @@ Params load_scene(const std::string& scene, const std::vector<std::string>& over
       check_cloth_mesh(p, "scenes/" + b.name + ".toml");
       check_obstacle_meshes(p, "scenes/" + b.name + ".toml");
       check_handle_vertices(p, "scenes/" + b.name + ".toml");
-      detail::check_humidity_map(p, "scenes/" + b.name + ".toml" +
-                                        line_of(b.text, b.name, "cloth.humidity_map"));
+      detail::check_humidity_map(
+          p, "scenes/" + b.name + ".toml" + line_of(b.text, b.name, "cloth.humidity_map"));
       return p;
     }
   if (scene.find('/') != std::string::npos || scene.find(".toml") != std::string::npos)
@@ -1680,8 +1688,9 @@ Params at_resolution(Params p, long long grid) {
                      "cloth.resolution is not used; remesh the file for another resolution");
   for (const auto& [name, h] : p.handles)  // j nu + i: other particles on another grid
     if (!h.vertices.empty())
-      throw SceneError("a grid " + std::to_string(grid) + " wide was asked of a scene whose handle." +
-                       name + ".vertices names particles by index: on another grid they are "
+      throw SceneError("a grid " + std::to_string(grid) +
+                       " wide was asked of a scene whose handle." + name +
+                       ".vertices names particles by index: on another grid they are "
                        "other particles (place the handle by at, span and patch to scale it)");
   const auto [nu, nv] = p.cloth.resolution;
   const double scale = static_cast<double>(grid - 1) / static_cast<double>(nu - 1);

@@ -64,10 +64,9 @@ GrayImage load_map(const Params& p) {
   stbi_uc* pixels = stbi_load_from_memory(reinterpret_cast<const stbi_uc*>(bytes.data()),
                                           static_cast<int>(bytes.size()), &w, &h, &channels, 1);
   if (!pixels)
-    throw SceneError("Params: " + key + ": " +
-                     resolve_scene_path(p, key, p.cloth.humidity_map).string() +
-                     ": not an image stb_image reads (PNG, JPEG, BMP, TGA, PGM): " +
-                     stbi_failure_reason());
+    throw SceneError(
+        "Params: " + key + ": " + resolve_scene_path(p, key, p.cloth.humidity_map).string() +
+        ": not an image stb_image reads (PNG, JPEG, BMP, TGA, PGM): " + stbi_failure_reason());
   GrayImage img;
   img.width = w;
   img.height = h;

@@ -25,8 +25,7 @@ using test::TempDir;
 // A square plate of half-side 1 m in the xy plane (an open mesh, a shell 2 mm
 // thick), sliding along x at `speed` from t = 0: a moving table.
 Params on_sliding_plate(const TempDir& dir, double speed, const std::vector<std::string>& sets) {
-  dir.write("meshes/plate.obj",
-            "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nf 1 2 3\nf 1 3 4\n");
+  dir.write("meshes/plate.obj", "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nf 1 2 3\nf 1 3 4\n");
   std::vector<std::string> all = {"cloth.humidity=0", "air.model=\"off\""};
   all.insert(all.end(), sets.begin(), sets.end());
   Params p = test::coarse("pull-straight", all);
@@ -116,10 +115,10 @@ TEST(MovingSurfaces, ClothOnAPlateThatRisesMovesUpWithIt) {
 // no particle is ever inside it.
 TEST(MovingSurfaces, MovingBallPushesAHangingCloth) {
   for (const bool xpbd : {false, true}) {
-    std::vector<std::string> sets = {"cloth.orientation=\"vertical\"", "cloth.center=[0,0,0.3]",
-                                     "table.enabled=false", "contact.surface=\"none\"",
-                                     "air.model=\"off\"", "ball.enabled=true",
-                                     "ball.center=[0,-0.1,0.25]", "ball.radius=0.06"};
+    std::vector<std::string> sets = {
+        "cloth.orientation=\"vertical\"", "cloth.center=[0,0,0.3]", "table.enabled=false",
+        "contact.surface=\"none\"",       "air.model=\"off\"",      "ball.enabled=true",
+        "ball.center=[0,-0.1,0.25]",      "ball.radius=0.06"};
     if (xpbd) sets.insert(sets.end(), kXpbd.begin(), kXpbd.end());
     Params p = test::coarse("hang", sets);
     p.ball.motion.keys = {{0, {0, 0, 0}, {0, 0, 0}}, {0.5, {0, 0.2, 0}, {0, 0, 0}}};

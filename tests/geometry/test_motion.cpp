@@ -19,7 +19,8 @@ namespace {
 Motion three_keys(Interpolation how) {
   Motion m;
   m.interpolation = how;
-  m.keys = {{0.5, {0, 0, 0}, {0, 0, 0}}, {1.5, {0.2, -0.1, 0.3}, {10, 20, 30}},
+  m.keys = {{0.5, {0, 0, 0}, {0, 0, 0}},
+            {1.5, {0.2, -0.1, 0.3}, {10, 20, 30}},
             {2.0, {0.4, 0.1, 0.3}, {0, 90, 45}}};
   return m;
 }
@@ -77,12 +78,12 @@ TEST(Motion, SmoothMidpointsAndRatesAreTheHermiteSplines) {
   const Vec3 p0 = translate_of(m.keys[0]), p1 = translate_of(m.keys[1]),
              p2 = translate_of(m.keys[2]);
   const Vec3 m1 = (p2 - p0) / (2.0 - 0.5);  // the inner key's tangent
-  EXPECT_LT((sample_motion(m, 1.0).translate - ((p0 + p1) / 2 + (Vec3::Zero() - m1) * 1.0 / 8))
-                .norm(),
-            1e-15);
-  EXPECT_LT((sample_motion(m, 1.75).translate - ((p1 + p2) / 2 + (m1 - Vec3::Zero()) * 0.5 / 8))
-                .norm(),
-            1e-15);
+  EXPECT_LT(
+      (sample_motion(m, 1.0).translate - ((p0 + p1) / 2 + (Vec3::Zero() - m1) * 1.0 / 8)).norm(),
+      1e-15);
+  EXPECT_LT(
+      (sample_motion(m, 1.75).translate - ((p1 + p2) / 2 + (m1 - Vec3::Zero()) * 0.5 / 8)).norm(),
+      1e-15);
   EXPECT_LT(sample_motion(m, 0.5).translate_rate.norm(), 1e-15);
   EXPECT_LT((sample_motion(m, 1.5).translate_rate - m1).norm(), 1e-14);
   EXPECT_LT((sample_motion(m, 1.5 - 1e-12).translate_rate - m1).norm(), 1e-9);  // C1 across it
@@ -120,9 +121,9 @@ TEST(Motion, PoseMovesPointsAtItsVelocity) {
   for (const double t : {0.9, 1.7}) {
     const RigidPose pose = motion_pose(m, pivot, t);
     const double e = 1e-6;
-    const Vec3 moved = (motion_pose(m, pivot, t + e).to_world(x0) -
-                        motion_pose(m, pivot, t - e).to_world(x0)) /
-                       (2 * e);
+    const Vec3 moved =
+        (motion_pose(m, pivot, t + e).to_world(x0) - motion_pose(m, pivot, t - e).to_world(x0)) /
+        (2 * e);
     EXPECT_LT((pose.velocity_at(pose.to_world(x0)) - moved).norm(), 1e-7) << t;
     EXPECT_LT((pose.to_body(pose.to_world(x0)) - x0).norm(), 1e-15) << t;
   }
@@ -154,20 +155,19 @@ TEST(Motion, BodyFrameQueryEqualsTheRebuiltMesh) {
     for (double x = -0.3; x <= 0.3; x += 0.05)
       for (double z = 0.2; z <= 0.4; z += 0.025) {
         const Vec3 q(x, 0.01 * (n++ % 11) - 0.047, z);  // off the axis: no ties
-        const MeshObstacle::Hit a = detail::query_mesh(*moving, &pose, q, MeshObstacle::kWhole,
-                                                       nullptr, 0);
+        const MeshObstacle::Hit a =
+            detail::query_mesh(*moving, &pose, q, MeshObstacle::kWhole, nullptr, 0);
         const MeshObstacle::Hit b = placed->query(q);
         EXPECT_NEAR(a.distance, b.distance, 1e-12) << q.transpose() << " t = " << t;
         EXPECT_LT((a.normal - b.normal).norm(), 1e-9) << q.transpose();
         // And its surface's velocity is the rebuilt mesh's closest point's.
         const Vec3 on = q - b.distance * b.normal;
-        EXPECT_LT((pose.velocity_at(on) - (obstacle_pose(p, "arm", t + 1e-6).to_world(
-                                               pose.to_body(on)) -
-                                           obstacle_pose(p, "arm", t - 1e-6).to_world(
-                                               pose.to_body(on))) /
-                                              2e-6)
-                      .norm(),
-                  1e-6);
+        EXPECT_LT(
+            (pose.velocity_at(on) - (obstacle_pose(p, "arm", t + 1e-6).to_world(pose.to_body(on)) -
+                                     obstacle_pose(p, "arm", t - 1e-6).to_world(pose.to_body(on))) /
+                                        2e-6)
+                .norm(),
+            1e-6);
       }
   }
 }

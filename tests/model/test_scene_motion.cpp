@@ -65,10 +65,12 @@ TEST(SceneMotion, KeyframesAreReadWrittenAndReadBack) {
 TEST(SceneMotion, BadKeyframesNameTheLineAndKey) {
   const std::string head = "[ball]\nenabled = true\n";
   const std::string order =
-      error_of(head + "motion = [[0, [0, 0, 0], [0, 0, 0]],\n  [1, [0, 0, 0], [0, 0, 0]],\n"
-                      "  [1, [0, 0, 0], [0, 0, 0]]]\n");
-  EXPECT_TRUE(has(order, "s.toml:5: ball.motion: keyframe 3's time 1.0 s is not after keyframe "
-                         "2's, 1.0 s"))
+      error_of(head +
+               "motion = [[0, [0, 0, 0], [0, 0, 0]],\n  [1, [0, 0, 0], [0, 0, 0]],\n"
+               "  [1, [0, 0, 0], [0, 0, 0]]]\n");
+  EXPECT_TRUE(has(order,
+                  "s.toml:5: ball.motion: keyframe 3's time 1.0 s is not after keyframe "
+                  "2's, 1.0 s"))
       << order;
   const std::string shape = error_of(head + "motion = [[0, [0, 0], [0, 0, 0]]]\n");
   EXPECT_TRUE(has(shape, "s.toml:3: ball.motion: keyframe 1: expected [t, [x, y, z]")) << shape;
@@ -101,10 +103,10 @@ TEST(SceneMotion, YUpClothMeshIsPlacedByItsKeys) {
   // 0.05 above its origin along the file's y.
   dir.write("meshes/sheet.obj",
             "v 0 0.05 0\nv 0.2 0.05 0\nv 0.2 0.05 -0.1\nv 0 0.05 -0.1\nf 1 2 3 4\n");
-  const fs::path scene = dir.write(
-      "s.toml",
-      "[cloth]\nmesh = \"meshes/sheet.obj\"\nup = \"y\"\nscale = [2, 2, 2]\n"
-      "translate = [1, 2, 3]\n[table]\nenabled = false\n[contact]\nsurface = \"none\"\n");
+  const fs::path scene =
+      dir.write("s.toml",
+                "[cloth]\nmesh = \"meshes/sheet.obj\"\nup = \"y\"\nscale = [2, 2, 2]\n"
+                "translate = [1, 2, 3]\n[table]\nenabled = false\n[contact]\nsurface = \"none\"\n");
   const Params p = load_scene(scene.string());
   const Model m = build_model(p);
   Vec3 lo = m.rest_position[0], hi = lo;
@@ -140,8 +142,9 @@ TEST(SceneMotion, VertexListHandlesHoldTheirParticles) {
       "[cloth]\nresolution = [11, 11]\nsize = [0.1, 0.1]\ncenter = [0, 0, 0.3]\n"
       "[table]\nenabled = false\n[contact]\nsurface = \"none\"\n";
   const fs::path scene =
-      dir.write("s.toml", cloth + "[handle.cuff]\ntype = \"pin\"\nvertices = \"cuff.txt\"\n"
-                                  "[handle.two]\ntype = \"pin\"\nvertices = [60, 5]\n");
+      dir.write("s.toml", cloth +
+                              "[handle.cuff]\ntype = \"pin\"\nvertices = \"cuff.txt\"\n"
+                              "[handle.two]\ntype = \"pin\"\nvertices = [60, 5]\n");
   const Params p = load_scene(scene.string());
   Simulation sim(p);
   EXPECT_EQ(sim.model().handles[0].particles, (std::vector<int>{0, 10, 120}));
@@ -162,10 +165,12 @@ TEST(SceneMotion, VertexListHandlesHoldTheirParticles) {
   EXPECT_TRUE(has(bad, "bad.txt:2: handle.cuff.vertices: 'x3' is not a particle index")) << bad;
   const std::string far = load_error(
       dir.write("f.toml", cloth + "[handle.cuff]\ntype = \"pin\"\nvertices = \"far.txt\"\n"));
-  EXPECT_TRUE(has(far, "far.txt:3: handle.cuff.vertices: index 121 is out of range: the cloth "
-                       "has 121 particles (0 to 120)"))
+  EXPECT_TRUE(has(far,
+                  "far.txt:3: handle.cuff.vertices: index 121 is out of range: the cloth "
+                  "has 121 particles (0 to 120)"))
       << far;
-  const std::string listed = error_of(cloth + "[handle.cuff]\ntype = \"pin\"\nvertices = [3, 200]\n");
+  const std::string listed =
+      error_of(cloth + "[handle.cuff]\ntype = \"pin\"\nvertices = [3, 200]\n");
   EXPECT_TRUE(has(listed, "handle.cuff.vertices: index 200 is out of range")) << listed;
   const std::string missing = load_error(
       dir.write("m.toml", cloth + "[handle.cuff]\ntype = \"pin\"\nvertices = \"none.txt\"\n"));

@@ -105,8 +105,9 @@ TEST(Wicking, EveryMillisecondIsWithinTolerance) {
     worst = std::max(worst, std::abs(fine[k] - coarse[k]));
     moved = std::max(moved, std::abs(fine[k] - m.initial_humidity[k]));
   }
-  std::printf("wicking every 1 ms against every step, 1 s: largest |Δω| %.3g (ω moved up to %.3g)\n",
-              worst, moved);
+  std::printf(
+      "wicking every 1 ms against every step, 1 s: largest |Δω| %.3g (ω moved up to %.3g)\n", worst,
+      moved);
   EXPECT_LT(worst, 1e-4);
   EXPECT_LT(worst, 1e-2 * moved);
 }
@@ -203,7 +204,8 @@ TEST(LocalHumidity, MassAndAdhesionFollowEachParticlesOmega) {
   sim.set_humidity_field(omega);
   const Model& m = sim.model();
   for (int k = 0; k < m.n; ++k)
-    EXPECT_EQ(m.mass[k], p.cloth.areal_density * (1.0 + p.cloth.water_ratio * omega[k]) * m.area[k]);
+    EXPECT_EQ(m.mass[k],
+              p.cloth.areal_density * (1.0 + p.cloth.water_ratio * omega[k]) * m.area[k]);
   sim.step();
   const Params wet = [&] {
     Params q = p;

@@ -41,6 +41,7 @@ Legend cloth_mesh(const Simulation& sim, ColorBy mode, float& scale, ClothMesh& 
   mesh.position.resize(n);
   mesh.normal.resize(n);
   mesh.color.assign(n, kClothColor);
+  mesh.gloss.assign(n, 0.0f);
   for (int i = 0; i < n; ++i) {
     mesh.position[i] = s.x[i].cast<float>();
     mesh.normal[i] = normal[i].cast<float>();
@@ -53,9 +54,24 @@ Legend cloth_mesh(const Simulation& sim, ColorBy mode, float& scale, ClothMesh& 
     return static_cast<float>(field ? s.humidity[i] : m.params.cloth.humidity);
   };
   switch (mode) {
-    case ColorBy::Fabric:
-      for (int i = 0; i < n; ++i) mesh.color[i] = wet_fabric_color(omega(i));
+    case ColorBy::Fabric: {
+      // Contact is a yes or no per particle: averaged over each particle's
+      // triangles, so that the look fades over a cell at the contact line
+      // instead of following the grid's staircase.
+      std::vector<float> touch(n, 0.0f), count(n, 0.0f);
+      if (s.contact.size() == static_cast<std::size_t>(n))
+        for (const auto& t : m.triangles) {
+          const float c =
+              static_cast<float>(s.contact[t[0]] + s.contact[t[1]] + s.contact[t[2]]) / 3;
+          for (const int v : t) touch[v] += c, count[v] += 1;
+        }
+      for (int i = 0; i < n; ++i) {
+        const FabricLook look = fabric_look(omega(i), count[i] > 0 ? touch[i] / count[i] : 0.0f);
+        mesh.color[i] = look.color;
+        mesh.gloss[i] = look.gloss;
+      }
       break;
+    }
     case ColorBy::Humidity: {
       const float top = range > 0 ? range : 1.0f;
       legend = {"humidity ω", 0, top, false, false};
@@ -122,16 +138,18 @@ Legend cloth_mesh(const Simulation& sim, ColorBy mode, float& scale, ClothMesh& 
   return legend;
 }
 
-float fabric_wetness(const Simulation& sim) {
-  const std::vector<double>& w = sim.state().humidity;
-  if (w.empty()) return static_cast<float>(sim.model().params.cloth.humidity);
-  double sum = 0;
-  for (const double x : w) sum += x;
-  return static_cast<float>(sum / static_cast<double>(w.size()));
+FabricLook fabric_look(float omega, float touching) {
+  const float w = std::clamp(omega, 0.0f, 1.0f), t = std::clamp(touching, 0.0f, 1.0f);
+  // The albedo (the colour squared: the shader's linear light).
+  const float albedo = (1.0f - 0.45f * w) * (1.0f - t * (0.1f + 0.3f * w));
+  return {kClothColor * std::sqrt(albedo), std::min(1.0f, (1.0f + 0.6f * t) * w)};
 }
 
-Vec3f wet_fabric_color(float omega) {
-  return kClothColor * std::sqrt(1.0f - 0.45f * std::clamp(omega, 0.0f, 1.0f));
+bool touches_stage(const Stage& stage, const Vec3f& p, float h) {
+  if (stage.table && p.z() - stage.ground_z < h &&
+      ((p.head<2>() - stage.table_center).cwiseAbs().array() <= stage.table_half).all())
+    return true;
+  return stage.ball && (p - stage.ball_center).norm() - stage.ball_radius < h;
 }
 
 std::string key_number(float v) {

@@ -33,19 +33,31 @@ inline const Vec3f kContactColor{0.95f, 0.55f, 0.15f}, kFreeColor{0.55f, 0.60f, 
 // pressure +-air.breakthrough_pressure (the deficit at which air breaks
 // through), strain 0 to strain_limit.tau, adhesion 0 to twice an inner
 // particle's share of eq. 13, humidity 0 to 1 (each particle's ω). range > 0
-// sets the top of the scale instead. The fabric's own colour (ColorBy::Fabric)
-// is darkened by each particle's ω, as water darkens cloth (the shader's
-// gloss follows the mean ω: fabric_wetness).
+// sets the top of the scale instead. The fabric's own look (ColorBy::Fabric)
+// follows each particle's ω and whether it touches a surface (fabric_look).
 // Only without adhesion (a scale of 0) is there an automatic one: scale grows
 // at once and shrinks slowly, so that colours do not flicker; keep it between calls.
 Legend cloth_mesh(const Simulation& sim, ColorBy mode, float& scale, ClothMesh& mesh,
                   float range = 0);
 
-// The mean ω over the particles (the fabric shader's gloss).
-float fabric_wetness(const Simulation& sim);
-// The fabric's colour at humidity ω: its albedo (the colour squared) times
-// 1 - 0.45 ω.
-Vec3f wet_fabric_color(float omega);
+// The fabric as it looks at humidity ω, lying on a surface or not. Water
+// darkens cloth (light goes into the water-filled weave instead of back out)
+// and glosses it; where a wet cloth lies on a surface it is pressed flat into
+// its film, darker and glossier still, as a wet patch looks, so the default
+// picture shows where the cloth clings. touching: 0 (free) to 1 (on a
+// surface). The albedo (the colour squared) is (1 - 0.45 ω)(1 - touching
+// (0.1 + 0.3 ω)); the gloss (0..1, the shader's specular weight and
+// sharpness) is (1 + 0.6 touching) ω, at most 1.
+struct FabricLook {
+  Vec3f color;
+  float gloss;
+};
+FabricLook fabric_look(float omega, float touching);
+
+// Whether a point of a cloth whose frame holds no contact field touches the
+// stage: within h of the table top (and over it) or of the ball (a run's
+// last frame, read back for the contact sheet).
+bool touches_stage(const Stage& stage, const Vec3f& p, float h);
 
 // Draws the legend as a key into the bottom-left corner of a picture (what the
 // viewer's panel shows): a colour bar with its numbers, or the two contact colours.

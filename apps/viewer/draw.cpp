@@ -100,16 +100,19 @@ const char* kLitVert = R"(#version 330 core
 layout(location = 0) in vec3 a_pos;
 layout(location = 1) in vec3 a_normal;
 layout(location = 2) in vec3 a_color;
+layout(location = 3) in float a_gloss;
 uniform mat4 u_model;  // unit sphere or unit quad to world; identity for the cloth
 uniform mat4 u_view_proj;
 out vec3 v_pos;
 out vec3 v_normal;
 out vec3 v_color;
+out float v_gloss;
 void main() {
   vec4 p = u_model * vec4(a_pos, 1.0);
   v_pos = p.xyz;
   v_normal = mat3(u_model) * a_normal;
   v_color = a_color;
+  v_gloss = a_gloss;
   gl_Position = u_view_proj * p;
 }
 )";
@@ -121,6 +124,7 @@ const char* kLitFrag = R"(
 in vec3 v_pos;
 in vec3 v_normal;
 in vec3 v_color;
+in float v_gloss;
 uniform vec3 u_eye;
 uniform vec3 u_light;  // unit vector towards the light
 out vec4 frag;
@@ -154,9 +158,7 @@ float lit_fraction(vec3 p, vec3 n_towards_light) {
 }
 #endif
 
-#if MATERIAL == 1
-uniform float u_wetness;
-#elif MATERIAL == 2
+#if MATERIAL == 2
 uniform vec4 u_table;  // table centre xy, half-width, 1 if there is a table
 uniform vec2 u_fog;    // fog start and end distance, m
 // Anti-aliased grid lines every `cell` metres, faded where they get denser than pixels.
@@ -176,9 +178,9 @@ void main() {
   float ks = 0.04, shininess = 24.0;
 #if MATERIAL == 1
   if (back) albedo *= 0.72;                 // the underside, a shade darker
-  // Water darkens fabric (each vertex's colour, by its own ω: wet_fabric_color)
-  ks = mix(0.03, 0.20, u_wetness);          // ...and makes it glossy (the mean ω)
-  shininess = mix(10.0, 60.0, u_wetness);
+  // Water darkens fabric (each vertex's colour: fabric_look) and glosses it
+  ks = mix(0.03, 0.20, v_gloss);
+  shininess = mix(10.0, 60.0, v_gloss);
 #elif MATERIAL == 2
   bool on_table = u_table.w > 0.5 && all(lessThan(abs(v_pos.xy - u_table.xy), vec2(u_table.z)));
   vec3 base = on_table ? vec3(0.66, 0.61, 0.54) : vec3(0.42, 0.42, 0.43);
@@ -268,7 +270,7 @@ void set(GLuint prog, const char* name, const Vec3f& v) {
 void set(GLuint prog, const char* name, float x) { glUniform1f(loc(prog, name), x); }
 void set(GLuint prog, const char* name, int x) { glUniform1i(loc(prog, name), x); }
 
-// A mesh with interleaved position, normal, colour (9 floats per vertex).
+// A mesh with interleaved position, normal, colour and gloss (10 floats per vertex).
 struct Mesh {
   GLuint vao = 0, vbo = 0, ebo = 0;
   GLsizei count = 0;  // indices
@@ -280,10 +282,10 @@ struct Mesh {
     glBindVertexArray(vao);
     glBindBuffer(GL_ARRAY_BUFFER, vbo);
     glBindBuffer(GL_ELEMENT_ARRAY_BUFFER, ebo);
-    for (GLuint a = 0; a < 3; ++a) {
+    for (GLuint a = 0; a < 4; ++a) {
       glEnableVertexAttribArray(a);
       glVertexAttribPointer(
-          a, 3, GL_FLOAT, GL_FALSE, 9 * sizeof(float),
+          a, a < 3 ? 3 : 1, GL_FLOAT, GL_FALSE, 10 * sizeof(float),
           reinterpret_cast<void*>(static_cast<std::uintptr_t>(a * 3 * sizeof(float))));
     }
     glBindVertexArray(0);
@@ -313,8 +315,8 @@ struct Mesh {
   }
 };
 
-void push(std::vector<float>& v, const Vec3f& p, const Vec3f& n, const Vec3f& c) {
-  v.insert(v.end(), {p.x(), p.y(), p.z(), n.x(), n.y(), n.z(), c.x(), c.y(), c.z()});
+void push(std::vector<float>& v, const Vec3f& p, const Vec3f& n, const Vec3f& c, float gloss = 0) {
+  v.insert(v.end(), {p.x(), p.y(), p.z(), n.x(), n.y(), n.z(), c.x(), c.y(), c.z(), gloss});
 }
 
 constexpr int kShadowSize = 1024;
@@ -673,10 +675,10 @@ struct Renderer::Impl {
 
   void upload_cloth(const ClothMesh& m) {
     vertices.clear();
-    vertices.reserve(m.position.size() * 9);
+    vertices.reserve(m.position.size() * 10);
     for (std::size_t i = 0; i < m.position.size(); ++i)
       push(vertices, m.position[i], i < m.normal.size() ? m.normal[i] : Vec3f::UnitZ(),
-           i < m.color.size() ? m.color[i] : kClothColor);
+           i < m.color.size() ? m.color[i] : kClothColor, i < m.gloss.size() ? m.gloss[i] : 0);
     std::vector<unsigned> idx;
     if (m.triangles != triangles) {  // the grid changed (or first frame)
       triangles = m.triangles;
@@ -761,7 +763,6 @@ GLuint Renderer::Impl::use_lit(const DrawFrame& f, Material m, bool shadows) {
 void Renderer::Impl::opaque_pass(const DrawFrame& f) {
   const Mat4f identity = Mat4f::Identity();
   GLuint p = use_lit(f, f.opt.fabric ? kFabric : kPlain, true);
-  if (f.opt.fabric) set(p, "u_wetness", std::clamp(f.opt.wetness, 0.0f, 1.0f));
   set(p, "u_model", identity);
   if (f.opt.wireframe) {  // the lines drawn later must win the depth test
     glEnable(GL_POLYGON_OFFSET_FILL);

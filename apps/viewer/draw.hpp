@@ -69,9 +69,11 @@ struct Stage {
 };
 Stage stage_from(const Params& p);
 
-// The cloth as drawn: float positions, normals and per-vertex sRGB colours.
+// The cloth as drawn: float positions, normals, per-vertex sRGB colours and,
+// for the fabric look, per-vertex gloss 0..1 (how wet its surface looks).
 struct ClothMesh {
   std::vector<Vec3f> position, normal, color;
+  std::vector<float> gloss;
   std::vector<std::array<int, 3>> triangles;
 };
 
@@ -81,8 +83,7 @@ inline const Vec3f kClothColor{0.30f, 0.50f, 0.86f};
 struct DrawOptions {
   bool wireframe = false;
   bool shadows = true;
-  bool fabric = true;      // material look: underside a shade darker, water darkens and glosses
-  float wetness = 0;       // 0..1 (the humidity), used when fabric is on
+  bool fabric = true;      // material look: underside a shade darker, glossy by ClothMesh::gloss
   int grab_particle = -1;  // >= 0: a line from that particle to grab_target
   Vec3f grab_target{0, 0, 0};
 };

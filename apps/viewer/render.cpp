@@ -170,8 +170,7 @@ void clear_render_folder(const fs::path& out) {
 struct Pending {
   long long frame;
   ClothMesh mesh;
-  Legend legend;      // its own: the adhesion scale may follow the frames
-  float wetness = 0;  // the mean ω then (the fabric's gloss)
+  Legend legend;  // its own: the adhesion scale may follow the frames
 };
 
 // What a render did: its frames, and the time drawing and writing them took.
@@ -196,7 +195,6 @@ struct FrameDrawer {
   bool write(const Pending& f, const Camera& cam, bool timed, RenderStats& stats) {
     auto t0 = Clock::now();
     target.bind();
-    opt.wetness = f.wetness;
     renderer.draw(f.mesh, stage, cam, o.width, o.height, opt);
     Image img = target.read();
     if (o.color != ColorBy::Fabric) draw_key(img, f.legend);
@@ -236,7 +234,7 @@ int draw_frames(const RenderOptions& o, double fps, FrameDrawer& drawer, RenderS
     // particles would zoom out every frame the camera looks ahead from.
     if (ok || f == 0) content_box(p, mesh.position, lo, hi);
     follow.add(t, lo, hi);
-    pending.push_back({f, std::move(mesh), stats.legend, fabric_wetness(sim)});
+    pending.push_back({f, std::move(mesh), stats.legend});
     while (!pending.empty() &&
            (!ok || f == frames || follow.time(pending.front().frame) + follow.reach() <= t)) {
       const long long g = pending.front().frame;
@@ -291,7 +289,6 @@ int render_frames(const RenderOptions& o) {
     clear_render_folder(o.out);
     FrameDrawer drawer{o, renderer, target, stage_from(o.params), {}};
     drawer.opt.fabric = o.color == ColorBy::Fabric;
-    drawer.opt.wetness = static_cast<float>(o.params.cloth.humidity);
     RenderStats stats;
     if (const int code = draw_frames(o, fps, drawer, stats); code != 0) return code;
     if (o.video && !make_video(o.out, fps)) return 1;
@@ -330,10 +327,20 @@ bool render_contact_sheet(const std::vector<std::pair<std::string, fs::path>>& c
     const fs::path frame = last_frame(dir);
     if (frame.empty()) return fail(label + ": no frames/frame_*.obj in " + dir.string());
     if (!read_cloth_obj(frame, t.mesh)) return fail(label + ": cannot read " + frame.string());
-    // The run's last frame holds no field: the fabric wet as the case's humidity.
-    for (auto& c : t.mesh.color) c = wet_fabric_color(static_cast<float>(t.params.cloth.humidity));
-    for (const auto& p : t.mesh.position) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+    // The run's last frame holds no field: the fabric wet as the case's
+    // humidity, touching where it lies within the bridge height of the stage.
     const Stage s = stage_from(t.params);
+    const float omega = static_cast<float>(t.params.cloth.humidity);
+    const float h = static_cast<float>(t.params.contact.bridge_height);
+    t.mesh.color.resize(t.mesh.position.size());
+    t.mesh.gloss.resize(t.mesh.position.size());
+    for (std::size_t i = 0; i < t.mesh.position.size(); ++i) {
+      const FabricLook look =
+          fabric_look(omega, touches_stage(s, t.mesh.position[i], h) ? 1.0f : 0.0f);
+      t.mesh.color[i] = look.color;
+      t.mesh.gloss[i] = look.gloss;
+    }
+    for (const auto& p : t.mesh.position) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
     if (s.table) lo.z() = std::min(lo.z(), s.ground_z);
     if (s.ball) {
       lo = lo.cwiseMin(s.ball_center - Vec3f::Constant(s.ball_radius));
@@ -356,10 +363,8 @@ bool render_contact_sheet(const std::vector<std::pair<std::string, fs::path>>& c
     Renderer renderer;
     Framebuffer target(tile_w, tile_h);
     for (int i = 0; i < n; ++i) {
-      DrawOptions opt;
-      opt.wetness = static_cast<float>(tiles[i].params.cloth.humidity);
       target.bind();
-      renderer.draw(tiles[i].mesh, stage_from(tiles[i].params), cam, tile_w, tile_h, opt);
+      renderer.draw(tiles[i].mesh, stage_from(tiles[i].params), cam, tile_w, tile_h, {});
       Image tile = target.read();
       draw_label(tile, 4 * text_scale, 4 * text_scale, tiles[i].label, text_scale);
       blit(sheet, tile, (i % cols) * tile_w, (i / cols) * tile_h);

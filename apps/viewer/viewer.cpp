@@ -732,7 +732,6 @@ class Viewer {
       const auto t0 = Clock::now();
       legend_ = cloth_mesh(*sim_, color_, color_scale_, mesh_);
       draw_.fabric = color_ == ColorBy::Fabric;
-      draw_.wetness = fabric_wetness(*sim_);
       draw_.grab_particle = grab_;
       draw_.grab_target = grab_target_;
       const int samples = antialias_ ? 4 : 0;

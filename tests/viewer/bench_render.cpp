@@ -34,7 +34,6 @@ int main(int argc, char** argv) {
       Framebuffer fb(w, h, samples);
       DrawOptions opt;
       opt.shadows = shadows;
-      opt.wetness = 0.7f;
       fb.bind();
       r.draw(mesh, stage, cam, w, h, opt);  // warm-up: shader compilation
       fb.read();

@@ -13,6 +13,7 @@
 #include <string>
 #include <vector>
 
+#include "viewer/coloring.hpp"
 #include "viewer/commands.hpp"
 #include "viewer/integrator_step.hpp"
 #include "wetcloth/scene.hpp"
@@ -147,6 +148,47 @@ TEST(Render, HumidityChangesThePicture) {
   diff /= pics[0].rgb.size();
   std::printf("mean absolute difference %.2f\n", diff);
   EXPECT_GT(diff, 0.5) << "mean absolute difference per channel";
+}
+
+TEST(Render, DefaultPictureShowsWhereTheClothTouches) {
+  // The same run drawn twice: coloured by contact, which says where the cloth
+  // touches, and in the default fabric look, where those parts must show
+  // darker (a wet patch's look), though they lie flat in the light. Before the
+  // look followed contact they were 2.5 % darker than the rest of the cloth.
+  const fs::path look = fresh("touch-look"), contact = fresh("touch-contact");
+  const std::string args = "render " + kPull + " --humidity 0.7 --size 480x270 --out ";
+  ASSERT_EQ(run_cli(args + "'" + look.string() + "'"), 0);
+  ASSERT_EQ(run_cli(args + "'" + contact.string() + "' --color contact"), 0);
+  const Picture a = load(look / "frame_00005.png"), c = load(contact / "frame_00005.png");
+  ASSERT_EQ(a.width, c.width);
+  double on = 0, off = 0;
+  std::size_t n_on = 0, n_off = 0;
+  for (int y = 0; y < a.height; ++y)
+    for (int x = 0; x < a.width; ++x) {
+      if (!cloth_blue(a.at(x, y))) continue;
+      if (contact_orange(c.at(x, y)))
+        on += a.luma(x, y), ++n_on;
+      else
+        off += a.luma(x, y), ++n_off;
+    }
+  ASSERT_GT(n_on, 1000u);
+  ASSERT_GT(n_off, 1000u);
+  std::printf("cloth brightness: %.1f touching (%zu px), %.1f free (%zu px)\n", on / n_on, n_on,
+              off / n_off, n_off);
+  EXPECT_LT(on / n_on, 0.9 * off / n_off);
+}
+
+TEST(FabricLook, WaterDarkensAndGlossesMoreWhereTheClothTouches) {
+  using wetcloth::viewer::fabric_look;
+  const auto luma = [](const wetcloth::viewer::Vec3f& c) { return c.squaredNorm(); };
+  EXPECT_EQ(fabric_look(0, 0).gloss, 0.0f);  // dry cloth is matt, touching or not
+  EXPECT_EQ(fabric_look(0, 1).gloss, 0.0f);
+  for (float w : {0.0f, 0.3f, 0.7f, 1.0f}) {
+    EXPECT_LT(luma(fabric_look(w, 1).color), luma(fabric_look(w, 0).color)) << w;
+    if (w > 0) EXPECT_GT(fabric_look(w, 1).gloss, fabric_look(w, 0).gloss - 1e-6f) << w;
+  }
+  EXPECT_LT(luma(fabric_look(1, 0).color), luma(fabric_look(0.3f, 0).color));
+  EXPECT_GT(fabric_look(0.5f, 1).gloss, fabric_look(0.5f, 0).gloss);
 }
 
 TEST(Render, VideoThroughFfmpeg) {

@@ -169,6 +169,7 @@ void clear_render_folder(const fs::path& out) {
 // A frame simulated, waiting until the camera has seen far enough ahead.
 struct Pending {
   long long frame;
+  double time;  // s: where the moving obstacles are drawn
   ClothMesh mesh;
   Legend legend;      // its own: the adhesion scale may follow the frames
   float wetness = 0;  // the mean ω then (the fabric's gloss)
@@ -197,7 +198,9 @@ struct FrameDrawer {
     auto t0 = Clock::now();
     target.bind();
     opt.wetness = f.wetness;
-    renderer.draw(f.mesh, stage, cam, o.width, o.height, opt);
+    Stage posed = stage;
+    pose_stage(posed, o.params, f.time);
+    renderer.draw(f.mesh, posed, cam, o.width, o.height, opt);
     Image img = target.read();
     if (o.color != ColorBy::Fabric) draw_key(img, f.legend);
     if (timed) stats.draw_ms += ms_since(t0);
@@ -234,9 +237,9 @@ int draw_frames(const RenderOptions& o, double fps, FrameDrawer& drawer, RenderS
     stats.legend = cloth_mesh(sim, o.color, scale, mesh, o.color_range);
     // A frame that blew up keeps the box of the one before: its flung
     // particles would zoom out every frame the camera looks ahead from.
-    if (ok || f == 0) content_box(p, mesh.position, lo, hi);
+    if (ok || f == 0) content_box(p, mesh.position, lo, hi, sim.state().time);
     follow.add(t, lo, hi);
-    pending.push_back({f, std::move(mesh), stats.legend, fabric_wetness(sim)});
+    pending.push_back({f, sim.state().time, std::move(mesh), stats.legend, fabric_wetness(sim)});
     while (!pending.empty() &&
            (!ok || f == frames || follow.time(pending.front().frame) + follow.reach() <= t)) {
       const long long g = pending.front().frame;
@@ -333,7 +336,9 @@ bool render_contact_sheet(const std::vector<std::pair<std::string, fs::path>>& c
     // The run's last frame holds no field: the fabric wet as the case's humidity.
     for (auto& c : t.mesh.color) c = wet_fabric_color(static_cast<float>(t.params.cloth.humidity));
     for (const auto& p : t.mesh.position) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
-    const Stage s = stage_from(t.params);
+    // The run's last frame is at its duration: the obstacles drawn there.
+    Stage s = stage_from(t.params);
+    pose_stage(s, t.params, t.params.run.duration);
     if (s.table) lo.z() = std::min(lo.z(), s.ground_z);
     if (s.ball) {
       lo = lo.cwiseMin(s.ball_center - Vec3f::Constant(s.ball_radius));
@@ -359,7 +364,9 @@ bool render_contact_sheet(const std::vector<std::pair<std::string, fs::path>>& c
       DrawOptions opt;
       opt.wetness = static_cast<float>(tiles[i].params.cloth.humidity);
       target.bind();
-      renderer.draw(tiles[i].mesh, stage_from(tiles[i].params), cam, tile_w, tile_h, opt);
+      Stage stage = stage_from(tiles[i].params);
+      pose_stage(stage, tiles[i].params, tiles[i].params.run.duration);
+      renderer.draw(tiles[i].mesh, stage, cam, tile_w, tile_h, opt);
       Image tile = target.read();
       draw_label(tile, 4 * text_scale, 4 * text_scale, tiles[i].label, text_scale);
       blit(sheet, tile, (i % cols) * tile_w, (i / cols) * tile_h);

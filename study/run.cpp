@@ -86,7 +86,10 @@ class OutputLock {
 // `first` on: a resumed run writes them again.
 void remove_frames_from(const fs::path& out, long long first) {
   std::error_code ec;
-  for (const auto& [folder, prefix] : {std::pair{"frames", "frame_"}, {"vtk", "cloth_"}}) {
+  for (const auto& [folder, prefix] : {std::pair{"frames", "frame_"},
+                                       {"vtk", "cloth_"},
+                                       {"frames", "obstacles_"},
+                                       {"vtk", "obstacles_"}}) {
     const fs::path dir = out / folder;
     if (!fs::is_directory(dir, ec)) continue;
     for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
@@ -176,22 +179,35 @@ std::vector<std::string> run_outputs(const Params& p) {
   if (!meshes.empty()) files.push_back("meshes/");
   files.insert(files.end(), meshes.begin(), meshes.end());
   const long long last = last_frame_index(p.run.duration, p.run.fps);
+  // Moving obstacles: their pose each frame, in each output that has frames.
+  const std::vector<std::string> moving = moving_obstacle_files(p);
   if (p.run.meshes) {
     files.push_back("frames/");
-    for (long long f = 0; f <= last; ++f)
+    for (long long f = 0; f <= last; ++f) {
       files.push_back(frame_file("frames", "frame_", f, ".obj"));
+      if (!moving.empty()) files.push_back(frame_file("frames", "obstacles_", f, ".obj"));
+    }
   }
   const ExportFormats formats = parse_export_formats(p.run.exports);
-  if (formats.pc2) files.insert(files.end(), {"cloth.pc2", "cloth_fields.pc2", "cloth_rest.obj"});
+  if (formats.pc2) {
+    files.insert(files.end(), {"cloth.pc2", "cloth_fields.pc2", "cloth_rest.obj"});
+    for (const std::string& name : moving)
+      files.insert(files.end(), {"obstacle_" + name + ".pc2", "obstacle_" + name + "_rest.obj"});
+  }
   if (formats.vtk) {
     files.insert(files.end(), {"cloth.pvd", "vtk/", "vtk/obstacles.vtp"});
-    for (long long f = 0; f <= last; ++f) files.push_back(frame_file("vtk", "cloth_", f, ".vtp"));
+    if (!moving.empty()) files.push_back("obstacles.pvd");
+    for (long long f = 0; f <= last; ++f) {
+      files.push_back(frame_file("vtk", "cloth_", f, ".vtp"));
+      if (!moving.empty()) files.push_back(frame_file("vtk", "obstacles_", f, ".vtp"));
+    }
   }
   if (formats.usd) {
     files.insert(files.end(), {"cloth.usda", ".cloth.usda.samples/"});
     for (const char* a : {"points", "normals", "extent", "contact", "pressure", "adhesion",
                           "humidity", "velocities", "deficit"})
       files.push_back(std::string(".cloth.usda.samples/") + a);
+    for (const std::string& name : moving) files.push_back(".cloth.usda.samples/xform_" + name);
   }
   return files;
 }
@@ -205,11 +221,17 @@ void check_resume_outputs(const Params& p, const fs::path& out, long long frames
   if (!q.cloth.mesh.empty()) files.push_back(q.cloth.mesh);
   for (const auto& [name, o] : q.obstacles) files.push_back(o.mesh);
   const ExportFormats formats = parse_export_formats(p.run.exports);
+  const std::vector<std::string> moving = moving_obstacle_files(p);
   if (formats.pc2) files.push_back("cloth_rest.obj");
+  if (formats.pc2)
+    for (const std::string& name : moving) files.push_back("obstacle_" + name + "_rest.obj");
   if (formats.vtk) files.push_back("vtk/obstacles.vtp");
   for (long long f = 0; f < frames; ++f) {
     if (p.run.meshes) files.push_back(frame_file("frames", "frame_", f, ".obj"));
     if (formats.vtk) files.push_back(frame_file("vtk", "cloth_", f, ".vtp"));
+    if (moving.empty()) continue;
+    if (p.run.meshes) files.push_back(frame_file("frames", "obstacles_", f, ".obj"));
+    if (formats.vtk) files.push_back(frame_file("vtk", "obstacles_", f, ".vtp"));
   }
   for (const std::string& rel : files) {
     struct stat st {};
@@ -497,7 +519,7 @@ void open_outputs(const Params& p, const fs::path& out, const Simulation& sim,
     write_file_atomic(out / "scene.toml", "# resolved by wetcloth " WETCLOTH_VERSION
                                           "; `wetcloth run` this file to reproduce the run\n" +
                                               to_toml(written));
-    write_file_atomic(out / "obstacles.obj", obstacles_obj(sim.model(), up));
+    write_file_atomic(out / "obstacles.obj", obstacles_obj(sim.model(), up, sim.state().time));
     if (formats.any()) caches.emplace(out, sim, formats, up, p.run.fps);
     metrics.emplace(out / "metrics.csv");
     at.metrics_bytes = metrics->size();
@@ -542,6 +564,11 @@ void write_frame(const Params& p, const fs::path& out, const Simulation& sim, co
     char name[32];
     std::snprintf(name, sizeof name, "frame_%05lld.obj", f);
     write_file_atomic(out / "frames" / name, cloth_obj(sim.model(), sim.state(), p.run.up));
+    if (obstacles_move(p)) {  // beside it, the obstacles where they are then
+      std::snprintf(name, sizeof name, "obstacles_%05lld.obj", f);
+      write_file_atomic(out / "frames" / name,
+                        obstacles_obj(sim.model(), p.run.up, sim.state().time));
+    }
   }
   // A frame on the frame rate has its number as its USD time code; the last
   // one, where the duration falls between two, its time × fps.

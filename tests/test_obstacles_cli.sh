@@ -48,7 +48,7 @@ printf '[obstacle.thing]\nmesh = "meshes/plate.obj"\nthickness = 0.01\ntranslate
 
 # The built-in scenes with obstacles: check, and a short coarse run whose
 # obstacles.obj and caches hold the mesh.
-for scene in bowl-drape towel-rail mannequin-drape sleeve-pull; do
+for scene in bowl-drape towel-rail mannequin-drape sleeve-pull arm-swing ball-roll; do
   "$W" check "$scene" >/dev/null 2>"$T/err" && ok "check $scene" || bad "check $scene: $(cat "$T/err")"
 done
 "$W" run mannequin-drape --grid 15 --duration 0.05 --export usd,vtk --out "$T/run" --quiet \
@@ -58,6 +58,21 @@ if [ $code -eq 0 ] && grep -q '^o torso' "$T/run/obstacles.obj" &&
   ok "mannequin-drape runs; the torso is in obstacles.obj, cloth.usda and obstacles.vtp"
 else
   bad "mannequin-drape run: exit $code: $(cat "$T/err")"
+fi
+
+# Moving obstacles in the outputs (docs/guide.md): the arm where it is each
+# frame in frames/obstacles_NNNNN.obj, its own PC2 over its rest OBJ, a
+# time-sampled transform in cloth.usda, a VTK frame and obstacles.pvd.
+"$W" run arm-swing --duration 0.1 --set run.fps=30 --export usd,pc2,vtk --out "$T/swing" \
+  --quiet 2>"$T/err" >/dev/null; code=$?
+if [ $code -eq 0 ] && [ -s "$T/swing/frames/obstacles_00003.obj" ] &&
+   ! cmp -s "$T/swing/frames/obstacles_00000.obj" "$T/swing/frames/obstacles_00003.obj" &&
+   [ -s "$T/swing/obstacle_arm.pc2" ] && grep -q '^o arm' "$T/swing/obstacle_arm_rest.obj" &&
+   grep -q 'matrix4d xformOp:transform.timeSamples' "$T/swing/cloth.usda" &&
+   grep -q 'vtk/obstacles_00003.vtp' "$T/swing/obstacles.pvd" && [ -s "$T/swing/vtk/obstacles_00003.vtp" ]; then
+  ok "arm-swing: the moving arm in frames/obstacles_*.obj, obstacle_arm.pc2, cloth.usda and obstacles.pvd"
+else
+  bad "arm-swing's moving arm in the outputs: exit $code: $(cat "$T/err")"
 fi
 
 # A run's folder runs anywhere: the meshes its scene names are copied to

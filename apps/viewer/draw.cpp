@@ -309,6 +309,13 @@ struct Mesh {
     }
     glBindVertexArray(0);
   }
+  // Indices [first, first + n) only.
+  void draw_range(int first, int n) const {
+    glBindVertexArray(vao);
+    glDrawElements(GL_TRIANGLES, n, GL_UNSIGNED_INT,
+                   reinterpret_cast<void*>(static_cast<std::uintptr_t>(first) * sizeof(unsigned)));
+    glBindVertexArray(0);
+  }
   void draw() const {
     glBindVertexArray(vao);
     glDrawElements(GL_TRIANGLES, count, GL_UNSIGNED_INT, nullptr);
@@ -424,6 +431,8 @@ std::shared_ptr<const Stage::Obstacles> scene_obstacles(const Params& p) {
     only.table.enabled = only.ball.enabled = false;
     for (const NamedMesh& mesh : obstacle_meshes(only)) {
       const int base = static_cast<int>(out->position.size());
+      out->parts.push_back({mesh.name, static_cast<int>(3 * out->triangles.size()),
+                            static_cast<int>(3 * mesh.triangles.size())});
       for (const Vec3& x : mesh.points) out->position.push_back(x.cast<float>());
       out->normal.resize(out->position.size(), Vec3f::Zero());
       for (const auto& t : mesh.triangles) {
@@ -434,7 +443,7 @@ std::shared_ptr<const Stage::Obstacles> scene_obstacles(const Params& p) {
       }
     }
   } catch (const std::exception&) {
-    out->position.clear(), out->normal.clear(), out->triangles.clear();
+    out->position.clear(), out->normal.clear(), out->triangles.clear(), out->parts.clear();
   }
   for (auto& n : out->normal) n.normalize();
   if (!out->position.empty()) {
@@ -445,20 +454,62 @@ std::shared_ptr<const Stage::Obstacles> scene_obstacles(const Params& p) {
   return cache[key] = out->position.empty() ? nullptr : out;
 }
 
-// Widens a box round the cloth to the obstacles in view: the table when the
-// cloth is within half its size of it (not under a hanging flag), the ball,
-// the mesh obstacles.
-void add_obstacles(const Params& p, Vec3f& lo, Vec3f& hi) {
+// The box of the corners of [lo, hi] moved by `model`.
+void moved_box(const Mat4f& model, Vec3f& lo, Vec3f& hi) {
+  Vec3f a = Vec3f::Constant(1e30f), b = Vec3f::Constant(-1e30f);
+  for (int c = 0; c < 8; ++c) {
+    const Vec3f x((c & 1) ? hi.x() : lo.x(), (c & 2) ? hi.y() : lo.y(), (c & 4) ? hi.z() : lo.z());
+    const Vec3f y = model.topLeftCorner<3, 3>() * x + model.block<3, 1>(0, 3);
+    a = a.cwiseMin(y), b = b.cwiseMax(y);
+  }
+  lo = a, hi = b;
+}
+
+// Each part's placement at time t, and the box of the parts so placed.
+void pose_obstacles(const Params& p, double t, const Stage::Obstacles& o,
+                    std::vector<Mat4f>& models, Vec3f& lo, Vec3f& hi) {
+  models.clear();
+  lo = o.lo, hi = o.hi;
+  bool any = false;
+  for (const auto& part : o.parts) {
+    const auto it = p.obstacles.find(part.name);
+    const RigidPose pose = it == p.obstacles.end() ? RigidPose{} : obstacle_pose(p, part.name, t);
+    Mat4f m = Mat4f::Identity();
+    m.topLeftCorner<3, 3>() = pose.rotation.cast<float>();
+    m.block<3, 1>(0, 3) = pose.to_world(Vec3::Zero()).cast<float>();
+    models.push_back(m);
+    any = any || pose.moving;
+  }
+  if (!any) {
+    models.clear();
+    return;
+  }
+  // Loose but safe: the whole set's box moved by each part's placement.
+  Vec3f a = Vec3f::Constant(1e30f), b = Vec3f::Constant(-1e30f);
+  for (const Mat4f& m : models) {
+    Vec3f l = o.lo, h = o.hi;
+    moved_box(m, l, h);
+    a = a.cwiseMin(l), b = b.cwiseMax(h);
+  }
+  lo = a, hi = b;
+}
+
+// Widens a box round the cloth to the obstacles in view at time t: the table
+// when the cloth is within half its size of it (not under a hanging flag),
+// the ball, the mesh obstacles.
+void add_obstacles(const Params& p, Vec3f& lo, Vec3f& hi, double t = 0) {
   if (const auto meshes = scene_obstacles(p)) {
-    lo = lo.cwiseMin(meshes->lo);
-    hi = hi.cwiseMax(meshes->hi);
+    std::vector<Mat4f> models;
+    Vec3f a, b;
+    pose_obstacles(p, t, *meshes, models, a, b);
+    lo = lo.cwiseMin(a);
+    hi = hi.cwiseMax(b);
   }
   const float size = static_cast<float>(std::max(p.cloth.size[0], p.cloth.size[1]));
   const float table = static_cast<float>(p.table.height);
   if (p.table.enabled && lo.z() - table < size * 0.5f) lo.z() = std::min(lo.z(), table);
   if (p.ball.enabled) {
-    const Vec3f b =
-        Eigen::Vector3d(p.ball.center[0], p.ball.center[1], p.ball.center[2]).cast<float>();
+    const Vec3f b = ball_pose(p, t).to_world(to_vec(p.ball.center)).cast<float>();
     const float r = static_cast<float>(p.ball.radius);
     lo = lo.cwiseMin(b - Vec3f::Constant(r));
     hi = hi.cwiseMax(b + Vec3f::Constant(r));
@@ -484,13 +535,24 @@ Camera frame_scene(const Params& p, float aspect) {
   return frame_box(lo, hi, aspect, scene_view(p));
 }
 
-void content_box(const Params& p, const std::vector<Vec3f>& cloth, Vec3f& lo, Vec3f& hi) {
+void content_box(const Params& p, const std::vector<Vec3f>& cloth, Vec3f& lo, Vec3f& hi, double t) {
   lo = Vec3f::Constant(1e30f), hi = Vec3f::Constant(-1e30f);
   for (const auto& x : cloth) lo = lo.cwiseMin(x), hi = hi.cwiseMax(x);
   if (lo.x() > hi.x())
     lo = hi =
         Eigen::Vector3d(p.cloth.center[0], p.cloth.center[1], p.cloth.center[2]).cast<float>();
-  add_obstacles(p, lo, hi);
+  add_obstacles(p, lo, hi, t);
+}
+
+void pose_stage(Stage& s, const Params& p, double t) {
+  if (s.ball) {
+    const RigidPose pose = ball_pose(p, t);
+    s.ball_center = pose.to_world(to_vec(p.ball.center)).cast<float>();
+    s.ball_rotation = pose.rotation.cast<float>();
+    s.ball_moves = pose.moving;
+  }
+  if (s.obstacles)
+    pose_obstacles(p, t, *s.obstacles, s.obstacle_models, s.obstacles_lo, s.obstacles_hi);
 }
 
 Stage stage_from(const Params& p) {
@@ -511,6 +573,7 @@ Stage stage_from(const Params& p) {
       Eigen::Vector3d(p.ball.center[0], p.ball.center[1], p.ball.center[2]).cast<float>();
   s.ball_radius = static_cast<float>(p.ball.radius);
   s.obstacles = scene_obstacles(p);
+  pose_stage(s, p, 0);
   if (s.table) {
     s.ground_z = static_cast<float>(p.table.height);
   } else {  // no table: the grid a little below the lowest thing in the scene
@@ -520,7 +583,7 @@ Stage stage_from(const Params& p) {
     if (p.cloth.orientation == Orientation::Vertical)
       low -= static_cast<float>(p.cloth.size[1]) * 0.75f;
     if (s.ball) low = std::min(low, s.ball_center.z() - s.ball_radius);
-    if (s.obstacles) low = std::min(low, s.obstacles->lo.z());
+    if (s.obstacles) low = std::min(low, s.obstacles_lo.z());
     s.ground_z = low - (p.cloth.orientation == Orientation::Vertical ? 0.0f : 0.1f);
   }
   return s;
@@ -554,6 +617,7 @@ DrawFrame draw_frame(const ClothMesh& cloth, const Stage& stage, const Camera& c
   // by a fraction of a millimetre, which would show as specks of ball through the cloth.
   const float ball_r = std::max(stage.ball_radius - 0.0015f, stage.ball_radius * 0.98f);
   f.ball_model = translate_scale(stage.ball_center, Vec3f::Constant(ball_r));
+  f.ball_model.topLeftCorner<3, 3>() = stage.ball_rotation * ball_r;
 
   // Light frustum: an orthographic box around what casts shadows (cloth, ball).
   Vec3f lo = Vec3f::Constant(1e30f), hi = Vec3f::Constant(-1e30f);
@@ -562,7 +626,7 @@ DrawFrame draw_frame(const ClothMesh& cloth, const Stage& stage, const Camera& c
     lo = lo.cwiseMin(stage.ball_center - Vec3f::Constant(stage.ball_radius));
     hi = hi.cwiseMax(stage.ball_center + Vec3f::Constant(stage.ball_radius));
   }
-  if (stage.obstacles) lo = lo.cwiseMin(stage.obstacles->lo), hi = hi.cwiseMax(stage.obstacles->hi);
+  if (stage.obstacles) lo = lo.cwiseMin(stage.obstacles_lo), hi = hi.cwiseMax(stage.obstacles_hi);
   if (lo.x() > hi.x()) lo = hi = Vec3f::Zero();
   const Vec3f center = (lo + hi) / 2;
   f.lo = lo, f.hi = hi;
@@ -577,6 +641,7 @@ struct Renderer::Impl {
   GLuint lit[3][2] = {};  // [material][shadows], compiled when first used
   GLuint empty_vao = 0;
   Mesh cloth, sphere, quad;
+  Mesh banded;     // the unit sphere in eight coloured gores: a moving ball, its turning seen
   Mesh obstacles;  // the stage's mesh obstacles, as last uploaded
   const Stage::Obstacles* uploaded = nullptr;
   GLuint line_vao = 0, line_vbo = 0;
@@ -594,6 +659,7 @@ struct Renderer::Impl {
     sphere.create();
     quad.create();
     obstacles.create();
+    banded.create();
 
     // Unit sphere (ball, grab marker).
     std::vector<float> v;
@@ -612,6 +678,12 @@ struct Renderer::Impl {
         idx.insert(idx.end(), {a, c, d, a, d, b});  // counter-clockwise seen from outside
       }
     sphere.upload(v, idx, GL_STATIC_DRAW);
+    for (int r = 0; r <= rings; ++r)  // the same, every other gore a paler shade
+      for (int s = 0; s <= segs; ++s)
+        if ((s * 8 / segs) % 2 == 1 && s % (segs / 8) != 0)
+          for (int q = 0; q < 3; ++q)
+            v[9 * (r * (segs + 1) + s) + 6 + q] = Vec3f(0.96f, 0.86f, 0.70f)[q];
+    banded.upload(v, idx, GL_STATIC_DRAW);
 
     // Unit ground quad in z = 0, facing up.
     v.clear();
@@ -657,6 +729,7 @@ struct Renderer::Impl {
     cloth.destroy();
     sphere.destroy();
     obstacles.destroy();
+    banded.destroy();
     quad.destroy();
     glDeleteVertexArrays(1, &line_vao);
     glDeleteBuffers(1, &line_vbo);
@@ -701,6 +774,19 @@ struct Renderer::Impl {
     uploaded = stage.obstacles.get();
   }
 
+  // The mesh obstacles, each part where the stage has it (u_model of `program`).
+  void draw_obstacles(GLuint program, const Stage& stage) {
+    if (stage.obstacle_models.empty()) {
+      set(program, "u_model", Mat4f(Mat4f::Identity()));
+      obstacles.draw();
+      return;
+    }
+    for (std::size_t k = 0; k < stage.obstacles->parts.size(); ++k) {
+      set(program, "u_model", stage.obstacle_models[k]);
+      obstacles.draw_range(stage.obstacles->parts[k].first, stage.obstacles->parts[k].count);
+    }
+  }
+
   // The passes of a draw, in order.
   void shadow_pass(const DrawFrame& f);
   GLuint use_lit(const DrawFrame& f, Material m, bool shadows);
@@ -729,10 +815,7 @@ void Renderer::Impl::shadow_pass(const DrawFrame& f) {
     set(depth, "u_model", f.ball_model);
     sphere.draw();
   }
-  if (f.stage.obstacles) {
-    set(depth, "u_model", identity);
-    obstacles.draw();
-  }
+  if (f.stage.obstacles) draw_obstacles(depth, f.stage);
   glDisable(GL_POLYGON_OFFSET_FILL);
 }
 
@@ -774,7 +857,7 @@ void Renderer::Impl::opaque_pass(const DrawFrame& f) {
   if (f.stage.ball) {
     p = use_lit(f, kPlain, true);
     set(p, "u_model", f.ball_model);
-    sphere.draw();
+    (f.stage.ball_moves ? banded : sphere).draw();
   }
   if (f.stage.obstacles) {
     // Pushed back a little, as the ball is drawn a hair small: the cloth
@@ -782,8 +865,7 @@ void Renderer::Impl::opaque_pass(const DrawFrame& f) {
     glEnable(GL_POLYGON_OFFSET_FILL);
     glPolygonOffset(2.0f, 8.0f);
     p = use_lit(f, kPlain, true);
-    set(p, "u_model", identity);
-    obstacles.draw();
+    draw_obstacles(p, f.stage);
     glDisable(GL_POLYGON_OFFSET_FILL);
   }
 }

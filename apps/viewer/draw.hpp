@@ -46,7 +46,9 @@ Camera scene_view(const Params& p);
 Camera frame_scene(const Params& p, float aspect);
 // The box of what a picture must show: the cloth as it is now, the ball, and the
 // table's height when the cloth is near it.
-void content_box(const Params& p, const std::vector<Vec3f>& cloth, Vec3f& lo, Vec3f& hi);
+// Moving obstacles where they are at time t (s).
+void content_box(const Params& p, const std::vector<Vec3f>& cloth, Vec3f& lo, Vec3f& hi,
+                 double t = 0);
 
 // Everything drawn besides the cloth, from the scene's parameters.
 struct Stage {
@@ -56,18 +58,33 @@ struct Stage {
   Eigen::Vector2f table_center{0, 0};
   float table_half = 0.6f;  // half-width of the table top (as in obstacles.obj)
   bool ball = false;
-  Vec3f ball_center{0, 0, 0};
+  Vec3f ball_center{0, 0, 0};  // where it is now (pose_stage)
   float ball_radius = 0;
+  bool ball_moves = false;  // then drawn in bands, so that its turning shows
+  Eigen::Matrix3f ball_rotation = Eigen::Matrix3f::Identity();
   // The [obstacle.NAME] meshes, triangles in float (shared: a stage made
   // again from the same scene reuses them, and the renderer uploads them once).
   struct Obstacles {
     std::vector<Vec3f> position, normal;  // per vertex, normals smoothed
     std::vector<std::array<int, 3>> triangles;
     Vec3f lo{0, 0, 0}, hi{0, 0, 0};
+    struct Part {  // an obstacle's triangles: [first, first + count)
+      std::string name;
+      int first = 0, count = 0;
+    };
+    std::vector<Part> parts;
   };
   std::shared_ptr<const Obstacles> obstacles;
+  // Each part's placement now (moving ones; empty: all where they were
+  // read), and the box they fill then.
+  std::vector<Mat4f> obstacle_models;
+  Vec3f obstacles_lo{0, 0, 0}, obstacles_hi{0, 0, 0};
 };
+// The stage at time 0.
 Stage stage_from(const Params& p);
+// Moves the ball and the mesh obstacles to where their motions have them at
+// time t (s): the viewer and the render call it as the cloth moves.
+void pose_stage(Stage& s, const Params& p, double t);
 
 // The cloth as drawn: float positions, normals, per-vertex sRGB colours and,
 // for the fabric look, per-vertex gloss 0..1 (how wet its surface looks).

@@ -169,6 +169,7 @@ void clear_render_folder(const fs::path& out) {
 // A frame simulated, waiting until the camera has seen far enough ahead.
 struct Pending {
   long long frame;
+  double time;  // s: where the moving obstacles are drawn
   ClothMesh mesh;
   Legend legend;  // its own: the adhesion scale may follow the frames
 };
@@ -195,7 +196,9 @@ struct FrameDrawer {
   bool write(const Pending& f, const Camera& cam, bool timed, RenderStats& stats) {
     auto t0 = Clock::now();
     target.bind();
-    renderer.draw(f.mesh, stage, cam, o.width, o.height, opt);
+    Stage posed = stage;
+    pose_stage(posed, o.params, f.time);
+    renderer.draw(f.mesh, posed, cam, o.width, o.height, opt);
     Image img = target.read();
     if (o.color != ColorBy::Fabric) draw_key(img, f.legend);
     if (timed) stats.draw_ms += ms_since(t0);
@@ -232,9 +235,9 @@ int draw_frames(const RenderOptions& o, double fps, FrameDrawer& drawer, RenderS
     stats.legend = cloth_mesh(sim, o.color, scale, mesh, o.color_range);
     // A frame that blew up keeps the box of the one before: its flung
     // particles would zoom out every frame the camera looks ahead from.
-    if (ok || f == 0) content_box(p, mesh.position, lo, hi);
+    if (ok || f == 0) content_box(p, mesh.position, lo, hi, sim.state().time);
     follow.add(t, lo, hi);
-    pending.push_back({f, std::move(mesh), stats.legend});
+    pending.push_back({f, sim.state().time, std::move(mesh), stats.legend});
     while (!pending.empty() &&
            (!ok || f == frames || follow.time(pending.front().frame) + follow.reach() <= t)) {
       const long long g = pending.front().frame;
@@ -328,8 +331,10 @@ bool render_contact_sheet(const std::vector<std::pair<std::string, fs::path>>& c
     if (frame.empty()) return fail(label + ": no frames/frame_*.obj in " + dir.string());
     if (!read_cloth_obj(frame, t.mesh)) return fail(label + ": cannot read " + frame.string());
     // The run's last frame holds no field: the fabric wet as the case's
-    // humidity, touching where it lies within the bridge height of the stage.
-    const Stage s = stage_from(t.params);
+    // humidity, touching where it lies within the bridge height of the stage,
+    // its obstacles where they are at the run's duration.
+    Stage s = stage_from(t.params);
+    pose_stage(s, t.params, t.params.run.duration);
     const float omega = static_cast<float>(t.params.cloth.humidity);
     const float h = static_cast<float>(t.params.contact.bridge_height);
     t.mesh.color.resize(t.mesh.position.size());
@@ -364,7 +369,9 @@ bool render_contact_sheet(const std::vector<std::pair<std::string, fs::path>>& c
     Framebuffer target(tile_w, tile_h);
     for (int i = 0; i < n; ++i) {
       target.bind();
-      renderer.draw(tiles[i].mesh, stage_from(tiles[i].params), cam, tile_w, tile_h, {});
+      Stage stage = stage_from(tiles[i].params);
+      pose_stage(stage, tiles[i].params, tiles[i].params.run.duration);
+      renderer.draw(tiles[i].mesh, stage, cam, tile_w, tile_h, {});
       Image tile = target.read();
       draw_label(tile, 4 * text_scale, 4 * text_scale, tiles[i].label, text_scale);
       blit(sheet, tile, (i % cols) * tile_w, (i / cols) * tile_h);

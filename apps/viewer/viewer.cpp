@@ -741,6 +741,7 @@ class Viewer {
         target_ = std::make_unique<Framebuffer>(w, h, samples);
       }
       target_->bind();
+      pose_stage(stage_, params_, sim_->state().time);
       renderer_->draw(mesh_, stage_, camera_, w, h, draw_);
       if (recording_) {  // the scene without the panel
         char name[32];

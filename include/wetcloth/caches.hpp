@@ -23,6 +23,12 @@
 //                             zlib-compressed and appended; vtk/obstacles.vtp;
 //                             cloth.pvd the collection with each frame's time,
 //                             rewritten as frames come.
+//
+// Moving obstacles (docs/guide.md, "Moving obstacles in the outputs"): in USD
+// each moving obstacle's Mesh has a time-sampled xformOp:transform, a sample
+// a frame; PC2 gives each its own obstacle_NAME.pc2 over obstacle_NAME_rest.obj;
+// VTK writes vtk/obstacles_NNNNN.vtp a frame and obstacles.pvd. NAME: the
+// obstacle's USD prim name (moving_obstacle_files).
 #pragma once
 
 #include <cstdio>
@@ -53,6 +59,10 @@ struct CacheFrame {
   std::vector<float> humidity;  // ω per vertex (the humidity field)
 };
 CacheFrame cache_frame(const Simulation& sim, UpAxis up);
+
+// The NAMEs of the moving obstacles' caches (obstacle_NAME.pc2, and in USD
+// the prim /wetcloth/NAME): the obstacle's name made a USD name, unique.
+std::vector<std::string> moving_obstacle_files(const Params& p);
 
 // Where the caches stand after some frames: what a checkpoint keeps so that a
 // resumed run continues them (CacheWriter::resume).
@@ -94,6 +104,8 @@ class CacheWriter {
   struct Spool;  // a time-sampled USD attribute's samples, in a file of their own
   void open_usd_samples(const CachePosition* at);
   void write_pvd();
+  void find_moving_obstacles();
+  void write_vtk_obstacles(const std::filesystem::path& path, const std::vector<RigidPose>& poses);
   std::filesystem::path dir_;
   ExportFormats formats_;
   UpAxis up_;
@@ -104,7 +116,11 @@ class CacheWriter {
   bool finished_ = false;
   std::fstream pc2_, pc2_fields_;
   std::vector<double> vtk_times_;
-  std::vector<std::unique_ptr<Spool>> spools_;
+  std::vector<std::unique_ptr<Spool>> spools_;  // the cloth's, then moving_'s transforms
+  std::vector<NamedMesh> meshes_;               // the obstacles (obstacle_meshes)
+  std::vector<std::string> prims_;              // their USD names
+  std::vector<std::size_t> moving_;             // which of them move
+  std::vector<std::unique_ptr<std::fstream>> obstacle_pc2_;  // one a moving obstacle
 };
 
 }  // namespace wetcloth

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "wetcloth/motion.hpp"
 #include "wetcloth/simulation.hpp"
 
 namespace wetcloth {
@@ -106,7 +107,20 @@ std::vector<NamedMesh> obstacle_meshes(const Model& m);
 // The same from a scene's parameters (its mesh files read again; throws
 // SceneError as load_scene would), for a viewer that has no Model.
 std::vector<NamedMesh> obstacle_meshes(const Params& p);
-std::string obstacles_obj(const Model& m, UpAxis up = UpAxis::Z);
+// Where each of obstacle_meshes' obstacles stands at time t, in the same
+// order: a moving one's pose (its points x0 are at pose.to_world(x0)), the
+// identity (moving false) for one that stands still.
+std::vector<RigidPose> obstacle_poses(const Params& p, double t);
+// Whether any obstacle moves: then the outputs carry the obstacles per frame.
+bool obstacles_move(const Params& p);
+// The obstacles as they stand at time t (obstacles.obj: at the start; with
+// moving obstacles, frames/obstacles_NNNNN.obj: each frame's, the same
+// vertices and faces every frame).
+std::string obstacles_obj(const Model& m, UpAxis up = UpAxis::Z, double t = 0);
+// A pose in the files' up axis as USD writes it: the row-vector matrix
+// (points times it) taking a point of obstacle_meshes, in that axis, to
+// where the pose has it.
+Eigen::Matrix4d up_matrix(const RigidPose& pose, UpAxis up);
 
 // metrics.csv, one row per output frame.
 class MetricsTable {

@@ -100,6 +100,19 @@ std::string tuples(const std::vector<Vec3>& v) {  // USD: (x, y, z), ...
   return o;
 }
 
+std::string usd_matrix(const Eigen::Matrix4d& M) {  // ( (a, b, c, d), ... )
+  std::string o = "(";
+  for (int r = 0; r < 4; ++r) {
+    o += r ? ", (" : "(";
+    for (int c = 0; c < 4; ++c) {
+      if (c) o += ", ";
+      put(o, M(r, c));
+    }
+    o += ")";
+  }
+  return o + ")";
+}
+
 std::vector<Vec3> uvs(const Model& m) {  // (u, v, 0): the grid's own coordinates, or the mesh's
   std::vector<Vec3> uv;
   uv.reserve(m.n);
@@ -181,6 +194,36 @@ std::string mesh_topology(const std::vector<std::array<int, 3>>& tris, const std
          "int[] faceVertexIndices = [" + indices + "]\n";
 }
 
+// USD names, [A-Za-z_][A-Za-z0-9_]*, each once and never "cloth": the
+// obstacles' prims, and the names of their files.
+std::vector<std::string> prim_names(const std::vector<std::string>& names) {
+  std::vector<std::string> prims;
+  for (std::string prim : names) {
+    for (char& c : prim)
+      if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
+    if (prim.empty() || std::isdigit(static_cast<unsigned char>(prim[0]))) prim = "_" + prim;
+    while (std::find(prims.begin(), prims.end(), prim) != prims.end() || prim == "cloth")
+      prim += "_";
+    prims.push_back(prim);
+  }
+  return prims;
+}
+
+// The names obstacle_meshes gives, in its order, from the parameters alone.
+std::vector<std::string> obstacle_names(const Params& p) {
+  std::vector<std::string> names;
+  if (p.table.enabled) names.emplace_back("table");
+  if (p.ball.enabled) names.emplace_back("ball");
+  for (const auto& [name, unused] : p.obstacles) names.push_back(name);
+  return names;
+}
+
+std::string vtk_obstacles_name(long long k) {
+  char name[32];
+  std::snprintf(name, sizeof name, "obstacles_%05lld.vtp", k);
+  return name;
+}
+
 constexpr const char* kPc2 = "cloth.pc2";
 constexpr const char* kPc2Fields = "cloth_fields.pc2";
 
@@ -198,6 +241,15 @@ void write_pc2_header(std::fstream& f, int points, long long samples) {
 }
 
 }  // namespace
+
+std::vector<std::string> moving_obstacle_files(const Params& p) {
+  std::vector<std::string> files;
+  const std::vector<std::string> prims = prim_names(obstacle_names(p));
+  const std::vector<RigidPose> poses = obstacle_poses(p, 0);
+  for (std::size_t k = 0; k < prims.size(); ++k)
+    if (poses[k].moving) files.push_back(prims[k]);
+  return files;
+}
 
 // A USD attribute's time samples, "code: value,\n" each, kept in a file of
 // .cloth.usda.samples/ until the stage is written.
@@ -236,12 +288,17 @@ void CacheWriter::open_usd_samples(const CachePosition* at) {
   const fs::path folder = dir_ / kSamples;
   if (std::error_code ec; fs::create_directories(folder, ec), ec)
     throw_output_error(folder, "cannot make the folder", ec.value());
-  if (at && at->samples_bytes.size() != std::size(kAttributes))
+  // The cloth's attributes, then each moving obstacle's transform.
+  std::vector<std::pair<std::string, std::string>> attributes;
+  for (const auto& [declaration, file] : kAttributes) attributes.emplace_back(declaration, file);
+  for (const std::size_t k : moving_)
+    attributes.emplace_back("matrix4d xformOp:transform", "xform_" + prims_[k]);
+  if (at && at->samples_bytes.size() != attributes.size())
     throw SceneError(folder.string() + ": the checkpoint does not say where its samples end");
-  for (std::size_t a = 0; a < std::size(kAttributes); ++a) {
+  for (std::size_t a = 0; a < attributes.size(); ++a) {
     auto spool = std::make_unique<Spool>();
-    spool->declaration = kAttributes[a][0];
-    spool->path = folder / kAttributes[a][1];
+    spool->declaration = attributes[a].first;
+    spool->path = folder / attributes[a].second;
     if (at) {
       std::error_code ec;
       const auto size = fs::file_size(spool->path, ec);
@@ -264,6 +321,8 @@ CacheWriter::CacheWriter(const fs::path& dir, const Simulation& sim, ExportForma
                          UpAxis up, double fps)
     : dir_(dir), formats_(formats), up_(up), fps_(fps), model_(sim.model()) {
   const Model& m = model_;
+  find_moving_obstacles();
+  const std::vector<RigidPose> poses = obstacle_poses(m.params, sim.state().time);
   if (formats.pc2) {
     write_file_atomic(dir / "cloth_rest.obj", cloth_obj(m, sim.state(), up));
     for (auto [file, name] : {std::pair{&pc2_, kPc2}, std::pair{&pc2_fields_, kPc2Fields}}) {
@@ -272,21 +331,57 @@ CacheWriter::CacheWriter(const fs::path& dir, const Simulation& sim, ExportForma
       if (!*file) throw_output_error(dir / name, "cannot write", errno);
       write_pc2_header(*file, m.n, 0);
     }
+    // A moving obstacle's own point cache over its own rest OBJ, as the cloth's.
+    for (const std::size_t k : moving_) {
+      const NamedMesh& mesh = meshes_[k];
+      std::ostringstream o;
+      o << "# wetcloth obstacle " << mesh.name << ", " << (up == UpAxis::Z ? "z" : "y")
+        << " up, metres; obstacle_" << prims_[k] << ".pc2 moves it\no " << prims_[k] << "\n";
+      for (const Vec3& x0 : mesh.points) {
+        const Vec3 x = to_up(poses[k].to_world(x0), up);
+        o << "v " << x.x() << " " << x.y() << " " << x.z() << "\n";
+      }
+      for (const auto& t : mesh.triangles)
+        o << "f " << t[0] + 1 << " " << t[1] + 1 << " " << t[2] + 1 << "\n";
+      write_file_atomic(dir / ("obstacle_" + prims_[k] + "_rest.obj"), o.str());
+      const fs::path path = dir / ("obstacle_" + prims_[k] + ".pc2");
+      ::unlink(path.c_str());
+      auto file = std::make_unique<std::fstream>(
+          path, std::ios::binary | std::ios::in | std::ios::out | std::ios::trunc);
+      if (!*file) throw_output_error(path, "cannot write", errno);
+      write_pc2_header(*file, static_cast<int>(mesh.points.size()), 0);
+      obstacle_pc2_.push_back(std::move(file));
+    }
   }
   if (formats.vtk) {
     if (std::error_code ec; fs::create_directories(dir / "vtk", ec), ec)
       throw_output_error(dir / "vtk", "cannot make the folder", ec.value());
-    std::vector<Vec3> points;
-    std::vector<std::array<int, 3>> tris;
-    for (const NamedMesh& mesh : obstacle_meshes(m)) {
-      const int base = static_cast<int>(points.size());
-      for (const Vec3& x : mesh.points) points.push_back(to_up(x, up));
-      for (const auto& t : mesh.triangles) tris.push_back({base + t[0], base + t[1], base + t[2]});
-    }
-    VtkArrays arrays;
-    write_file_atomic(dir / "vtk" / "obstacles.vtp", polydata(points, tris, "", arrays));
+    write_vtk_obstacles(dir / "vtk" / "obstacles.vtp", poses);
   }
   if (formats.usd) open_usd_samples(nullptr);
+}
+
+void CacheWriter::find_moving_obstacles() {
+  meshes_ = obstacle_meshes(model_);
+  std::vector<std::string> names;
+  for (const NamedMesh& mesh : meshes_) names.push_back(mesh.name);
+  prims_ = prim_names(names);
+  const std::vector<RigidPose> poses = obstacle_poses(model_.params, 0);
+  for (std::size_t k = 0; k < poses.size(); ++k)
+    if (poses[k].moving) moving_.push_back(k);
+}
+
+void CacheWriter::write_vtk_obstacles(const fs::path& path, const std::vector<RigidPose>& poses) {
+  std::vector<Vec3> points;
+  std::vector<std::array<int, 3>> tris;
+  for (std::size_t k = 0; k < meshes_.size(); ++k) {
+    const int base = static_cast<int>(points.size());
+    for (const Vec3& x : meshes_[k].points) points.push_back(to_up(poses[k].to_world(x), up_));
+    for (const auto& t : meshes_[k].triangles)
+      tris.push_back({base + t[0], base + t[1], base + t[2]});
+  }
+  VtkArrays arrays;
+  write_file_atomic(path, polydata(points, tris, "", arrays));
 }
 
 CacheWriter::CacheWriter(const fs::path& dir, const Simulation& sim, ExportFormats formats,
@@ -295,24 +390,32 @@ CacheWriter::CacheWriter(const fs::path& dir, const Simulation& sim, ExportForma
     : dir_(dir), formats_(formats), up_(up), fps_(fps), model_(sim.model()) {
   frames_ = at.frames;
   last_code_ = at.last_code;
-  if (formats.pc2)
-    for (auto [file, name] : {std::pair{&pc2_, kPc2}, std::pair{&pc2_fields_, kPc2Fields}}) {
-      const fs::path path = dir / name;
-      const auto bytes = static_cast<std::uintmax_t>(32 + at.frames * 3LL * model_.n * 4);
-      std::error_code ec;
-      const auto size = fs::file_size(path, ec);
-      if (ec || size < bytes)
-        throw SceneError(path.string() + ": " +
-                         (ec ? ec.message() : "shorter than the checkpoint says") + ": the " +
-                         std::to_string(at.frames) +
-                         " frames the checkpoint continues are not there");
-      if (fs::resize_file(path, bytes, ec); ec)
-        throw_output_error(path, "cannot cut back", ec.value());
-      file->open(path, std::ios::binary | std::ios::in | std::ios::out);
-      if (!*file) throw_output_error(path, "cannot write", errno);
-      write_pc2_header(*file, model_.n, at.frames);
-      if (!file->flush()) throw_output_error(path, "cannot write", errno);
+  find_moving_obstacles();
+  // A point cache cut back to the checkpoint's frames.
+  const auto reopen = [&](std::fstream& file, const fs::path& path, int points) {
+    const auto bytes = static_cast<std::uintmax_t>(32 + at.frames * 3LL * points * 4);
+    std::error_code ec;
+    const auto size = fs::file_size(path, ec);
+    if (ec || size < bytes)
+      throw SceneError(
+          path.string() + ": " + (ec ? ec.message() : "shorter than the checkpoint says") +
+          ": the " + std::to_string(at.frames) + " frames the checkpoint continues are not there");
+    if (fs::resize_file(path, bytes, ec); ec)
+      throw_output_error(path, "cannot cut back", ec.value());
+    file.open(path, std::ios::binary | std::ios::in | std::ios::out);
+    if (!file) throw_output_error(path, "cannot write", errno);
+    write_pc2_header(file, points, at.frames);
+    if (!file.flush()) throw_output_error(path, "cannot write", errno);
+  };
+  if (formats.pc2) {
+    for (auto [file, name] : {std::pair{&pc2_, kPc2}, std::pair{&pc2_fields_, kPc2Fields}})
+      reopen(*file, dir / name, model_.n);
+    for (const std::size_t k : moving_) {
+      obstacle_pc2_.push_back(std::make_unique<std::fstream>());
+      reopen(*obstacle_pc2_.back(), dir / ("obstacle_" + prims_[k] + ".pc2"),
+             static_cast<int>(meshes_[k].points.size()));
     }
+  }
   if (formats.vtk) {
     if (static_cast<long long>(frame_times.size()) != at.frames)
       throw std::logic_error("CacheWriter: a frame time a frame kept");
@@ -331,6 +434,11 @@ CachePosition CacheWriter::position(bool durable) {
       if (!file->flush()) throw_output_error(dir_ / name, "cannot write", errno);
       if (durable) sync_file(dir_ / name);
     }
+  for (std::size_t q = 0; q < obstacle_pc2_.size(); ++q) {
+    const fs::path path = dir_ / ("obstacle_" + prims_[moving_[q]] + ".pc2");
+    if (!obstacle_pc2_[q]->flush()) throw_output_error(path, "cannot write", errno);
+    if (durable) sync_file(path);
+  }
   for (const auto& spool : spools_) {
     if (std::fflush(spool->file) != 0) throw_output_error(spool->path, "cannot write", errno);
     if (durable && ::fsync(fileno(spool->file)) != 0)
@@ -343,15 +451,20 @@ CachePosition CacheWriter::position(bool durable) {
 }
 
 void CacheWriter::write_pvd() {
-  std::string pvd =
-      "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n";
-  for (std::size_t q = 0; q < vtk_times_.size(); ++q) {
-    char line[128];
-    std::snprintf(line, sizeof line, "<DataSet timestep=\"%.9g\" file=\"vtk/cloth_%05zu.vtp\"/>\n",
-                  vtk_times_[q], q);
-    pvd += line;
+  // cloth.pvd; with moving obstacles, obstacles.pvd their frames the same way.
+  for (const char* what : {"cloth", "obstacles"}) {
+    const bool cloth = what[0] == 'c';
+    if (!cloth && moving_.empty()) break;
+    std::string pvd =
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n";
+    for (std::size_t q = 0; q < vtk_times_.size(); ++q) {
+      char line[128];
+      std::snprintf(line, sizeof line, "<DataSet timestep=\"%.9g\" file=\"vtk/%s_%05zu.vtp\"/>\n",
+                    vtk_times_[q], what, q);
+      pvd += line;
+    }
+    write_file_atomic(dir_ / (std::string(what) + ".pvd"), pvd + "</Collection>\n</VTKFile>\n");
   }
-  write_file_atomic(dir_ / "cloth.pvd", pvd + "</Collection>\n</VTKFile>\n");
 }
 
 CacheWriter::~CacheWriter() = default;
@@ -360,6 +473,8 @@ void CacheWriter::add_frame(const Simulation& sim, double frame_code) {
   if (finished_) throw std::logic_error("CacheWriter: a frame after finish()");
   const CacheFrame f = cache_frame(sim, up_);
   const long long k = frames_++;
+  const std::vector<RigidPose> poses =
+      moving_.empty() ? std::vector<RigidPose>{} : obstacle_poses(model_.params, f.time);
   if (formats_.pc2) {
     // cloth.pc2 the points; cloth_fields.pc2, its side file, each point's
     // (humidity ω, contact 0 or 1, pressure deficit p_atm - P_in in Pa).
@@ -378,8 +493,26 @@ void CacheWriter::add_frame(const Simulation& sim, double frame_code) {
       write_pc2_header(*file, static_cast<int>(f.points.size()), k + 1);
       if (!file->flush()) throw_output_error(dir_ / name, "cannot write", errno);
     }
+    for (std::size_t q = 0; q < moving_.size(); ++q) {
+      const std::size_t o = moving_[q];
+      std::vector<float> points;
+      points.reserve(3 * meshes_[o].points.size());
+      for (const Vec3& x0 : meshes_[o].points) {
+        const Vec3 x = to_up(poses[o].to_world(x0), up_);
+        points.insert(points.end(), {static_cast<float>(x.x()), static_cast<float>(x.y()),
+                                     static_cast<float>(x.z())});
+      }
+      std::fstream& file = *obstacle_pc2_[q];
+      file.seekp(32 + k * static_cast<long long>(points.size() * sizeof(float)));
+      file.write(reinterpret_cast<const char*>(points.data()),
+                 static_cast<std::streamsize>(points.size() * sizeof(float)));
+      write_pc2_header(file, static_cast<int>(meshes_[o].points.size()), k + 1);
+      if (!file.flush())
+        throw_output_error(dir_ / ("obstacle_" + prims_[o] + ".pc2"), "cannot write", errno);
+    }
   }
   if (formats_.vtk) {
+    if (!moving_.empty()) write_vtk_obstacles(dir_ / "vtk" / vtk_obstacles_name(k), poses);
     char name[32];
     std::snprintf(name, sizeof name, "cloth_%05lld.vtp", k);
     VtkArrays arrays;
@@ -415,6 +548,8 @@ void CacheWriter::add_frame(const Simulation& sim, double frame_code) {
     for (std::size_t i = 0; i < deficit.size(); ++i)
       deficit[i] = static_cast<float>(model_.params.air.p_atm - f.pressure[i]);
     spools_[8]->add(code, "[" + join(deficit, ", ") + "]");
+    for (std::size_t q = 0; q < moving_.size(); ++q)
+      spools_[std::size(kAttributes) + q]->add(code, usd_matrix(up_matrix(poses[moving_[q]], up_)));
   }
 }
 
@@ -463,7 +598,8 @@ void CacheWriter::finish() {
   {
     std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
     out << o;
-    for (const auto& spool : spools_) {
+    for (std::size_t a = 0; a < std::size(kAttributes); ++a) {
+      const auto& spool = spools_[a];
       out << "        " << spool->declaration << ".timeSamples = {\n";
       std::rewind(spool->file);
       char buf[1 << 16];
@@ -472,20 +608,27 @@ void CacheWriter::finish() {
       out << "        }\n";
     }
     out << "    }\n";
-    std::vector<std::string> prims;  // USD names: [A-Za-z_][A-Za-z0-9_]*, each once
-    for (const NamedMesh& mesh : obstacle_meshes(m)) {
+    // The obstacles: still ones where they stand; a moving one at its
+    // placement before the motion, moved by its time-sampled transform
+    // (written as the cloth's samples are, one a frame).
+    std::size_t q = 0;
+    for (std::size_t k = 0; k < meshes_.size(); ++k) {
+      const NamedMesh& mesh = meshes_[k];
       std::vector<Vec3> points;
       for (const Vec3& x : mesh.points) points.push_back(to_up(x, up_));
-      std::string prim = mesh.name;
-      for (char& c : prim)
-        if (!std::isalnum(static_cast<unsigned char>(c))) c = '_';
-      if (prim.empty() || std::isdigit(static_cast<unsigned char>(prim[0]))) prim = "_" + prim;
-      while (std::find(prims.begin(), prims.end(), prim) != prims.end() || prim == "cloth")
-        prim += "_";
-      prims.push_back(prim);
-      out << "\n    def Mesh \"" << prim << "\"\n    {\n"
+      out << "\n    def Mesh \"" << prims_[k] << "\"\n    {\n"
           << mesh_topology(mesh.triangles, "        ") << "        point3f[] points = ["
-          << tuples(points) << "]\n        uniform token subdivisionScheme = \"none\"\n    }\n";
+          << tuples(points) << "]\n        uniform token subdivisionScheme = \"none\"\n";
+      if (q < moving_.size() && moving_[q] == k) {
+        const Spool& spool = *spools_[std::size(kAttributes) + q++];
+        out << "        " << spool.declaration << ".timeSamples = {\n";
+        std::rewind(spool.file);
+        char buf[1 << 16];
+        for (std::size_t got; (got = std::fread(buf, 1, sizeof buf, spool.file)) > 0;)
+          out.write(buf, static_cast<std::streamsize>(got));
+        out << "        }\n        uniform token[] xformOpOrder = [\"xformOp:transform\"]\n";
+      }
+      out << "    }\n";
     }
     out << "}\n";
     if (!out.flush()) {

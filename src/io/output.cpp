@@ -326,21 +326,53 @@ std::vector<NamedMesh> obstacle_meshes(const Params& p) {
   return meshes;
 }
 
-std::string obstacles_obj(const Model& m, UpAxis up) {
+std::vector<RigidPose> obstacle_poses(const Params& p, double t) {
+  std::vector<RigidPose> poses;
+  if (p.table.enabled) poses.emplace_back();  // the table stands still
+  if (p.ball.enabled) poses.push_back(ball_pose(p, t));
+  for (const auto& [name, unused] : p.obstacles) poses.push_back(obstacle_pose(p, name, t));
+  return poses;
+}
+
+bool obstacles_move(const Params& p) {
+  for (const RigidPose& pose : obstacle_poses(p, 0))
+    if (pose.moving) return true;
+  return false;
+}
+
+std::string obstacles_obj(const Model& m, UpAxis up, double t) {
   std::ostringstream o;
-  o << "# wetcloth obstacles, " << (up == UpAxis::Z ? "z" : "y") << " up, metres\n";
+  o << "# wetcloth obstacles, " << (up == UpAxis::Z ? "z" : "y") << " up, metres";
+  const std::vector<RigidPose> poses = obstacle_poses(m.params, t);
+  if (obstacles_move(m.params)) o << ", at t = " << format_number(t) << " s";
+  o << "\n";
   int base = 1;
+  std::size_t k = 0;
   for (const NamedMesh& mesh : obstacle_meshes(m)) {
+    const RigidPose& pose = poses[k++];
     o << "o " << mesh.name << "\n";
     for (const Vec3& x0 : mesh.points) {
-      const Vec3 x = to_up(x0, up);
+      const Vec3 x = to_up(pose.to_world(x0), up);
       o << "v " << x.x() << " " << x.y() << " " << x.z() << "\n";
     }
-    for (const auto& t : mesh.triangles)
-      o << "f " << base + t[0] << " " << base + t[1] << " " << base + t[2] << "\n";
+    for (const auto& tri : mesh.triangles)
+      o << "f " << base + tri[0] << " " << base + tri[1] << " " << base + tri[2] << "\n";
     base += static_cast<int>(mesh.points.size());
   }
   return o.str();
+}
+
+Eigen::Matrix4d up_matrix(const RigidPose& pose, UpAxis up) {
+  // x -> R x + (pivot + shift - R pivot), conjugated by the up axis' turn C:
+  // C R C^T on C x. USD multiplies row vectors: the transpose, translation last.
+  Mat3 C = Mat3::Identity();
+  if (up == UpAxis::Y) C << 1, 0, 0, 0, 0, 1, 0, -1, 0;
+  const Mat3 R = pose.moving ? pose.rotation : Mat3::Identity();
+  const Vec3 t = pose.to_world(Vec3::Zero());
+  Eigen::Matrix4d M = Eigen::Matrix4d::Identity();
+  M.topLeftCorner<3, 3>() = (C * R * C.transpose()).transpose();
+  M.block<1, 3>(3, 0) = (C * t).transpose();
+  return M;
 }
 
 std::string MetricsTable::csv() const {

@@ -10,6 +10,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <numbers>
 
 #include "common.hpp"
 #include "detail.hpp"
@@ -92,6 +93,67 @@ TEST(MovingSurfaces, FrictionlessPlateSlidesUnderAClothThatStaysPut) {
       ASSERT_NEAR(sim.state().x[i].x(), start[i].x(), 1e-12) << "particle " << i;
       ASSERT_NEAR(sim.state().x[i].y(), start[i].y(), 1e-12) << "particle " << i;
       ASSERT_TRUE(sim.state().contact[i]) << "particle " << i;
+    }
+  }
+}
+
+// A plate tilted by theta about x (its downhill direction -(0, cos, sin)),
+// moving at the constant velocity V in its own plane, and a dry cloth lying
+// on it (tilted with it) that starts with the plate's velocity.
+Simulation on_moving_incline(const TempDir& dir, double theta_deg, const Vec3& V, bool xpbd) {
+  // No air drag: the law has none.
+  std::vector<std::string> sets = {"forces.viscous_damping=0"};
+  if (xpbd) sets.insert(sets.end(), kXpbd.begin(), kXpbd.end());
+  Params p = on_sliding_plate(dir, 0.0, sets);
+  const double th = theta_deg * std::numbers::pi / 180;
+  ObstacleParams& plate = p.obstacles["plate"];
+  plate.rotate = {theta_deg, 0, 0};
+  plate.motion.keys = {{0, {0, 0, 0}, {0, 0, 0}},
+                       {10, {10 * V.x(), 10 * V.y(), 10 * V.z()}, {0, 0, 0}}};
+  const Vec3 normal(0, -std::sin(th), std::cos(th));
+  const Vec3 c = 0.0012 * normal;  // 0.2 mm above the shell, as on the flat plate
+  p.cloth.center = {c.x(), c.y(), c.z()};
+  p.cloth.tilt = theta_deg;
+  Simulation sim(p);
+  sim.set_velocities(Vec3Array(static_cast<std::size_t>(sim.model().n), V));
+  return sim;
+}
+
+// The moving incline (issue 39's check): a constant velocity changes nothing
+// (Galilean), so relative to the plate a dry cloth does what it does on a
+// still incline. Below Coulomb's threshold (tan θ < μ) it does not slip: it
+// moves with the plate. Above it, it slides down the plate at
+// a = g (sin θ - μ cos θ), within 5 %.
+TEST(MovingSurfaces, ClothOnAMovingInclineSlipsAboveCoulombsThresholdOnly) {
+  TempDir dir("moving_incline");
+  const double mu = Params{}.friction.mu, g = 9.81, T = 0.3;
+  for (const bool xpbd : {false, true}) {
+    for (const double theta : {10.0, 30.0}) {
+      const double th = theta * std::numbers::pi / 180;
+      const Vec3 downhill(0, -std::cos(th), -std::sin(th));
+      const Vec3 V = 0.2 * Vec3::UnitX() - 0.1 * downhill;  // across and up the slope
+      Simulation sim = on_moving_incline(dir, theta, V, xpbd);
+      const Vec3 start = mean_of(sim.state().x);
+      ASSERT_TRUE(sim.advance_to(T)) << sim.blow_up_reason();
+      const double t = sim.state().time;
+      // Relative to the plate, along it (the cloth settles the 0.2 mm onto it).
+      const Vec3 normal(0, -std::sin(th), std::cos(th));
+      Vec3 slip = mean_of(sim.state().x) - start - V * t;
+      slip -= slip.dot(normal) * normal;
+      const Vec3 rate = mean_of(sim.state().v) - V;
+      const std::string what =
+          std::string(xpbd ? "xpbd" : "symplectic") + " at " + std::to_string(theta) + " deg";
+      for (int i = 0; i < sim.model().n; ++i)
+        ASSERT_TRUE(sim.state().contact[i]) << "particle " << i << ", " << what;
+      if (std::tan(th) < mu) {
+        EXPECT_LT(slip.norm(), 1e-4) << what << ": slipped " << slip.transpose();
+        EXPECT_LT(rate.norm(), 1e-3) << what;
+      } else {
+        const double a = g * (std::sin(th) - mu * std::cos(th));
+        EXPECT_NEAR(rate.dot(downhill), a * t, 0.05 * a * t) << what;
+        EXPECT_NEAR(slip.dot(downhill), a * t * t / 2, 0.05 * a * t * t / 2) << what;
+        EXPECT_LT((slip - slip.dot(downhill) * downhill).norm(), 0.01 * a * t * t / 2) << what;
+      }
     }
   }
 }

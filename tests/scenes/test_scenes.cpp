@@ -245,6 +245,34 @@ TEST(Scenes, ArmSwingWetSleeveRidesAlongDryOneSlides) {
   EXPECT_GT(contact[0], 1.2 * contact[1]);
 }
 
+// ball-roll (issue 39's moving obstacles): the ball rolls without slipping
+// (its lowest point, on the table, stands still at every time), 12 cm along
+// x and back. Soaked, the cloth draped on it rides round with its surface
+// (the cloth's middle carried past the ball's centre at the turn) and comes
+// back with it; dry, it slides off the ball's front onto the table and stays.
+TEST(Scenes, BallRollWetClothRidesRoundDryOneSlidesOff) {
+  const Params wet = load_scene("ball-roll");
+  for (double t = 0; t <= wet.run.duration; t += 0.05) {
+    const RigidPose ball = ball_pose(wet, t);
+    const Vec3 bottom = ball.to_world(to_vec(wet.ball.center)) - wet.ball.radius * Vec3::UnitZ();
+    EXPECT_LT(ball.velocity_at(bottom).norm(), 1e-12) << "t = " << t;
+  }
+  std::vector<double> turn_x, end_x, end_contact;
+  for (const char* humidity : {"cloth.humidity=0.7", "cloth.humidity=0"}) {
+    Simulation sim(load_scene("ball-roll", {humidity}));
+    ASSERT_TRUE(sim.advance_to(1.6)) << sim.blow_up_reason();
+    turn_x.push_back(sim.metrics().centroid_x_m);
+    ASSERT_TRUE(sim.advance_to(wet.run.duration)) << sim.blow_up_reason();
+    end_x.push_back(sim.metrics().centroid_x_m);
+    end_contact.push_back(sim.metrics().contact_area_m2);
+  }
+  EXPECT_GT(turn_x[0], 0.12 + 0.04);  // the ball's centre is at 0.12
+  EXPECT_LT(std::abs(end_x[0]), 0.005);
+  EXPECT_GT(end_contact[0], 0.03);
+  EXPECT_GT(end_x[1], 0.15);  // on the table, in front of where the ball came back to
+  EXPECT_LT(end_contact[1], 0.001);
+}
+
 // wet-patch (issue 39's humidity field): a dry cloth with a soaked patch,
 // lifted by its far edge. The patch clings to the table while the dry cloth
 // between it and the hand lifts; its water spreads into the dry cloth around

@@ -15,7 +15,9 @@
 
 #include "viewer/coloring.hpp"
 #include "viewer/commands.hpp"
+#include "viewer/draw.hpp"
 #include "viewer/integrator_step.hpp"
+#include "wetcloth/motion.hpp"
 #include "wetcloth/scene.hpp"
 #include "wetcloth/simulation.hpp"
 
@@ -278,6 +280,46 @@ TEST(View, ScreenshotUnderXvfbShowsTheSceneAndThePanel) {
 // substeps where one is too many), the small-step ones 5e-5 s from a
 // large-step scene; a step of the scene's own kind stays. The step picked
 // runs: xpbd takes the straight pull 0.05 s in 12 steps.
+// The stage follows the moving obstacles: the ball and each mesh part are
+// drawn where their motions have them at the cloth's time (the viewer and
+// the render pose it each frame); a still scene keeps its stage as it was.
+TEST(Stage, MovingObstaclesArePosedAtTheClothsTime) {
+  using namespace wetcloth;
+  using viewer::pose_stage;
+  const Params roll = load_scene("ball-roll");
+  viewer::Stage s = viewer::stage_from(roll);
+  EXPECT_LT((s.ball_center - Eigen::Vector3f(0, 0, 0.1f)).norm(), 1e-6f);
+  pose_stage(s, roll, 1.6);
+  EXPECT_TRUE(s.ball_moves);
+  EXPECT_LT((s.ball_center - Eigen::Vector3f(0.12f, 0, 0.1f)).norm(), 1e-6f);
+  EXPECT_LT((s.ball_rotation - ball_pose(roll, 1.6).rotation.cast<float>()).norm(), 1e-6f);
+  EXPECT_NEAR(std::acos(s.ball_rotation(0, 0)), 1.2, 1e-5);  // 0.12 m / 0.1 m rolled
+
+  const Params swing = load_scene("arm-swing");
+  viewer::Stage arm = viewer::stage_from(swing);
+  ASSERT_TRUE(arm.obstacles);
+  ASSERT_EQ(arm.obstacles->parts.size(), 1u);
+  EXPECT_EQ(arm.obstacles->parts[0].name, "arm");
+  for (const double t : {0.5, 1.2}) {
+    pose_stage(arm, swing, t);
+    ASSERT_EQ(arm.obstacle_models.size(), 1u);
+    const RigidPose pose = obstacle_pose(swing, "arm", t);
+    for (std::size_t k = 0; k < arm.obstacles->position.size(); k += 97) {
+      const Eigen::Vector3f x = arm.obstacles->position[k];
+      const Eigen::Vector3f drawn = (arm.obstacle_models[0] * x.homogeneous()).head<3>();
+      EXPECT_LT((drawn - pose.to_world(x.cast<double>()).cast<float>()).norm(), 1e-5f) << t;
+      EXPECT_TRUE(((drawn.array() >= arm.obstacles_lo.array() - 1e-5f) &&
+                   (drawn.array() <= arm.obstacles_hi.array() + 1e-5f))
+                      .all());
+    }
+  }
+  const Params still = load_scene("drape-ball");
+  viewer::Stage d = viewer::stage_from(still);
+  pose_stage(d, still, 1.0);
+  EXPECT_FALSE(d.ball_moves);
+  EXPECT_EQ(d.ball_rotation, Eigen::Matrix3f::Identity());
+}
+
 TEST(Panel, AnIntegratorPickedGetsAStepOfItsKind) {
   using wetcloth::IntegratorType;
   using wetcloth::viewer::step_for_integrator;

@@ -1,6 +1,6 @@
 // The humidity field (src/water/humidity.cpp, docs/model.md "Humidity
 // field"): wicking (water conserved, a Gaussian's variance, a uniform field
-// kept, stable at any step, the cap), drying, uptake from a film, the local ω
+// kept, stable at any step, the cap, a strip's erfc), drying, uptake from a film, the local ω
 // in mass and adhesion, the start's maps and regions, checkpoints and threads.
 #include <gtest/gtest.h>
 
@@ -76,6 +76,55 @@ TEST(Wicking, AGaussianSpotsVarianceGrowsAsTwoDt) {
   const int steps = 200;  // 2 s
   for (int s = 0; s < steps; ++s) detail::wick(m, c, h, D * dt);
   EXPECT_NEAR(variance() - v0, 2 * D * steps * dt, 0.02 * 2 * D * steps * dt);
+}
+
+// A strip wet at one end: its left half soaked (ω1 = 1), its right half damp
+// (ω0 = 0.2), the step at x = 0 on the face between two particles (an even
+// count). Wicked alone (no forces, no contact) as the step runs it, once per
+// kWickingInterval, for t = 10 s at the default D, the field matches the
+// line's solution ω0 + (ω1 − ω0)/2 erfc(x / (2√(D t))) away from the ends
+// (|x| < a quarter of the strip: the ends' images add erfc(0.1 / 0.014) ≈ 1e−24).
+// Returns the largest error there, as a fraction of ω1 − ω0.
+double strip_erfc_error(double spacing, double t) {
+  const double length = 0.402, D = Params{}.material.wicking_diffusivity;
+  const int nu = 2 * static_cast<int>(std::lround((length / spacing + 1) / 2));  // even
+  Params p = grid(nu, length);
+  p.cloth.resolution = {nu, 3};
+  p.cloth.size = {length, 2 * length / (nu - 1)};
+  const Model m = build_model(p);
+  const double w0 = 0.2, w1 = 1.0;
+  std::vector<double> c(m.n);
+  for (int k = 0; k < m.n; ++k) c[k] = m.rest_position[k].x() < 0 ? w1 : w0;
+  HumidityScratch h;
+  const double interval = detail::kWickingInterval;
+  const long long steps = std::llround(t / interval);
+  for (long long s = 0; s < steps; ++s) detail::wick(m, c, h, D * interval);
+  double worst = 0;
+  for (int k = 0; k < m.n; ++k) {
+    const double x = m.rest_position[k].x();
+    if (std::abs(x) > length / 4) continue;
+    const double exact = w0 + (w1 - w0) / 2 * std::erfc(x / (2 * std::sqrt(D * t)));
+    worst = std::max(worst, std::abs(c[k] - exact) / (w1 - w0));
+  }
+  return worst;
+}
+
+// The erfc check at the default cloth's 6 mm (pull-straight's 51 over 30 cm):
+// within 2 %, and second order in the spacing (the error a quarter at half
+// the spacing; the 1 ms interval's own error is a few per cent of it).
+TEST(Wicking, AStripWetAtOneEndMatchesTheErfcSolution) {
+  const double t = 10;  // √(D t) = 7 mm, about one spacing: the hardest the grid sees
+  const double e6 = strip_erfc_error(0.006, t), e3 = strip_erfc_error(0.003, t),
+               e15 = strip_erfc_error(0.0015, t);
+  std::printf(
+      "erfc strip, t = %g s: largest error %.3g %% at 6 mm, %.3g %% at 3 mm, %.3g %% at "
+      "1.5 mm\n",
+      t, 100 * e6, 100 * e3, 100 * e15);
+  EXPECT_LT(e6, 0.02);
+  EXPECT_LT(e3, e6 / 3);
+  EXPECT_LT(e15, e3 / 3);
+  // Later, the front wider against the grid, the error smaller.
+  EXPECT_LT(strip_erfc_error(0.006, 30), e6 / 2);
 }
 
 TEST(Wicking, KeepsAUniformFieldExactly) {

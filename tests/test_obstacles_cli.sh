@@ -48,7 +48,7 @@ printf '[obstacle.thing]\nmesh = "meshes/plate.obj"\nthickness = 0.01\ntranslate
 
 # The built-in scenes with obstacles: check, and a short coarse run whose
 # obstacles.obj and caches hold the mesh.
-for scene in bowl-drape towel-rail mannequin-drape sleeve-pull; do
+for scene in bowl-drape towel-rail towel-dry mannequin-drape sleeve-pull; do
   "$W" check "$scene" >/dev/null 2>"$T/err" && ok "check $scene" || bad "check $scene: $(cat "$T/err")"
 done
 "$W" run mannequin-drape --grid 15 --duration 0.05 --export usd,vtk --out "$T/run" --quiet \

@@ -210,8 +210,14 @@ void Simulation::set_params(const Params& p) {
                                        });
     if (!same_start || state_.humidity.size() != static_cast<std::size_t>(model_.n))
       state_.humidity = model_.initial_humidity;
+    const auto obstacle_films = [](const Params& q) {
+      std::vector<std::pair<bool, double>> films;
+      for (const auto& [name, o] : q.obstacles) films.emplace_back(o.contact, o.water_film);
+      return films;
+    };
     if (p.table.water_film != before.table.water_film ||
-        p.ball.water_film != before.ball.water_film || p.contact.surface != before.contact.surface)
+        p.ball.water_film != before.ball.water_film ||
+        p.contact.surface != before.contact.surface || obstacle_films(p) != obstacle_films(before))
       start_film(model_, state_);
     note_humidity_changed(state_, *ws_);
     set_masses(model_, state_.humidity);

@@ -128,16 +128,17 @@ const char* signal_name(int sig) {
   return sig == SIGINT ? "SIGINT" : sig == SIGTERM ? "SIGTERM" : "a signal";
 }
 
-// A run's scene.toml runs from its folder: the meshes the scene names go to
-// OUT/meshes/ (a built-in scene's from the copies in the program), and its
-// keys name them there. P with those paths; with `files`, each file's path in
-// OUT and its text. One file named twice is copied once; two files of one
-// name become meshes/NAME and meshes/2-NAME.
-Params with_output_meshes(const Params& p,
-                          std::vector<std::pair<std::string, std::string>>* files = nullptr) {
+// A run's scene.toml runs from its folder: the files the scene names go to
+// OUT/meshes/ (meshes), OUT/maps/ (cloth.humidity_map) and OUT/lists/
+// (handles' vertex lists), a built-in scene's from the copies in the program,
+// and its keys name them there. P with those paths; with `files`, each file's
+// path in OUT and its bytes. One file named twice is copied once; two files
+// of one name in one folder become NAME and 2-NAME.
+Params with_output_files(const Params& p,
+                         std::vector<std::pair<std::string, std::string>>* files = nullptr) {
   Params q = p;
   std::vector<std::pair<std::string, std::string>> placed;  // the scene's path, the new one
-  const auto place = [&](const std::string& key, std::string& path) {
+  const auto place = [&](const std::string& folder, const std::string& key, std::string& path) {
     if (path.empty()) return;
     const std::string from = fs::path(path).lexically_normal().generic_string();
     for (const auto& [source, to] : placed)
@@ -146,18 +147,46 @@ Params with_output_meshes(const Params& p,
         return;
       }
     const std::string name = fs::path(from).filename().string();
-    std::string to = "meshes/" + name;
+    std::string to = folder + "/" + name;
     for (int k = 2;
          std::any_of(placed.begin(), placed.end(), [&](const auto& e) { return e.second == to; });
          ++k)
-      to = "meshes/" + std::to_string(k) + "-" + name;
+      to = folder + "/" + std::to_string(k) + "-" + name;
     placed.emplace_back(from, to);
     if (files) files->emplace_back(to, scene_file_text(p, key, path));
     path = to;
   };
-  place("cloth.mesh", q.cloth.mesh);
-  for (auto& [name, o] : q.obstacles) place("obstacle." + name + ".mesh", o.mesh);
+  place("meshes", "cloth.mesh", q.cloth.mesh);
+  for (auto& [name, o] : q.obstacles) place("meshes", "obstacle." + name + ".mesh", o.mesh);
+  place("maps", "cloth.humidity_map", q.cloth.humidity_map);
+  for (auto& [name, h] : q.handles) place("lists", "handle." + name + ".vertices", h.vertices.file);
   return q;
+}
+
+// The folders and files with_output_files(p) copies into a run's folder,
+// each folder (ending in '/') before its files: for the manifest.
+std::vector<std::string> output_copies(const Params& p) {
+  const Params q = with_output_files(p);
+  std::vector<std::string> paths;
+  const auto add = [&](const std::string& path) {
+    if (!path.empty() && std::find(paths.begin(), paths.end(), path) == paths.end())
+      paths.push_back(path);
+  };
+  add(q.cloth.mesh);
+  for (const auto& [name, o] : q.obstacles) add(o.mesh);
+  add(q.cloth.humidity_map);
+  for (const auto& [name, h] : q.handles) add(h.vertices.file);
+  std::vector<std::string> out;
+  for (const char* folder : {"meshes/", "maps/", "lists/"}) {
+    bool first = true;
+    for (const std::string& path : paths)
+      if (path.rfind(folder, 0) == 0) {
+        if (first) out.push_back(folder);
+        first = false;
+        out.push_back(path);
+      }
+  }
+  return out;
 }
 
 std::string frame_file(const char* folder, const char* prefix, long long f, const char* extension) {
@@ -171,13 +200,8 @@ std::string frame_file(const char* folder, const char* prefix, long long f, cons
 std::vector<std::string> run_outputs(const Params& p) {
   std::vector<std::string> files = {"metrics.csv", "summary.json", "scene.toml", "obstacles.obj",
                                     "checkpoint.state"};
-  const Params q = with_output_meshes(p);
-  std::vector<std::string> meshes;
-  if (!q.cloth.mesh.empty()) meshes.push_back(q.cloth.mesh);
-  for (const auto& [name, o] : q.obstacles)
-    if (std::find(meshes.begin(), meshes.end(), o.mesh) == meshes.end()) meshes.push_back(o.mesh);
-  if (!meshes.empty()) files.push_back("meshes/");
-  files.insert(files.end(), meshes.begin(), meshes.end());
+  const std::vector<std::string> copies = output_copies(p);
+  files.insert(files.end(), copies.begin(), copies.end());
   const long long last = last_frame_index(p.run.duration, p.run.fps);
   // Moving obstacles: their pose each frame, in each output that has frames.
   const std::vector<std::string> moving = moving_obstacle_files(p);
@@ -217,9 +241,8 @@ std::vector<std::string> run_outputs(const Params& p) {
 void check_resume_outputs(const Params& p, const fs::path& out, long long frames,
                           const fs::path& checkpoint) {
   std::vector<std::string> files = {"scene.toml", "obstacles.obj"};
-  const Params q = with_output_meshes(p);
-  if (!q.cloth.mesh.empty()) files.push_back(q.cloth.mesh);
-  for (const auto& [name, o] : q.obstacles) files.push_back(o.mesh);
+  for (const std::string& copy : output_copies(p))
+    if (copy.back() != '/') files.push_back(copy);
   const ExportFormats formats = parse_export_formats(p.run.exports);
   const std::vector<std::string> moving = moving_obstacle_files(p);
   if (formats.pc2) files.push_back("cloth_rest.obj");
@@ -383,8 +406,8 @@ ResumePoint load_resume_point(const fs::path& dir) {
   Params compared = c.params;
   compared.integrator.threads = folder.integrator.threads;
   compared.run.checkpoint_every = folder.run.checkpoint_every;
-  // scene.toml names the meshes it copied (or, from an older run, the scene's).
-  const std::string mine = to_toml(with_output_meshes(compared)), theirs = to_toml(folder);
+  // scene.toml names the files it copied (or, from an older run, the scene's).
+  const std::string mine = to_toml(with_output_files(compared)), theirs = to_toml(folder);
   if (mine != theirs && to_toml(compared) != theirs) {
     std::istringstream a(mine), b(theirs);
     std::string la, lb;
@@ -394,6 +417,12 @@ ResumePoint load_resume_point(const fs::path& dir) {
                      " (the checkpoint's `" + la + "`, scene.toml's `" + lb + "`)");
   }
   rp.params = std::move(c.params);
+  // A folder whose scene.toml names its own copies runs from them: it resumes
+  // wherever the scene's files have gone (the same bytes, so the same bits).
+  if (mine == theirs) {
+    rp.params = with_output_files(rp.params);
+    rp.params.scene_dir = folder.scene_dir;
+  }
   rp.state = std::move(c.state);
   rp.record = std::move(c.run);
   return rp;
@@ -504,18 +533,20 @@ void open_outputs(const Params& p, const fs::path& out, const Simulation& sim,
   const std::vector<std::string> files = run_outputs(p);
   refuse_links(out, files);
   if (!resume) {
-    // The meshes read first: a run of DIR/scene.toml into DIR reads its own.
-    std::vector<std::pair<std::string, std::string>> meshes;
-    const Params written = with_output_meshes(p, &meshes);
+    // The copies read first: a run of DIR/scene.toml into DIR reads its own.
+    std::vector<std::pair<std::string, std::string>> copies;
+    const Params written = with_output_files(p, &copies);
     remove_outputs(out, earlier_outputs(out));
     write_manifest(out, files);
     if (p.run.meshes)
       if (std::error_code ec; fs::create_directories(out / "frames", ec), ec)
         throw_output_error(out / "frames", "cannot make the folder", ec.value());
-    if (!meshes.empty())
-      if (std::error_code ec; fs::create_directories(out / "meshes", ec), ec)
-        throw_output_error(out / "meshes", "cannot make the folder", ec.value());
-    for (const auto& [path, text] : meshes) write_file_atomic(out / path, text);
+    for (const auto& [path, bytes] : copies) {
+      const fs::path folder = (out / path).parent_path();
+      if (std::error_code ec; fs::create_directories(folder, ec), ec)
+        throw_output_error(folder, "cannot make the folder", ec.value());
+      write_file_atomic(out / path, bytes);
+    }
     write_file_atomic(out / "scene.toml", "# resolved by wetcloth " WETCLOTH_VERSION
                                           "; `wetcloth run` this file to reproduce the run\n" +
                                               to_toml(written));

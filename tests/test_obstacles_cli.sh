@@ -102,6 +102,9 @@ printf 'translate = [-0.1, -0.1, 0]\n[run]\nduration = 0.05\n' >> "$T/own/own.to
   ok "two meshes of one name: meshes/plate.obj and meshes/2-plate.obj; the same bits moved" ||
   bad "own scene's copied meshes: $(cat "$T/err"; ls "$T/own-out/meshes" 2>&1)"
 
+# towel-dry (the humidity field's drying) is towel-rail's towel and rail.
+"$W" check towel-dry >/dev/null 2>"$T/err" && ok "check towel-dry" || bad "check towel-dry: $(cat "$T/err")"
+
 # Obstacles' keys in sweeps, as handles': obstacle.NAME.KEY.
 "$W" sweep towel-rail --vary "obstacle.rail.translate=[0,0,0.6],[0,0,0.55]" --grid 9 --list >"$T/l" 2>"$T/err" &&
   [ "$(cut -f2 "$T/l" | tr '\n' ' ')" = "translate=0x0x0.6 translate=0x0x0.55 " ] &&

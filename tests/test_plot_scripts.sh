@@ -293,6 +293,27 @@ if "$PY" "$REPORT" "$T/nowhere" "$T/val2/report.md" >/dev/null 2>&1 \
    && grep -q "^| the cantilever gives B back .* | not run (.*) | not run |$" "$T/val2/report.md"
 then ok "report on no runs: every claim and criterion not run"; else bad "report on no runs"; fi
 
+# plot_metrics.py: one run's columns against time, a panel a --panel; bad
+# input exits 2 and writes nothing.
+PM="$SRC/tools/plot_metrics.py"
+mkdir -p "$T/pm"
+printf 'time_s,humidity_mean,humidity_min,water_kg\n0,1,1,0.0216\n1,0.6,0.5,0.013\n2,0.3,0.2,0.0065\n' >"$T/pm/metrics.csv"
+"$PY" "$PM" "$T/pm/metrics.csv" "$T/pm/m.png" --panel humidity_mean,humidity_min:ω \
+  --panel 'water_kg*1000:water (g)' --title test >"$T/out" 2>&1 && [ -s "$T/pm/m.png" ] &&
+  [ "$(head -c 4 "$T/pm/m.png" | tail -c 3)" = PNG ] && ok "plot_metrics.py: two panels" ||
+  bad "plot_metrics.py: $(cat "$T/out")"
+pm_bad() {
+  local name="$1" text="$2"; shift 2
+  "$PY" "$PM" "$@" "$T/pm/bad.png" --panel humidity_mean >"$T/out" 2>&1; local code=$?
+  [ $code -eq 2 ] && grep -qF "plot_metrics.py: error: " "$T/out" && grep -qF -- "$text" "$T/out" &&
+    [ ! -e "$T/pm/bad.png" ] && [ -z "$(ls "$T/pm" | grep tmp)" ] && ok "plot_metrics.py: $name: exit 2" ||
+    bad "plot_metrics.py: $name: exit $code: $(cat "$T/out")"
+}
+pm_bad "a missing file" "No such file" "$T/pm/none.csv"
+printf 'a,b\n1,2\n' >"$T/pm/other.csv"; pm_bad "not metrics" "no time_s column" "$T/pm/other.csv"
+printf 'time_s,humidity_mean\n0,x\n' >"$T/pm/nan.csv"; pm_bad "not a number" "line 2: humidity_mean" "$T/pm/nan.csv"
+printf 'time_s,water_kg\n0,1\n' >"$T/pm/col.csv"; pm_bad "an unknown column" "no column 'humidity_mean'" "$T/pm/col.csv"
+
 # The sweep command's printout, with a program to run (WETCLOTH=build/wetcloth).
 W="${WETCLOTH:-}"
 if [ -z "$W" ]; then

@@ -119,6 +119,7 @@ struct ObstacleParams {
   Vec3d scale{1, 1, 1};      // per axis (the same three: uniform)
   double thickness = 0;      // open meshes: a shell this thick about the surface, m
   bool contact = false;      // the contact surface (with contact.surface = "obstacle")
+  double water_film = 0;     // depth of water on it under the cloth, m (when the contact surface)
   Motion motion;
   Vec3d pivot{0, 0, 0};  // the point the motion turns about, in the file's coordinates
 };

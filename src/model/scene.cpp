@@ -319,8 +319,9 @@ std::vector<ParamDef> cloth_defs() {
             "face of two open to the air)",
             P(material.drying_contact_factor)),
       field("material.uptake_rate", "1/s", 0, 1e6,
-            "uptake from a wet surface (table.water_film, ball.water_film): a particle in contact "
-            "takes up water as dω/dt = k_u (1 − ω) while the film under it lasts",
+            "uptake from a wet surface (table.water_film, ball.water_film, "
+            "obstacle.*.water_film): a particle in contact takes up water as dω/dt = k_u (1 − ω) "
+            "while the film under it lasts",
             P(material.uptake_rate)),
       optional_field("springs.structural_k", "N/m", 0, 1e7,
                      "every structural spring's constant at any grid, set directly (the blog's "
@@ -547,6 +548,10 @@ std::vector<ParamDef> named_defs() {
                      "this obstacle is the contact surface (with contact.surface = "
                      "\"obstacle\"): adhesion, friction's wet load and trapped air act on it",
                      O(contact)),
+      obstacle_field("water_film", "m", 0, 1,
+                     "water on the obstacle as a depth, as table.water_film (when it is the "
+                     "contact surface)",
+                     O(water_film)),
       motion_field(
           "obstacle.*.motion",
           "keyframes [[t, [x, y, z], [rx, ry, rz]], ...]: at time t (s) the placed mesh "
@@ -1214,6 +1219,12 @@ void check_surfaces(const Params& p, const Complain& bad) {
     if (o.mesh.empty())
       bad("obstacle." + name + ".mesh", "is missing: name the obstacle's OBJ file");
     if (o.contact) contact_obstacles += (contact_obstacles.empty() ? "" : ", ") + name;
+    // Uptake follows the contact state, which only the contact surface has.
+    if (o.water_film > 0 && !o.contact)
+      bad("obstacle." + name + ".water_film",
+          "is set but the obstacle is not the contact surface: water is taken up only from "
+          "it (set obstacle." +
+              name + ".contact = true and contact.surface = \"obstacle\")");
   }
   if (contact_obstacles.find(',') != std::string::npos)
     bad("contact.surface", "one obstacle at most can be the contact surface, and " +

@@ -295,6 +295,10 @@ double film_depth(const Model& m) {
       return m.params.table.water_film;
     case SurfaceKind::Ball:
       return m.params.ball.water_film;
+    case SurfaceKind::Mesh:  // the one obstacle with contact = true
+      for (const auto& [name, o] : m.params.obstacles)
+        if (o.contact) return o.water_film;
+      return 0;
     default:
       return 0;
   }

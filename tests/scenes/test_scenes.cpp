@@ -296,3 +296,30 @@ TEST(Scenes, WetPatchClingsWhileTheDryPartLiftsAndSpreads) {
   EXPECT_GT(outside, 0.02);
   EXPECT_NEAR(sim.metrics().water_kg, water, 1e-12 * water);
 }
+
+// towel-dry (issue 39's humidity field): a soaked towel hung unevenly over
+// the rail holds by the water's adhesion while it dries (a time-lapse), and
+// slides off onto the floor once its wettest part, on the rail, is at about
+// ω = 0.2; the water it lost is the water evaporated.
+TEST(Scenes, TowelDryHoldsWhileWetThenSlidesOff) {
+  const Params p = load_scene("towel-dry");
+  Simulation sim(p);
+  const double water = sim.metrics().water_kg;
+  ASSERT_TRUE(sim.advance_to(20)) << sim.blow_up_reason();
+  Metrics r = sim.metrics();
+  EXPECT_GT(r.contact_area_m2, 0.01);  // on the rail
+  EXPECT_GT(r.max_height_m, 0.6);
+  EXPECT_GT(r.humidity_max, 0.3);  // where it lies on the rail, drying at half the rate
+  EXPECT_LT(r.humidity_mean, 0.2);
+  ASSERT_TRUE(sim.advance_to(p.run.duration)) << sim.blow_up_reason();
+  r = sim.metrics();
+  EXPECT_EQ(r.contact_area_m2, 0.0);  // off the rail, on the floor
+  EXPECT_LT(r.max_height_m, 0.05);
+  EXPECT_LT(r.humidity_max, 0.02);
+  EXPECT_NEAR(r.water_kg + r.evaporated_kg, water, 1e-12 * water);
+  // Dry from the start, it slides off at once.
+  Simulation dry(load_scene("towel-dry", {"cloth.humidity=0"}));
+  ASSERT_TRUE(dry.advance_to(3)) << dry.blow_up_reason();
+  EXPECT_EQ(dry.metrics().contact_area_m2, 0.0);
+  EXPECT_LT(dry.metrics().max_height_m, 0.1);
+}

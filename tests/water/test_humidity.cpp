@@ -1,18 +1,23 @@
 // The humidity field (src/water/humidity.cpp, docs/model.md "Humidity
-// field"): wicking (water conserved, a Gaussian's variance, a uniform field
-// kept, stable at any step, the cap), drying, uptake from a film, the local ω
-// in mass and adhesion, the start's maps and regions, checkpoints and threads.
+// field"): wicking (water conserved, a Gaussian's variance, a strip's erfc, a
+// uniform field kept, stable at any step, the cap), drying, uptake from a film
+// (the table's and an obstacle's), the local ω in mass and adhesion, the
+// start's maps and regions (and their copies in a run's folder), checkpoints
+// and threads.
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <csignal>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <numeric>
+#include <regex>
 
 #include "common.hpp"
 #include "detail.hpp"
 #include "wetcloth/checkpoint.hpp"
+#include "wetcloth/run.hpp"
 
 namespace wetcloth {
 namespace {
@@ -76,6 +81,55 @@ TEST(Wicking, AGaussianSpotsVarianceGrowsAsTwoDt) {
   const int steps = 200;  // 2 s
   for (int s = 0; s < steps; ++s) detail::wick(m, c, h, D * dt);
   EXPECT_NEAR(variance() - v0, 2 * D * steps * dt, 0.02 * 2 * D * steps * dt);
+}
+
+// A strip wet at one end: its left half soaked (ω1 = 1), its right half damp
+// (ω0 = 0.2), the step at x = 0 on the face between two particles (an even
+// count). Wicked alone (no forces, no contact) as the step runs it, once per
+// kWickingInterval, for t = 10 s at the default D, the field matches the
+// line's solution ω0 + (ω1 − ω0)/2 erfc(x / (2√(D t))) away from the ends
+// (|x| < a quarter of the strip: the ends' images add erfc(0.1 / 0.014) ≈ 1e−24).
+// Returns the largest error there, as a fraction of ω1 − ω0.
+double strip_erfc_error(double spacing, double t) {
+  const double length = 0.402, D = Params{}.material.wicking_diffusivity;
+  const int nu = 2 * static_cast<int>(std::lround((length / spacing + 1) / 2));  // even
+  Params p = grid(nu, length);
+  p.cloth.resolution = {nu, 3};
+  p.cloth.size = {length, 2 * length / (nu - 1)};
+  const Model m = build_model(p);
+  const double w0 = 0.2, w1 = 1.0;
+  std::vector<double> c(m.n);
+  for (int k = 0; k < m.n; ++k) c[k] = m.rest_position[k].x() < 0 ? w1 : w0;
+  HumidityScratch h;
+  const double interval = detail::kWickingInterval;
+  const long long steps = std::llround(t / interval);
+  for (long long s = 0; s < steps; ++s) detail::wick(m, c, h, D * interval);
+  double worst = 0;
+  for (int k = 0; k < m.n; ++k) {
+    const double x = m.rest_position[k].x();
+    if (std::abs(x) > length / 4) continue;
+    const double exact = w0 + (w1 - w0) / 2 * std::erfc(x / (2 * std::sqrt(D * t)));
+    worst = std::max(worst, std::abs(c[k] - exact) / (w1 - w0));
+  }
+  return worst;
+}
+
+// The erfc check at the default cloth's 6 mm (pull-straight's 51 over 30 cm):
+// within 2 %, and second order in the spacing (the error a quarter at half
+// the spacing; the 1 ms interval's own error is a few per cent of it).
+TEST(Wicking, AStripWetAtOneEndMatchesTheErfcSolution) {
+  const double t = 10;  // √(D t) = 7 mm, about one spacing: the hardest the grid sees
+  const double e6 = strip_erfc_error(0.006, t), e3 = strip_erfc_error(0.003, t),
+               e15 = strip_erfc_error(0.0015, t);
+  std::printf(
+      "erfc strip, t = %g s: largest error %.3g %% at 6 mm, %.3g %% at 3 mm, %.3g %% at "
+      "1.5 mm\n",
+      t, 100 * e6, 100 * e3, 100 * e15);
+  EXPECT_LT(e6, 0.02);
+  EXPECT_LT(e3, e6 / 3);
+  EXPECT_LT(e15, e3 / 3);
+  // Later, the front wider against the grid, the error smaller.
+  EXPECT_LT(strip_erfc_error(0.006, 30), e6 / 2);
 }
 
 TEST(Wicking, KeepsAUniformFieldExactly) {
@@ -187,6 +241,42 @@ TEST(Uptake, TheFilmLosesWhatTheClothGains) {
   EXPECT_NEAR(a.film_water_kg - b.film_water_kg, b.water_kg - a.water_kg, 1e-12 * a.film_water_kg);
   EXPECT_NEAR(a.film_water_kg + a.water_kg, b.film_water_kg + b.water_kg, 1e-15);
   for (const double w : sim.state().humidity) EXPECT_LE(w, 1.0);
+}
+
+// The same on a mesh obstacle (a plate, obstacle.plate.water_film): the
+// film's water and the cloth's together are kept to rounding, in the metrics.
+TEST(Uptake, AMeshObstaclesFilmLosesWhatTheClothGains) {
+  const test::TempDir dir("obstacle_film");
+  dir.write("plate.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n");
+  const std::string scene =
+      "[cloth]\nresolution = [11, 11]\nsize = [0.1, 0.1]\ncenter = [0, 0, 0.006]\n"
+      "humidity = 0.1\n[table]\nenabled = false\n"
+      "[obstacle.plate]\nmesh = \"plate.obj\"\nthickness = 0.004\nscale = [0.4, 0.4, 1]\n"
+      "translate = [-0.2, -0.2, 0]\ncontact = true\nwater_film = 2e-5\n"
+      "[contact]\nsurface = \"obstacle\"\n[material]\nuptake_rate = 5\n";
+  Simulation sim(load_scene(dir.write("scene.toml", scene).string()));
+  const Metrics a = sim.metrics();
+  EXPECT_NEAR(a.film_water_kg, 1000 * 2e-5 * 0.01, 1e-15);  // ρ_w h A over the cloth
+  ASSERT_TRUE(sim.advance_to(0.3)) << sim.blow_up_reason();
+  const Metrics b = sim.metrics();
+  EXPECT_GT(b.contact_area_m2, 0.5 * 0.01);
+  EXPECT_GT(b.water_kg - a.water_kg, 0.2 * a.film_water_kg);  // most of it taken up
+  EXPECT_NEAR(a.film_water_kg - b.film_water_kg, b.water_kg - a.water_kg, 1e-12 * a.film_water_kg);
+  EXPECT_NEAR(a.film_water_kg + a.water_kg, b.film_water_kg + b.water_kg,
+              1e-14 * (a.film_water_kg + a.water_kg));
+  for (const double w : sim.state().humidity) EXPECT_LE(w, 1.0);
+
+  // A film on an obstacle that is not the contact surface is refused, by key.
+  const std::string off = std::regex_replace(scene, std::regex("contact = true\n"), "");
+  try {
+    load_scene(dir.write("off.toml", off).string());
+    ADD_FAILURE() << "no error";
+  } catch (const SceneError& e) {
+    EXPECT_NE(std::string(e.what()).find("off.toml:13: obstacle.plate.water_film: is set but the "
+                                         "obstacle is not the contact surface"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
 // Half wet, half dry: each particle's mass follows its own ω, and a dry
@@ -327,6 +417,53 @@ TEST(WetMaps, AnImageSetsOmegaByUV) {
   EXPECT_DOUBLE_EQ(m.initial_humidity[m.index(2, 2)], 1.0);
   EXPECT_DOUBLE_EQ(m.initial_humidity[m.index(1, 1)], (0 + 1 + 0.2 + 0.4) / 4);
   fs::remove_all(dir);
+}
+
+// A run's folder holds its own copy of the wet map (maps/) and of a handle's
+// vertex list (lists/), listed in its manifest, and its scene.toml names them:
+// with the scene's folder gone, the folder resumes, and reruns, to the bytes
+// of a run never stopped.
+TEST(WetMaps, ARunFolderCopiesTheMapAndResumesWithoutTheScene) {
+  const test::TempDir dir("wetmap_run");
+  const fs::path src = dir.path / "scene";
+  fs::create_directories(src / "img");
+  std::string image = "P5\n3 3\n255\n";
+  for (const int v : {0, 40, 255, 90, 255, 255, 0, 128, 200}) image += static_cast<char>(v);
+  std::ofstream(src / "img" / "wet.pgm", std::ios::binary) << image;
+  std::ofstream(src / "pin.txt") << "0 8\n";
+  std::ofstream(src / "scene.toml") << "name = \"map\"\n[cloth]\nresolution = [9, 9]\n"
+                                       "humidity_map = \"img/wet.pgm\"\n"
+                                       "[handle.pin]\ntype = \"pin\"\nvertices = \"pin.txt\"\n"
+                                       "[integrator]\ndt = 2e-4\nthreads = 1\n"
+                                       "[run]\nduration = 0.06\nfps = 100\n";
+  const Params p = load_scene((src / "scene.toml").string());
+  ASSERT_EQ(run_scene(p, dir.path / "ref").code, kOk);
+  long long polls = 0;
+  RunHooks stop_early;
+  stop_early.stop = [&] { return ++polls >= 150 ? SIGINT : 0; };  // at 0.03 s
+  const fs::path out = dir.path / "stopped";
+  ASSERT_EQ(run_scene(p, out, stop_early).code, 128 + SIGINT);
+  ASSERT_TRUE(fs::exists(out / "checkpoint.state"));
+
+  const auto text = [](const fs::path& f) {
+    std::ifstream in(f, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(in), {});
+  };
+  EXPECT_EQ(text(out / "maps" / "wet.pgm"), image);
+  EXPECT_EQ(text(out / "lists" / "pin.txt"), "0 8\n");
+  const std::string scene = text(out / "scene.toml"), manifest = text(out / kManifest);
+  EXPECT_NE(scene.find("humidity_map = \"maps/wet.pgm\"\n"), std::string::npos) << scene;
+  EXPECT_NE(scene.find("vertices = \"lists/pin.txt\"\n"), std::string::npos) << scene;
+  for (const char* f : {"maps/\n", "maps/wet.pgm\n", "lists/\n", "lists/pin.txt\n"})
+    EXPECT_NE(manifest.find(f), std::string::npos) << f << " not in\n" << manifest;
+
+  fs::rename(src, dir.path / "gone");  // the scene's files are no longer where it named them
+  const ResumePoint from = load_resume_point(out);
+  ASSERT_EQ(run_scene(from.params, out, {}, &from).code, kOk);
+  EXPECT_EQ(text(out / "metrics.csv"), text(dir.path / "ref" / "metrics.csv"));
+  const Params again = load_scene((out / "scene.toml").string());
+  ASSERT_EQ(run_scene(again, dir.path / "again").code, kOk);
+  EXPECT_EQ(text(dir.path / "again" / "metrics.csv"), text(dir.path / "ref" / "metrics.csv"));
 }
 
 // Errors name the file, the line and the key.

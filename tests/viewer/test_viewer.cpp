@@ -187,7 +187,7 @@ TEST(FabricLook, WaterDarkensAndGlossesMoreWhereTheClothTouches) {
   EXPECT_EQ(fabric_look(0, 1).gloss, 0.0f);
   for (float w : {0.0f, 0.3f, 0.7f, 1.0f}) {
     EXPECT_LT(luma(fabric_look(w, 1).color), luma(fabric_look(w, 0).color)) << w;
-    if (w > 0) EXPECT_GT(fabric_look(w, 1).gloss, fabric_look(w, 0).gloss - 1e-6f) << w;
+    EXPECT_GE(fabric_look(w, 1).gloss, fabric_look(w, 0).gloss) << w;
   }
   EXPECT_LT(luma(fabric_look(1, 0).color), luma(fabric_look(0.3f, 0).color));
   EXPECT_GT(fabric_look(0.5f, 1).gloss, fabric_look(0.5f, 0).gloss);

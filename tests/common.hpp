@@ -7,6 +7,8 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <regex>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -66,6 +68,23 @@ inline bool same_bits(const Vec3Array& a, const Vec3Array& b) {
       if (std::memcmp(&x, &y, sizeof x) != 0) return false;
     }
   return true;
+}
+
+// A file's whole contents.
+inline std::string slurp(const std::filesystem::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream o;
+  o << in.rdbuf();
+  return o.str();
+}
+
+// Every number in a text, in order (a cache read back).
+inline std::vector<double> numbers(const std::string& text) {
+  std::vector<double> v;
+  static const std::regex number(R"([-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?)");
+  for (std::sregex_iterator it(text.begin(), text.end(), number), end; it != end; ++it)
+    v.push_back(std::stod(it->str()));
+  return v;
 }
 
 // A folder of its own for a test's files (with meshes/ in it), removed at the end.

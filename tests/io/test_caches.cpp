@@ -20,20 +20,8 @@ namespace {
 
 namespace fs = std::filesystem;
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream o;
-  o << in.rdbuf();
-  return o.str();
-}
-
-std::vector<double> numbers(const std::string& text) {
-  std::vector<double> v;
-  static const std::regex number(R"([-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?)");
-  for (std::sregex_iterator it(text.begin(), text.end(), number), end; it != end; ++it)
-    v.push_back(std::stod(it->str()));
-  return v;
-}
+using test::numbers;
+using test::slurp;
 
 // A damp cloth dropped on the table, 9 x 9, with frames at 0, 0.05, ... 0.2 s.
 struct CachedRun {

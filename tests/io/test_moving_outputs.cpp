@@ -24,20 +24,8 @@ namespace {
 namespace fs = std::filesystem;
 using test::TempDir;
 
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream o;
-  o << in.rdbuf();
-  return o.str();
-}
-
-std::vector<double> numbers(const std::string& text) {
-  std::vector<double> v;
-  static const std::regex number(R"([-+]?(\d+\.?\d*|\.\d+)([eE][-+]?\d+)?)");
-  for (std::sregex_iterator it(text.begin(), text.end(), number), end; it != end; ++it)
-    v.push_back(std::stod(it->str()));
-  return v;
-}
+using test::numbers;
+using test::slurp;
 
 // A cloth dropped on the table, 9 x 9, beside a ball that rolls along x (it
 // turns about y) and a plate that slides and turns; frames at 0, 0.05, ... 0.2 s.

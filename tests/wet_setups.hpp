@@ -1,6 +1,7 @@
 // Wet-cloth test set-ups shared by the air, adhesion, contact and friction tests.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <vector>
@@ -63,6 +64,47 @@ inline GrowingTent grow_tent_steadily(Simulation& sim, double steps_per_tau) {
     detail::update_air(m, s, w, t.dt);
   }
   return t;
+}
+
+// The peel rig's force balance (docs/model.md sections 2 and 9): a move
+// handle records everything the rest of the cloth does to its patch, so on a
+// slow peel it balances the load of what it lifts: the lifted cloth's weight,
+// the suction on it (deficit × lifted area, along the table's normal as eq. 3
+// takes it), and the pull of the cloth still in contact across the peel front
+// (front_pull_n). Frame by frame once the peel is under way: |recorded / load
+// - 1| sorted, and the largest share of the recorded force that the strain
+// limiter's reaction is.
+struct PeelBalance {
+  std::vector<double> off;
+  double limiter_share = 0;
+  double median() const { return off[off.size() / 2]; }
+  double p90() const { return off[off.size() * 9 / 10]; }
+};
+inline PeelBalance peel_balance(const Params& p) {
+  Simulation sim(p);
+  const Model& m = sim.model();
+  const Handle& rig = m.handles[m.measured_handle];
+  const double areal_weight =
+      p.cloth.areal_density * (1 + p.cloth.water_ratio * p.cloth.humidity) * -p.forces.gravity[2];
+  double patch = 0;
+  for (const int k : rig.particles) patch += m.area[k];
+  PeelBalance b;
+  const long frames = std::lround(p.run.duration * p.run.fps);
+  for (long frame = 1; frame <= frames; ++frame) {
+    if (!sim.advance_to(frame / p.run.fps)) return {};
+    const Metrics r = sim.metrics();
+    if (r.lifted_area_m2 <= patch * (1 + 1e-9)) continue;  // the peel is not under way yet
+    const double suction = p.air.p_atm - r.inner_pressure_pa;
+    const double load = (areal_weight + suction) * r.lifted_area_m2 + r.front_pull_n;
+    b.off.push_back(std::abs(r.handle_force_n / load - 1));
+    const std::vector<Vec3>& reaction = detail::workspace(sim).strain_reaction;
+    double limiter = 0;
+    if (!reaction.empty())  // the symplectic step's limiter alone records one
+      for (const int k : rig.particles) limiter -= reaction[k].z();
+    b.limiter_share = std::max(b.limiter_share, limiter / r.handle_force_n);
+  }
+  std::sort(b.off.begin(), b.off.end());
+  return b;
 }
 
 }  // namespace wetcloth::test

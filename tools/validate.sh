@@ -11,7 +11,7 @@
 #            ω = 0.7 moved by k·1e-7, implicit Euler at 1/240 s against the
 #            explicit step, which the report compares; grid-<scene>-<G>: the
 #            grid convergence of pull-straight, pull-oblique and drape-ball at
-#            ω = 0.7 on G = 31 and 101 particles (51 is their sweep above), and
+#            ω = 0.7 on G = 31, 101 and 201 particles (51 is their sweep above), and
 #            of the cantilever's bending length on 26, 51 and 101; claims101-<scene>:
 #            the paper's sweeps again at 101 x 101), or the run
 #            free-cloth (a law the model keeps; the other, the peel's force
@@ -25,7 +25,7 @@ set -u
 PAPER="pull-straight pull-oblique pull-corner drag-corner drape-ball peel-rig"
 AGREEMENT="pull-straight pull-oblique pull-corner drape-ball"
 GRIDDED="pull-straight pull-oblique drape-ball"
-GRIDS="31 101"
+GRIDS="31 101 201"
 CANTILEVER_GRIDS="26 51 101"
 NAMES="pull-straight pull-oblique pull-corner drag-corner drape-ball peel-rig air-models free-cloth $(for s in $AGREEMENT; do printf 'implicit-%s explicit-%s ' "$s" "$s"; done)"
 NAMES="$NAMES $(for s in $GRIDDED; do for g in $GRIDS; do printf 'grid-%s-%s ' "$s" "$g"; done; done)"

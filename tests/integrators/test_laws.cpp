@@ -2,8 +2,8 @@
 // at its accurate Δt, implicit Euler and XPBD at a frame rate's 1/240 s. Each
 // holds within the same tolerance on all three; the integrators' own tests
 // (test_implicit_euler.cpp, test_xpbd.cpp) check what only one of them has.
-// The peel rig's force balance holds for the symplectic step alone so far
-// (Handles.PeelRigForceBalancesTheLiftedLoad says what the others miss).
+// The peel rig's force balance holds for each at the setting where it
+// converges (PeelRigBalancesTheLiftedLoadWhereTheStepConverges).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -164,6 +164,26 @@ TEST_P(Laws, SealedPocketKeepsPressureTimesVolume) {
   }
   EXPECT_GT(sim.state().air_volume, 0);
   EXPECT_LT(sim.state().inner_pressure, p.air.p_atm - 1000);  // sealed: no breakthrough
+}
+
+// The peel rig's force balance (test::peel_balance) at 21 x 21 over the 4 s
+// peel: within 3 % at the median frame and 5 % at the 90th percentile. It
+// sees each step's truncation error as well as the law. Measured at the
+// median frame (2026-11-27): the symplectic step 0.7 % at 5e-5 s; implicit
+// Euler at 1/240 s 32, 8.5, 6.1 and 1.3 % at max_step_strain 0.025 (the
+// scenes'), 0.005, 0.0025 and 0.001; XPBD 69, 20 and 2.6 % in 10 (its default
+// here), 40 and 160 substeps. At the coarse settings the recorded force
+// falls short of the load (the front's springs measure more pull than
+// reaches the rig: with the air off as well); refined, it comes to it. So each
+// is held to the law where its step has converged.
+TEST_P(Laws, PeelRigBalancesTheLiftedLoadWhereTheStepConverges) {
+  Params p = with_integrator(load_scene("peel-rig", {"cloth.resolution=[21,21]"}));
+  if (p.integrator.type == IntegratorType::ImplicitEuler) p.integrator.max_step_strain = 0.001;
+  if (p.integrator.type == IntegratorType::Xpbd) p.integrator.substeps = 160;
+  const test::PeelBalance b = test::peel_balance(p);
+  ASSERT_GT(b.off.size(), std::size_t(p.run.duration * p.run.fps / 2)) << "blew up or never peeled";
+  EXPECT_LT(b.median(), 0.03);
+  EXPECT_LT(b.p90(), 0.05);
 }
 
 const auto kName = [](const auto& info) { return std::string(info.param.name); };

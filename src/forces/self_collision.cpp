@@ -11,22 +11,44 @@ namespace wetcloth::detail {
 
 namespace {
 
-// Squared distance of particle i from its anchor, by columns (pointers taken
-// once, so that a loop over i vectorises).
+// Squared distance of particle i from its anchor moved by the cloth's common
+// motion c (by columns, pointers taken once, so that a loop over i vectorises).
 struct AnchorGap {
   const double *x, *y, *z, *ax, *ay, *az;
-  AnchorGap(const Vec3Array& p, const Vec3Array& anchor)
+  double cx, cy, cz;
+  AnchorGap(const Vec3Array& p, const Vec3Array& anchor, const Vec3& c)
       : x(p.column(0)),
         y(p.column(1)),
         z(p.column(2)),
         ax(anchor.column(0)),
         ay(anchor.column(1)),
-        az(anchor.column(2)) {}
+        az(anchor.column(2)),
+        cx(c.x()),
+        cy(c.y()),
+        cz(c.z()) {}
   double operator()(int i) const {
-    const double dx = x[i] - ax[i], dy = y[i] - ay[i], dz = z[i] - az[i];
+    const double dx = x[i] - ax[i] - cx, dy = y[i] - ay[i] - cy, dz = z[i] - az[i] - cz;
     return dx * dx + dy * dy + dz * dz;
   }
 };
+
+// The cloth's common motion since its anchors: the mean of x - anchor, row
+// by row in a fixed order (the same on any number of threads).
+Vec3 common_motion(const Model& m, const Vec3Array& p, const Vec3Array& anchor) {
+  double sum[3] = {0, 0, 0};
+  for (int k = 0; k < 3; ++k) {
+    const double* __restrict x = p.column(k), * __restrict a = anchor.column(k);
+    double total = 0;
+    for (int j = 0; j < m.nv; ++j) {
+      double row = 0;
+#pragma omp simd reduction(+ : row)
+      for (int i = j * m.nu; i < (j + 1) * m.nu; ++i) row += x[i] - a[i];
+      total += row;
+    }
+    sum[k] = total / m.n;
+  }
+  return {sum[0], sum[1], sum[2]};
+}
 
 // The largest of them: a maximum over columns, which vectorises (and is the
 // same in any order).
@@ -74,6 +96,7 @@ void search_whole_cloth(const Model& m, const State& s, Workspace& w, double rad
   auto& anchor = w.candidates_anchor;
   w.candidates_radius = radius;
   anchor = s.x;
+  w.candidates_motion = Vec3::Zero();
   build_hash(anchor, 2 * radius, w, m.threads);
   clear_stale(w);
   if (m.threads <= 1) {  // straight into the list: no second copy of the pairs
@@ -151,7 +174,7 @@ void find_mover_pairs(const Model& m, Workspace& w, double radius, Take&& take) 
 // The movers' pairs, dropped and searched again from their new anchors.
 // Their flags are set here and cleared at the end: no pass over the cloth.
 void search_movers_again(const Model& m, const State& s, Workspace& w, double radius,
-                         const NearInGrid& near_in_grid) {
+                         const NearInGrid& near_in_grid, const Vec3& common) {
   auto& anchor = w.candidates_anchor;
   const auto& movers = w.candidate_movers;
   auto& moved = w.candidate_moved;
@@ -159,7 +182,7 @@ void search_movers_again(const Model& m, const State& s, Workspace& w, double ra
   moved.resize(m.n, 0);
   for (int i : movers) {
     moved[i] = 1;
-    anchor[i] = s.x[i];
+    anchor[i] = s.x[i] - common;
   }
   // The rest stays sorted; the new pairs are sorted alone and merged in:
   // a flat cloth at 401 x 401 lists a million pairs, too many to sort again.
@@ -206,8 +229,15 @@ void refresh_collision_candidates(const Model& m, const State& s, Workspace& w) 
   auto& movers = w.candidate_movers;
   movers.clear();
   bool search_all = w.candidates_radius != radius || anchor.size() != s.x.size();
+  // A pair's distance does not change when both particles move by the same
+  // vector: each is measured from its anchor moved by the cloth's common
+  // motion c (x_i = a_i + c + g_i with every |g_i| <= margin / 2 keeps a pair
+  // off the list at least d_t apart). A falling or sliding cloth then keeps
+  // its list; the pairs, and so the results, are the same bits either way.
+  const Vec3 common = search_all ? Vec3::Zero() : common_motion(m, s.x, anchor);
+  w.candidates_motion = common;
   const double far2 = 0.25 * margin * margin;
-  const AnchorGap gap(s.x, anchor);
+  const AnchorGap gap(s.x, anchor, common);
   if (!search_all && farthest(m, gap) > far2) {
     for (int i = 0; i < m.n; ++i)
       if (gap(i) > far2) movers.push_back(i);
@@ -217,7 +247,7 @@ void refresh_collision_candidates(const Model& m, const State& s, Workspace& w) 
   if (search_all)
     search_whole_cloth(m, s, w, radius, near_in_grid);
   else if (!movers.empty())
-    search_movers_again(m, s, w, radius, near_in_grid);
+    search_movers_again(m, s, w, radius, near_in_grid, common);
 }
 
 void add_self_collision(const Model& m, const State& s, Workspace& w, bool with_damping) {

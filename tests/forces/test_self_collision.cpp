@@ -15,7 +15,8 @@ using namespace wetcloth::test;
 
 // The candidate list is searched again only around particles that moved:
 // at every step it must hold exactly the pairs whose anchors are within its
-// radius, and every particle must be within margin/2 of its anchor.
+// radius, and every particle must be within margin/2 of its anchor moved by
+// the cloth's common motion.
 TEST(SelfCollision, CandidatesSearchedAroundMoversAreTheWholeSearch) {
   Params p = load_scene("drop-table", {"cloth.center=[0,0,0.02]", "cloth.resolution=[20,20]",
                                        "cloth.size=[0.12,0.12]"});
@@ -41,7 +42,7 @@ TEST(SelfCollision, CandidatesSearchedAroundMoversAreTheWholeSearch) {
     rebuilt += moved && w.hash_stale.empty();
     std::vector<std::array<int, 2>> expected;
     for (int i = 0; i < m.n; ++i) {
-      ASSERT_LE((x[i] - a[i]).norm(), 0.5 * margin) << "particle " << i;
+      ASSERT_LE((x[i] - a[i] - w.candidates_motion).norm(), 0.5 * margin) << "particle " << i;
       for (int j = i + 1; j < m.n; ++j) {
         const double len2 = (a[i] - a[j]).squaredNorm();
         const bool grid =
@@ -87,6 +88,43 @@ TEST(SelfCollision, MoversMeetingEachOtherArePaired) {
   EXPECT_FALSE(w.hash_stale.empty());  // a and b: out of the hash
   EXPECT_TRUE(paired(c, a));
   EXPECT_TRUE(paired(a, b));
+}
+
+// A cloth that moves as a whole keeps its list: 10 cm along, every pair is
+// as far apart as it was, and no particle is searched again. Then two
+// particles far apart on the grid brought within d_t there are paired.
+TEST(SelfCollision, ClothMovedAsAWholeKeepsItsCandidates) {
+  Params p = load_scene("drop-table", {"cloth.resolution=[20,20]", "cloth.size=[0.12,0.12]"});
+  p.self_collision.enabled = true;
+  Simulation sim(p);
+  const Model& m = sim.model();
+  State& s = detail::state(sim);
+  auto& w = detail::workspace(sim);
+  const Vec3 lift(0, 0, 0.5 * p.self_collision.distance);
+  const auto paired = [&](int i, int j) {
+    return std::binary_search(w.candidates.begin(), w.candidates.end(),
+                              std::array<int, 2>{std::min(i, j), std::max(i, j)});
+  };
+  const int a = m.index(3, 3), b = m.index(15, 14), c = m.index(9, 17), d = m.index(2, 10);
+  detail::put(s.x[a], Vec3(s.x[b] + lift));   // a fold: a over b
+  detail::add_self_collision(m, s, w, true);  // the whole search
+  ASSERT_TRUE(paired(a, b));
+  const auto candidates = w.candidates;
+  const Vec3Array anchors = w.candidates_anchor;
+  const Vec3 along(0.06, -0.08, 0.0);
+  for (int i = 0; i < m.n; ++i) detail::add(s.x[i], along);
+  detail::add_self_collision(m, s, w, true);
+  EXPECT_TRUE(w.candidate_movers.empty());
+  EXPECT_EQ(w.candidates, candidates);
+  EXPECT_TRUE(w.candidates_anchor == anchors);
+  EXPECT_LT((w.candidates_motion - along).norm(), 1e-12);
+  EXPECT_EQ(w.collision_pairs.size(), 1u);  // a and b, still within d_t
+  detail::put(s.x[c], Vec3(s.x[d] + lift));
+  detail::add_self_collision(m, s, w, true);
+  EXPECT_EQ(w.candidate_movers, std::vector<int>{c});
+  EXPECT_TRUE(paired(c, d));
+  EXPECT_TRUE(paired(a, b));
+  EXPECT_EQ(w.collision_pairs.size(), 2u);
 }
 
 // A cloth folded onto itself on the table: the top layer rests on the bottom one.

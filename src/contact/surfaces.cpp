@@ -42,8 +42,13 @@ void place_surfaces(const Model& m, Workspace& w, double t) {
   poses.shapes.resize(m.obstacles.size());
   for (std::size_t k = 0; k < m.obstacles.size(); ++k) {
     poses.obstacles[k] = obstacle_pose(m.params, m.obstacles[k]->name, t);
-    if (m.obstacles[k]->cache) {  // a deforming obstacle: its shape at t
-      std::shared_ptr<MeshObstacle>& shape = poses.shapes[k];
+    std::shared_ptr<MeshObstacle>& shape = poses.shapes[k];
+    if (!m.obstacles[k]->cache) {
+      shape.reset();
+    } else {  // a deforming obstacle: its shape at t
+      // Made again for a model built anew (Simulation::set), and for a
+      // workspace copied from another (the two would share it).
+      if (shape && shape->cache != m.obstacles[k]->cache) shape.reset();
       if (!shape || shape.use_count() > 1)
         shape = deformable_copy(shape ? *shape : *m.obstacles[k]);
       reshape(*shape, t);

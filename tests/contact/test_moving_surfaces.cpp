@@ -395,6 +395,19 @@ TEST(MovingSurfaces, GrowingBumpInACacheLiftsTheCloth) {
     EXPECT_GT(top, kBumpHeight * 0.95 + 0.001) << integrator;
     EXPECT_LT(top, kBumpHeight + 0.001 + 0.0015) << integrator;
   }
+  // New parameters (the viewer's, Python's set) take the new cache: at half
+  // its speed the bump is half as high at 0.2 s.
+  Simulation sim(on_growing_bump(dir, {"integrator.type=\"xpbd\"", kXpbd[1]}));
+  Params slower = sim.model().params;
+  slower.obstacles["plate"].cache_fps = 12;
+  sim.set_params(slower);
+  const MeshObstacle& shape = detail::mesh_of(sim.model(), detail::workspace(sim).surfaces, 0);
+  EXPECT_EQ(shape.cache, sim.model().obstacles[0]->cache);
+  ASSERT_TRUE(sim.advance_to(0.2)) << sim.blow_up_reason();
+  double apex = 0;
+  for (const Vec3& x : detail::mesh_of(sim.model(), detail::workspace(sim).surfaces, 0).points)
+    apex = std::max(apex, x.z());
+  EXPECT_NEAR(apex, bump(0, 0, 0.1), 1e-3 * kBumpHeight);
 }
 
 // A deforming obstacle is a function of time too: the same bits on one

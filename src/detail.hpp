@@ -108,6 +108,12 @@ inline const RigidPose* pose_of(const SurfacePoses& poses, int code) {
   return pose && pose->moving ? pose : nullptr;
 }
 
+// Mesh obstacle k's shape now: a deforming one's, or the model's.
+inline const MeshObstacle& mesh_of(const Model& m, const SurfacePoses& poses, int k) {
+  const auto u = static_cast<std::size_t>(k);
+  return u < poses.shapes.size() && poses.shapes[u] ? *poses.shapes[u] : *m.obstacles[u];
+}
+
 // The table and the ball where they are now: the ball's centre moved by its
 // motion (it turns about its centre: its distances do not change with it).
 inline SurfaceHit query_surface(const Params& p, const SurfacePoses& poses, SurfaceKind kind,
@@ -141,16 +147,29 @@ inline SurfaceHit query_code(const Model& m, const SurfacePoses& poses, int code
   const RigidPose* pose = pose_of(poses, code);
   if (!pose) return query_code(m, code, x);
   if (code < kMeshCode) return query_surface(m.params, poses, static_cast<SurfaceKind>(code), x);
-  const MeshObstacle::Hit h = m.obstacles[code - kMeshCode]->query(pose->to_body(x));
+  const MeshObstacle::Hit h = mesh_of(m, poses, code - kMeshCode).query(pose->to_body(x));
   return {h.distance, pose->rotation * h.normal};
 }
 
 // The velocity of the surface a byte names at x (zero where it stands
 // still): friction (eq. 14) and the inelastic contact act on the cloth's
-// velocity relative to it.
+// velocity relative to it. A deforming mesh's adds its vertices' velocity at
+// the point of it nearest x (a search of its tree), turned by its pose.
 inline Vec3 surface_velocity(const SurfacePoses& poses, int code, const Vec3& x) {
   const RigidPose* pose = pose_of(poses, code);
-  return pose ? pose->velocity_at(x) : Vec3::Zero();
+  if (!pose) return Vec3::Zero();
+  Vec3 v = pose->velocity_at(x);
+  const auto k = static_cast<std::size_t>(code - kMeshCode);
+  if (code >= kMeshCode && k < poses.shapes.size() && poses.shapes[k]) {
+    // Asked of particles on or near the surface: a search within 1 cm of it
+    // first (the same answer, but for ties), the whole tree past that.
+    const MeshObstacle& o = *poses.shapes[k];
+    const Vec3 xb = pose->to_body(x);
+    MeshObstacle::Hit h = o.query_within(xb, o.half_thickness + 0.01);
+    if (h.triangle < 0) h = o.query(xb);
+    v += pose->rotation * surface_velocity_at(o, h);
+  }
+  return v;
 }
 
 // contact/surfaces.cpp: projects particles out of every obstacle and removes inward normal

@@ -57,6 +57,10 @@ struct SurfacePoses {
   bool any = false;  // some surface moves
   RigidPose ball;
   std::vector<RigidPose> obstacles;  // as Model::obstacles
+  // A deforming obstacle's shape now (obstacle.NAME.cache; its pose is
+  // `moving`, the identity without a motion), null for a rigid one: its own
+  // copy, made again where a copied workspace shares it (copy on write).
+  std::vector<std::shared_ptr<MeshObstacle>> shapes;
 };
 
 // Scratch arrays, reused every step: nothing is allocated per step.

@@ -160,6 +160,21 @@ Params with_output_files(const Params& p,
   for (auto& [name, o] : q.obstacles) place("meshes", "obstacle." + name + ".mesh", o.mesh);
   place("maps", "cloth.humidity_map", q.cloth.humidity_map);
   for (auto& [name, h] : q.handles) place("lists", "handle." + name + ".vertices", h.vertices.file);
+  // Obstacles' caches to OUT/caches/: a PC2 file, or each file of an OBJ
+  // sequence (its # pattern then names them there).
+  for (auto& [name, o] : q.obstacles) {
+    const std::string key = "obstacle." + name + ".cache";
+    if (o.cache.empty()) continue;
+    if (o.cache.find('#') == std::string::npos) {
+      place("caches", key, o.cache);
+      continue;
+    }
+    for (const std::string& frame : obstacle_cache_files(p, name))
+      if (files)
+        files->emplace_back("caches/" + fs::path(frame).filename().string(),
+                            scene_file_text(p, key, frame));
+    o.cache = "caches/" + fs::path(o.cache).filename().string();
+  }
   return q;
 }
 
@@ -176,8 +191,13 @@ std::vector<std::string> output_copies(const Params& p) {
   for (const auto& [name, o] : q.obstacles) add(o.mesh);
   add(q.cloth.humidity_map);
   for (const auto& [name, h] : q.handles) add(h.vertices.file);
+  for (const auto& [name, o] : p.obstacles) {
+    if (o.cache.empty()) continue;
+    for (const std::string& frame : obstacle_cache_files(p, name))
+      add("caches/" + fs::path(frame).filename().string());
+  }
   std::vector<std::string> out;
-  for (const char* folder : {"meshes/", "maps/", "lists/"}) {
+  for (const char* folder : {"meshes/", "maps/", "lists/", "caches/"}) {
     bool first = true;
     for (const std::string& path : paths)
       if (path.rfind(folder, 0) == 0) {
@@ -231,7 +251,8 @@ std::vector<std::string> run_outputs(const Params& p) {
     for (const char* a : {"points", "normals", "extent", "contact", "pressure", "adhesion",
                           "humidity", "velocities", "deficit"})
       files.push_back(std::string(".cloth.usda.samples/") + a);
-    for (const std::string& name : moving) files.push_back(".cloth.usda.samples/xform_" + name);
+    for (const std::string& name : obstacle_usd_samples(p))
+      files.push_back(".cloth.usda.samples/" + name);
   }
   return files;
 }

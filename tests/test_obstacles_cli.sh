@@ -102,6 +102,76 @@ printf 'translate = [-0.1, -0.1, 0]\n[run]\nduration = 0.05\n' >> "$T/own/own.to
   ok "two meshes of one name: meshes/plate.obj and meshes/2-plate.obj; the same bits moved" ||
   bad "own scene's copied meshes: $(cat "$T/err"; ls "$T/own-out/meshes" 2>&1)"
 
+# A deforming obstacle (obstacle.NAME.cache): a bad cache exits 2 from check
+# and run, naming the file, the key and its line, and run writes nothing; a
+# good one runs, its folder (the cache copied to OUT/caches/) runs moved with
+# the same bits, and a run stopped by SIGINT resumes to the same bytes.
+mkdir -p "$T/deform/meshes"
+python3 - "$T/deform" <<'PY'
+import math, struct, sys
+d, n, half = sys.argv[1], 9, 0.2
+def grid(t):
+    return [(-half + 2 * half * i / (n - 1), -half + 2 * half * j / (n - 1),
+             0.02 * min(t / 0.2, 1) * math.exp(-((2 * half * i / (n - 1) - half) ** 2 +
+                                                 (2 * half * j / (n - 1) - half) ** 2) / 0.01))
+            for j in range(n) for i in range(n)]
+faces = [f for j in range(n - 1) for i in range(n - 1)
+         for a in [j * n + i + 1] for f in [(a, a + 1, a + n + 1), (a, a + n + 1, a + n)]]
+obj = lambda pts: "".join("v %.17g %.17g %.17g\n" % p for p in pts) + "".join("f %d %d %d\n" % f for f in faces)
+open(d + "/meshes/bump.obj", "w").write(obj(grid(0)))
+for k in range(8):
+    open(d + "/meshes/bump_%02d.obj" % (k + 1), "w").write(obj(grid(k / 24)))
+pc2 = b"POINTCACHE2\0" + struct.pack("<iiffi", 1, n * n - 1, 0.0, 1.0, 2) + b"\0" * (24 * (n * n - 1))
+open(d + "/meshes/short.pc2", "wb").write(pc2)
+PY
+deform_scene() {  # deform_scene NAME CACHE_KEYS
+  printf 'name = "%s"\n[cloth]\nresolution = [11, 11]\nsize = [0.2, 0.2]\ncenter = [0, 0, 0.0012]\n' "$1" > "$T/deform/$1.toml"
+  printf '[table]\nenabled = false\n[contact]\nsurface = "obstacle"\n[run]\nduration = 0.3\nfps = 24\n' >> "$T/deform/$1.toml"
+  printf 'checkpoint_every = 0.05\nexport = "pc2"\n[obstacle.plate]\nmesh = "meshes/bump.obj"\nthickness = 0.002\n' >> "$T/deform/$1.toml"
+  printf 'contact = true\n%b' "$2" >> "$T/deform/$1.toml"
+}
+deform_error() {  # deform_error NAME CACHE_KEYS WHAT: check and run exit 2 naming it; nothing written
+  deform_scene "$1" "$2"
+  "$W" check "$T/deform/$1.toml" >/dev/null 2>"$T/err"; local code=$?
+  "$W" run "$T/deform/$1.toml" --out "$T/deform-out-$1" --quiet >/dev/null 2>"$T/err2"; local run=$?
+  if [ $code -eq 2 ] && [ $run -eq 2 ] && grep -q "$1.toml:19: obstacle.plate.cache" "$T/err" &&
+     grep -q "$3" "$T/err" && [ ! -e "$T/deform-out-$1" ]; then
+    ok "cache $1: check and run exit 2, naming $1.toml:19, obstacle.plate.cache and $3; nothing written"
+  else
+    bad "cache $1: check $code, run $run: $(cat "$T/err" "$T/err2")"
+  fi
+}
+deform_error missing-cache 'cache = "meshes/none.pc2"\n' 'none.pc2: no such file'
+deform_error count-cache 'cache = "meshes/short.pc2"\n' 'has 80 vertices a frame'
+deform_error no-frames 'cache = "meshes/arm_##.obj"\n' 'no such files'
+deform_scene fps-cache 'cache = "meshes/bump_##.obj"\ncache_fps = -24\n'
+"$W" check "$T/deform/fps-cache.toml" >/dev/null 2>"$T/err"; code=$?
+[ $code -eq 2 ] && grep -q "fps-cache.toml:20" "$T/err" && grep -q "obstacle.plate.cache_fps" "$T/err" &&
+  ok "cache_fps out of range: exit 2, its line and key" || bad "cache_fps: exit $code, $(cat "$T/err")"
+deform_scene bump 'cache = "meshes/bump_##.obj"\n'
+"$W" run "$T/deform/bump.toml" --out "$T/bump" --quiet 2>"$T/err" >/dev/null &&
+  cmp -s "$T/bump/caches/bump_08.obj" "$T/deform/meshes/bump_08.obj" &&
+  grep -q '^cache = "caches/bump_##.obj"$' "$T/bump/scene.toml" &&
+  ! cmp -s "$T/bump/obstacle_plate_rest.obj" "$T/bump/frames/obstacles_00007.obj" &&
+  mv "$T/bump" "$T/bump-moved" && "$W" run "$T/bump-moved/scene.toml" --out "$T/bump-again" --quiet 2>"$T/err" &&
+  cmp -s "$T/bump-moved/metrics.csv" "$T/bump-again/metrics.csv" &&
+  cmp -s "$T/bump-moved/obstacle_plate.pc2" "$T/bump-again/obstacle_plate.pc2" &&
+  ok "a deforming obstacle runs; its cache copied to OUT/caches/, the folder runs moved, the same bits" ||
+  bad "deforming run: $(cat "$T/err")"
+"$W" run "$T/deform/bump.toml" --out "$T/bump-stop" --quiet >/dev/null 2>&1 & pid=$!
+for _ in $(seq 300); do [ -f "$T/bump-stop/checkpoint.state" ] && break; sleep 0.05; done
+kill -INT $pid 2>/dev/null; wait $pid; code=$?
+if [ -f "$T/bump-stop/checkpoint.state" ]; then
+  "$W" run --resume "$T/bump-stop" --quiet >/dev/null 2>"$T/err" &&
+    cmp -s "$T/bump-moved/metrics.csv" "$T/bump-stop/metrics.csv" &&
+    cmp -s "$T/bump-moved/obstacle_plate.pc2" "$T/bump-stop/obstacle_plate.pc2" &&
+    cmp -s "$T/bump-moved/cloth.pc2" "$T/bump-stop/cloth.pc2" &&
+    ok "a deforming obstacle's run stopped ($code) and resumed: the same bytes" ||
+    bad "deforming resume: $(cat "$T/err")"
+else
+  ok "a deforming obstacle's run ended before SIGINT (exit $code): nothing to resume"
+fi
+
 # towel-dry (the humidity field's drying) is towel-rail's towel and rail.
 "$W" check towel-dry >/dev/null 2>"$T/err" && ok "check towel-dry" || bad "check towel-dry: $(cat "$T/err")"
 

@@ -5,6 +5,7 @@
 #include <Eigen/Geometry>
 #include <Eigen/LU>
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -408,6 +409,21 @@ Camera scene_view(const Params& p) {
 }
 
 namespace {
+// Area-weighted vertex normals of the obstacles' triangles, and their box.
+void smooth_normals_and_box(Stage::Obstacles& o) {
+  o.normal.assign(o.position.size(), Vec3f::Zero());
+  for (const auto& t : o.triangles) {
+    const Vec3f n =
+        (o.position[t[1]] - o.position[t[0]]).cross(o.position[t[2]] - o.position[t[0]]);
+    for (int k : t) o.normal[k] += n;
+  }
+  for (auto& n : o.normal) n.normalize();
+  if (!o.position.empty()) {
+    o.lo = o.hi = o.position[0];
+    for (const auto& x : o.position) o.lo = o.lo.cwiseMin(x), o.hi = o.hi.cwiseMax(x);
+  }
+}
+
 // The scene's mesh obstacles for drawing, read once per scene (a stage is
 // made again for every tile of a comparison): none when it has none, or
 // when they do not load (load_scene has said why already).
@@ -420,6 +436,8 @@ std::shared_ptr<const Stage::Obstacles> scene_obstacles(const Params& p) {
                   name.c_str(), o.translate[0], o.translate[1], o.translate[2], o.rotate[0],
                   o.rotate[1], o.rotate[2], o.scale[0], o.scale[1], o.scale[2]);
     key += t + o.mesh;
+    std::snprintf(t, sizeof t, "|%.17g %.17g ", o.cache_fps, o.cache_start);
+    key += t + o.cache;
   }
   static std::mutex mutex;
   static std::map<std::string, std::shared_ptr<const Stage::Obstacles>> cache;
@@ -432,26 +450,37 @@ std::shared_ptr<const Stage::Obstacles> scene_obstacles(const Params& p) {
     for (const NamedMesh& mesh : obstacle_meshes(only)) {
       const int base = static_cast<int>(out->position.size());
       out->parts.push_back({mesh.name, static_cast<int>(3 * out->triangles.size()),
-                            static_cast<int>(3 * mesh.triangles.size())});
+                            static_cast<int>(3 * mesh.triangles.size()), base});
       for (const Vec3& x : mesh.points) out->position.push_back(x.cast<float>());
-      out->normal.resize(out->position.size(), Vec3f::Zero());
-      for (const auto& t : mesh.triangles) {
+      for (const auto& t : mesh.triangles)
         out->triangles.push_back({base + t[0], base + t[1], base + t[2]});
-        const Vec3 n =
-            (mesh.points[t[1]] - mesh.points[t[0]]).cross(mesh.points[t[2]] - mesh.points[t[0]]);
-        for (int k : t) out->normal[base + k] += n.cast<float>();  // area-weighted
+      out->shape.emplace_back();
+      if (mesh.deforming) {
+        out->shape.back() = [mesh](double t) { return mesh.points_at(t); };
+        out->deforms = true;
       }
     }
   } catch (const std::exception&) {
-    out->position.clear(), out->normal.clear(), out->triangles.clear(), out->parts.clear();
+    out->position.clear(), out->triangles.clear(), out->parts.clear(), out->shape.clear();
   }
-  for (auto& n : out->normal) n.normalize();
-  if (!out->position.empty()) {
-    out->lo = out->hi = out->position[0];
-    for (const auto& x : out->position)
-      out->lo = out->lo.cwiseMin(x), out->hi = out->hi.cwiseMax(x);
-  }
+  smooth_normals_and_box(*out);
   return cache[key] = out->position.empty() ? nullptr : out;
+}
+
+// A deforming stage's obstacles at time t: a copy with each deforming part's
+// points then, its normals and box made again.
+std::shared_ptr<const Stage::Obstacles> shaped_obstacles(const Stage::Obstacles& o, double t) {
+  static std::atomic<std::uint64_t> serial{0};
+  auto out = std::make_shared<Stage::Obstacles>(o);
+  out->serial = ++serial;
+  for (std::size_t k = 0; k < o.parts.size(); ++k) {
+    if (!o.shape[k]) continue;
+    const std::vector<Vec3> points = o.shape[k](t);
+    for (std::size_t i = 0; i < points.size(); ++i)
+      out->position[static_cast<std::size_t>(o.parts[k].vertex0) + i] = points[i].cast<float>();
+  }
+  smooth_normals_and_box(*out);
+  return out;
 }
 
 // The box of the corners of [lo, hi] moved by `model`.
@@ -498,7 +527,9 @@ void pose_obstacles(const Params& p, double t, const Stage::Obstacles& o,
 // when the cloth is within half its size of it (not under a hanging flag),
 // the ball, the mesh obstacles.
 void add_obstacles(const Params& p, Vec3f& lo, Vec3f& hi, double t = 0) {
-  if (const auto meshes = scene_obstacles(p)) {
+  auto meshes = scene_obstacles(p);
+  if (meshes && meshes->deforms) meshes = shaped_obstacles(*meshes, t);
+  if (meshes) {
     std::vector<Mat4f> models;
     Vec3f a, b;
     pose_obstacles(p, t, *meshes, models, a, b);
@@ -551,6 +582,7 @@ void pose_stage(Stage& s, const Params& p, double t) {
     s.ball_rotation = pose.rotation.cast<float>();
     s.ball_moves = pose.moving;
   }
+  if (s.obstacles && s.obstacles->deforms) s.obstacles = shaped_obstacles(*s.obstacles, t);
   if (s.obstacles)
     pose_obstacles(p, t, *s.obstacles, s.obstacle_models, s.obstacles_lo, s.obstacles_hi);
 }
@@ -644,6 +676,7 @@ struct Renderer::Impl {
   Mesh banded;     // the unit sphere in eight coloured gores: a moving ball, its turning seen
   Mesh obstacles;  // the stage's mesh obstacles, as last uploaded
   const Stage::Obstacles* uploaded = nullptr;
+  std::uint64_t uploaded_serial = 0;
   GLuint line_vao = 0, line_vbo = 0;
   GLuint shadow_tex = 0, shadow_fbo = 0;
   std::vector<float> vertices;
@@ -763,7 +796,9 @@ struct Renderer::Impl {
   }
 
   void upload_obstacles(const Stage& stage) {
-    if (!stage.obstacles || stage.obstacles.get() == uploaded) return;
+    if (!stage.obstacles ||
+        (stage.obstacles.get() == uploaded && stage.obstacles->serial == uploaded_serial))
+      return;
     std::vector<float> v;
     std::vector<unsigned> idx;
     const Stage::Obstacles& o = *stage.obstacles;
@@ -772,6 +807,7 @@ struct Renderer::Impl {
     for (const auto& t : o.triangles) idx.insert(idx.end(), t.begin(), t.end());
     obstacles.upload(v, idx, GL_STATIC_DRAW);
     uploaded = stage.obstacles.get();
+    uploaded_serial = stage.obstacles->serial;
   }
 
   // The mesh obstacles, each part where the stage has it (u_model of `program`).

@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -71,8 +72,15 @@ struct Stage {
     struct Part {  // an obstacle's triangles: [first, first + count)
       std::string name;
       int first = 0, count = 0;
+      int vertex0 = 0;  // its first vertex
     };
     std::vector<Part> parts;
+    // Deforming obstacles (obstacle.NAME.cache): each part's time and its
+    // points then (pose_stage reshapes a copy); `serial` tells an upload a
+    // new shape from the last, whatever its address.
+    std::vector<std::function<std::vector<Eigen::Vector3d>(double)>> shape;  // per part, or null
+    bool deforms = false;
+    std::uint64_t serial = 0;
   };
   std::shared_ptr<const Obstacles> obstacles;
   // Each part's placement now (moving ones; empty: all where they were

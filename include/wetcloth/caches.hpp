@@ -26,8 +26,8 @@
 //
 // Moving obstacles (docs/guide.md, "Moving obstacles in the outputs"): in USD
 // each moving obstacle's Mesh has a time-sampled xformOp:transform, a sample
-// a frame; PC2 gives each its own obstacle_NAME.pc2 over obstacle_NAME_rest.obj;
-// VTK writes vtk/obstacles_NNNNN.vtp a frame and obstacles.pvd. NAME: the
+// a frame (a deforming one's, time-sampled points); PC2 gives each its own obstacle_NAME.pc2 over
+// obstacle_NAME_rest.obj; VTK writes vtk/obstacles_NNNNN.vtp a frame and obstacles.pvd. NAME: the
 // obstacle's USD prim name (moving_obstacle_files).
 #pragma once
 
@@ -63,6 +63,10 @@ CacheFrame cache_frame(const Simulation& sim, UpAxis up);
 // The NAMEs of the moving obstacles' caches (obstacle_NAME.pc2, and in USD
 // the prim /wetcloth/NAME): the obstacle's name made a USD name, unique.
 std::vector<std::string> moving_obstacle_files(const Params& p);
+// The USD sample files of the moving obstacles, in .cloth.usda.samples/:
+// xform_NAME for one that moves by a motion, points_NAME for one that
+// deforms by a cache (both for a cache moved by a motion).
+std::vector<std::string> obstacle_usd_samples(const Params& p);
 
 // Where the caches stand after some frames: what a checkpoint keeps so that a
 // resumed run continues them (CacheWriter::resume).
@@ -105,7 +109,8 @@ class CacheWriter {
   void open_usd_samples(const CachePosition* at);
   void write_pvd();
   void find_moving_obstacles();
-  void write_vtk_obstacles(const std::filesystem::path& path, const std::vector<RigidPose>& poses);
+  void write_vtk_obstacles(const std::filesystem::path& path, const std::vector<RigidPose>& poses,
+                           double t);
   std::filesystem::path dir_;
   ExportFormats formats_;
   UpAxis up_;
@@ -119,7 +124,10 @@ class CacheWriter {
   std::vector<std::unique_ptr<Spool>> spools_;  // the cloth's, then moving_'s transforms
   std::vector<NamedMesh> meshes_;               // the obstacles (obstacle_meshes)
   std::vector<std::string> prims_;              // their USD names
-  std::vector<std::size_t> moving_;             // which of them move
+  std::vector<std::size_t> moving_;             // which of them move (or deform)
+  // Per moving_ obstacle, its USD spools (index into spools_, -1: none): the
+  // transform of its motion, the points of its cache.
+  std::vector<int> xform_spool_, points_spool_;
   std::vector<std::unique_ptr<std::fstream>> obstacle_pc2_;  // one a moving obstacle
 };
 

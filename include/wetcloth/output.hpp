@@ -102,6 +102,10 @@ struct NamedMesh {
   std::string name;
   std::vector<Vec3> points;
   std::vector<std::array<int, 3>> triangles;  // 0-based
+  // A deforming obstacle (obstacle.NAME.cache): null for a rigid one.
+  std::shared_ptr<const MeshObstacle> deforming;
+  // Its points at time t before its pose: the cache's shape then, or `points`.
+  std::vector<Vec3> points_at(double t) const;
 };
 std::vector<NamedMesh> obstacle_meshes(const Model& m);
 // The same from a scene's parameters (its mesh files read again; throws
@@ -111,7 +115,8 @@ std::vector<NamedMesh> obstacle_meshes(const Params& p);
 // order: a moving one's pose (its points x0 are at pose.to_world(x0)), the
 // identity (moving false) for one that stands still.
 std::vector<RigidPose> obstacle_poses(const Params& p, double t);
-// Whether any obstacle moves: then the outputs carry the obstacles per frame.
+// Whether any obstacle moves or deforms: then the outputs carry the
+// obstacles per frame.
 bool obstacles_move(const Params& p);
 // The obstacles as they stand at time t (obstacles.obj: at the start; with
 // moving obstacles, frames/obstacles_NNNNN.obj: each frame's, the same

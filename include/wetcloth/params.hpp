@@ -122,6 +122,14 @@ struct ObstacleParams {
   double water_film = 0;     // depth of water on it under the cloth, m (when the contact surface)
   Motion motion;
   Vec3d pivot{0, 0, 0};  // the point the motion turns about, in the file's coordinates
+  // A deforming obstacle (docs/guide.md "Deforming obstacles"): its vertices
+  // per frame, an OBJ sequence ("arm_####.obj": # the zero-padded frame
+  // number) or a PC2 file over `mesh`, in the file's coordinates (placed by
+  // the keys above, then moved by the motion); "" for none. Frame k is at
+  // cache_start + k / cache_fps, linear between frames, held outside them.
+  std::string cache;
+  double cache_fps = 24;   // frames per second of the cache
+  double cache_start = 0;  // s: the time of the cache's first frame
 };
 
 // A wet region of the cloth at the start ([wet.NAME], docs/model.md "Humidity

@@ -79,6 +79,12 @@ Params at_resolution(Params p, long long grid);
 // `wetcloth run` copies them beside its scene.toml. Throws SceneError.
 std::string scene_file_text(const Params& p, const std::string& key, const std::string& path);
 
+// The files obstacle NAME's cache (obstacle.NAME.cache) reads, as the scene
+// names them (relative to its folder), in frame order: a PC2 file, or an OBJ
+// sequence's files, the # run the zero-padded frame number, numbered on from
+// the lowest found. Throws SceneError (no file, a gap in the sequence).
+std::vector<std::string> obstacle_cache_files(const Params& p, const std::string& name);
+
 // A mesh cloth's size (cloth.mesh), for estimates before the model is built:
 // its vertices (the particles), triangles and mean edge, m. Throws SceneError.
 struct ClothMeshSize {

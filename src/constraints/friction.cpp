@@ -43,13 +43,13 @@ void apply_friction(const Model& m, State& s, const Workspace& w,
   // A moving contact surface (docs/model.md section 3): eq. 14 on each
   // particle's velocity relative to the surface where it is. A particle
   // held by friction then rides along with it.
-  if (const RigidPose* pose = pose_of(w.surfaces, m.contact_code())) {
+  if (pose_of(w.surfaces, m.contact_code())) {
     for_each_particle(m, [&](int i) {
       if (!s.contact[i] || m.driven[i]) return;
       const Vec3 n = w.surface_normal[i];
       const double pressing = -(w.force[i].dot(n) + w.adhesion[i]);
       const double load = w.adhesion[i] + (with_load && pressing > 0 ? pressing : 0.0);
-      const Vec3 surface = pose->velocity_at(s.x[i]);
+      const Vec3 surface = surface_velocity(w.surfaces, m.contact_code(), s.x[i]);
       slow_down(m, s, i, n, load, mu, dt, &surface);
     });
   } else {

@@ -124,7 +124,8 @@ void update_strain_order(const Model& m, State& s, Workspace& w) {
                           const RigidPose* pose = pose_of(at, kMeshCode + k);
                           const Vec3 x = pose ? pose->to_body(s.x[i]) : Vec3(s.x[i]);
                           // (a search within the bridge alone: the cloth is outside)
-                          return o->query_within(x, h_th + o->half_thickness).distance < h_th;
+                          const MeshObstacle& shape = mesh_of(m, at, k);
+                          return shape.query_within(x, h_th + shape.half_thickness).distance < h_th;
                         });
       if (near) sources.push_back(i);
     }

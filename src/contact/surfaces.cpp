@@ -39,8 +39,21 @@ void place_surfaces(const Model& m, Workspace& w, double t) {
   poses.ball = m.params.ball.enabled ? ball_pose(m.params, t) : RigidPose{};
   poses.any = poses.ball.moving;
   poses.obstacles.resize(m.obstacles.size());
+  poses.shapes.resize(m.obstacles.size());
   for (std::size_t k = 0; k < m.obstacles.size(); ++k) {
     poses.obstacles[k] = obstacle_pose(m.params, m.obstacles[k]->name, t);
+    std::shared_ptr<MeshObstacle>& shape = poses.shapes[k];
+    if (!m.obstacles[k]->cache) {
+      shape.reset();
+    } else {  // a deforming obstacle: its shape at t
+      // Made again for a model built anew (Simulation::set), and for a
+      // workspace copied from another (the two would share it).
+      if (shape && shape->cache != m.obstacles[k]->cache) shape.reset();
+      if (!shape || shape.use_count() > 1)
+        shape = deformable_copy(shape ? *shape : *m.obstacles[k]);
+      reshape(*shape, t);
+      poses.obstacles[k].moving = true;  // (the identity pose, without a motion)
+    }
     poses.any = poses.any || poses.obstacles[k].moving;
   }
 }
@@ -65,8 +78,8 @@ void collide(const Model& m, State& s, std::vector<std::uint8_t>* touched,
     sub(s.x[i], distance * normal);
     // The inward velocity relative to the surface is removed: a moving
     // surface carries the particle along its normal (docs/model.md section 3).
-    if (const RigidPose* pose = pose_of(poses, code)) {
-      const double vn = (s.v[i] - pose->velocity_at(s.x[i])).dot(normal);
+    if (pose_of(poses, code)) {
+      const double vn = (s.v[i] - surface_velocity(poses, code, s.x[i])).dot(normal);
       if (vn < 0) sub(s.v[i], vn * normal);
     } else {
       const double vn = s.v[i].dot(normal);
@@ -84,8 +97,8 @@ void collide(const Model& m, State& s, std::vector<std::uint8_t>* touched,
       push_out(i, h.distance, h.normal, static_cast<int>(kinds[o]));
     }
     for (int k = 0; k < meshes; ++k) {
-      const MeshObstacle::Hit h = query_mesh(*m.obstacles[k], pose_of(poses, kMeshCode + k), s.x[i],
-                                             0.0, w ? &w->mesh_cache[k] : nullptr, i);
+      const MeshObstacle::Hit h = query_mesh(mesh_of(m, poses, k), pose_of(poses, kMeshCode + k),
+                                             s.x[i], 0.0, w ? &w->mesh_cache[k] : nullptr, i);
       if (h.distance >= 0) continue;
       push_out(i, h.distance, h.normal, kMeshCode + k);
     }
@@ -103,11 +116,14 @@ void collide_with_meshes(const Model& m, State& s, Workspace& w) {
     if (m.driven[i]) return;
     for (std::size_t k = 0; k < m.obstacles.size(); ++k) {
       const RigidPose* pose = pose_of(w.surfaces, kMeshCode + static_cast<int>(k));
-      const MeshObstacle::Hit h =
-          query_mesh(*m.obstacles[k], pose, s.x[i], 0.0, &w.mesh_cache[k], i);
+      const MeshObstacle::Hit h = query_mesh(mesh_of(m, w.surfaces, static_cast<int>(k)), pose,
+                                             s.x[i], 0.0, &w.mesh_cache[k], i);
       if (h.distance >= 0) continue;
       sub(s.x[i], h.distance * h.normal);
-      const Vec3 v = pose ? Vec3(s.v[i] - pose->velocity_at(s.x[i])) : Vec3(s.v[i]);
+      const Vec3 v =
+          pose
+              ? Vec3(s.v[i] - surface_velocity(w.surfaces, kMeshCode + static_cast<int>(k), s.x[i]))
+              : Vec3(s.v[i]);
       const double vn = v.dot(h.normal);
       if (vn < 0) sub(s.v[i], vn * h.normal);
     }
@@ -152,7 +168,7 @@ void update_contact(const Model& m, State& s, Workspace& w) {
       return;
     }
     if (kind == SurfaceKind::Mesh) {  // within the air's band: beyond it nothing needs more
-      const MeshObstacle& o = *m.obstacles[m.contact_obstacle];
+      const MeshObstacle& o = mesh_of(m, w.surfaces, m.contact_obstacle);
       MeshQueryCache* cache = &w.mesh_cache[m.contact_obstacle];
       const RigidPose* pose = pose_of(w.surfaces, m.contact_code());
       const double reach = std::max(p.air.band, h_th);

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <array>
+#include <functional>
 #include <limits>
 #include <memory>
 #include <string>
@@ -33,6 +34,8 @@ struct MeshObstacle {
     double distance = std::numeric_limits<double>::infinity();  // signed, m
     Vec3 normal = Vec3::UnitZ();                                // outward at the closest point
     double unsigned_distance = std::numeric_limits<double>::infinity();  // to the triangles
+    int triangle = -1;          // the closest point's triangle (-1: none found)
+    Vec3 point = Vec3::Zero();  // the closest point
   };
   // The signed distance and outward normal at x, exactly (a search of the whole tree).
   Hit query(const Vec3& x) const { return query_within(x, kWhole); }
@@ -44,7 +47,40 @@ struct MeshObstacle {
 
   struct Geometry;  // the tree, pseudo-normals (mesh_obstacle.cpp)
   std::shared_ptr<const Geometry> geometry;
+
+  // A deforming obstacle's cache (obstacle.NAME.cache): its vertices at
+  // each frame, placed as `points` are (its body frame). Null: rigid.
+  struct Cache {
+    std::string source;  // the file (or the sequence's first file), for messages
+    double start = 0;    // s: frame 0's time
+    double step = 1;     // s between frames
+    std::vector<std::vector<Vec3>> frames;
+  };
+  std::shared_ptr<const Cache> cache;
+
+  // A shape made by reshape (deformable_copy): each vertex's velocity (m/s,
+  // body frame), the time it is the shape of, and `travel`, the sum over
+  // its reshapes of the farthest any vertex moved: the distance to the mesh
+  // changes by no more, so MeshQueryCache's bounds stay bounds.
+  std::vector<Vec3> velocity;
+  double time = std::numeric_limits<double>::quiet_NaN();
+  double travel = 0;
 };
+
+// The cache's vertices at time t: linear between frames (velocity the
+// frame-to-frame difference over the step, the next interval's at a frame),
+// held at the first before it and at the last after it (velocity zero).
+void sample_cache(const MeshObstacle::Cache& c, double t, std::vector<Vec3>& points,
+                  std::vector<Vec3>& velocity);
+// A copy of a mesh obstacle with a tree of its own, to reshape.
+std::shared_ptr<MeshObstacle> deformable_copy(const MeshObstacle& o);
+// A deformable copy moved to its cache's shape at time t: points, bounding
+// box, pseudo-normals and the tree (rebuilt: CGAL's has no refit, and its
+// build is O(T log T), small beside a step's queries of every particle).
+void reshape(MeshObstacle& o, double t);
+// The velocity of a deforming obstacle's surface (body frame) at a hit's
+// closest point: its triangle's vertex velocities, barycentrically.
+Vec3 surface_velocity_at(const MeshObstacle& o, const MeshObstacle::Hit& h);
 
 // Builds [obstacle.NAME]'s mesh: read (load_scene_mesh, so relative to the
 // scene's folder), transformed, checked (a closed mesh must be consistently
@@ -55,7 +91,9 @@ std::shared_ptr<const MeshObstacle> build_mesh_obstacle(const Params& p, const s
 // Every obstacle's mesh loads and passes the checks above, and the cloth does
 // not start inside one (load_scene: wetcloth check, run, view). Throws
 // SceneError starting with `source`, the scene file.
-void check_obstacle_meshes(const Params& p, const std::string& source);
+// A cache's errors name the key's line too, ":LINE" as `line_of(key)` gives it.
+void check_obstacle_meshes(const Params& p, const std::string& source,
+                           const std::function<std::string(const std::string&)>& line_of = {});
 
 // A particle's last query of one obstacle, to bound the next: the signed
 // distance is 1-Lipschitz, so from x_last it is at least lo - |x - x_last|

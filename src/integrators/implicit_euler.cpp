@@ -497,7 +497,8 @@ void set_up_solve(const Model& m, const State& s, Workspace& w, double h) {
     }
     Vec3 held = Vec3::Zero();
     if (!fixed(m, s, a) && w.distance[a] <= kOnSurface && w.force[a].dot(w.surface_normal[a]) < 0 &&
-        (!moving || moving->velocity_at(s.x[a]).dot(w.surface_normal[a]) == 0))
+        (!moving ||
+         surface_velocity(w.surfaces, m.contact_code(), s.x[a]).dot(w.surface_normal[a]) == 0))
       held = w.surface_normal[a];
     for (int k = 0; k < 3; ++k) {
       r.c[k][a] = b[k];

@@ -240,14 +240,36 @@ void write_pc2_header(std::fstream& f, int points, long long samples) {
   f.write(header, sizeof header);
 }
 
+// Which of obstacle_meshes' obstacles deform (a cache), in its order.
+std::vector<bool> deforming(const Params& p) {
+  std::vector<bool> d;
+  if (p.table.enabled) d.push_back(false);
+  if (p.ball.enabled) d.push_back(false);
+  for (const auto& [name, o] : p.obstacles) d.push_back(!o.cache.empty());
+  return d;
+}
+
 }  // namespace
 
 std::vector<std::string> moving_obstacle_files(const Params& p) {
   std::vector<std::string> files;
   const std::vector<std::string> prims = prim_names(obstacle_names(p));
   const std::vector<RigidPose> poses = obstacle_poses(p, 0);
+  const std::vector<bool> deforms = deforming(p);
   for (std::size_t k = 0; k < prims.size(); ++k)
-    if (poses[k].moving) files.push_back(prims[k]);
+    if (poses[k].moving || deforms[k]) files.push_back(prims[k]);
+  return files;
+}
+
+std::vector<std::string> obstacle_usd_samples(const Params& p) {
+  std::vector<std::string> files;
+  const std::vector<std::string> prims = prim_names(obstacle_names(p));
+  const std::vector<RigidPose> poses = obstacle_poses(p, 0);
+  const std::vector<bool> deforms = deforming(p);
+  for (std::size_t k = 0; k < prims.size(); ++k) {
+    if (poses[k].moving) files.push_back("xform_" + prims[k]);
+    if (deforms[k]) files.push_back("points_" + prims[k]);
+  }
   return files;
 }
 
@@ -291,8 +313,20 @@ void CacheWriter::open_usd_samples(const CachePosition* at) {
   // The cloth's attributes, then each moving obstacle's transform.
   std::vector<std::pair<std::string, std::string>> attributes;
   for (const auto& [declaration, file] : kAttributes) attributes.emplace_back(declaration, file);
-  for (const std::size_t k : moving_)
-    attributes.emplace_back("matrix4d xformOp:transform", "xform_" + prims_[k]);
+  xform_spool_.assign(moving_.size(), -1);
+  points_spool_.assign(moving_.size(), -1);
+  const std::vector<RigidPose> poses = obstacle_poses(model_.params, 0);
+  for (std::size_t q = 0; q < moving_.size(); ++q) {
+    const std::size_t k = moving_[q];
+    if (poses[k].moving) {
+      xform_spool_[q] = static_cast<int>(attributes.size());
+      attributes.emplace_back("matrix4d xformOp:transform", "xform_" + prims_[k]);
+    }
+    if (meshes_[k].deforming) {
+      points_spool_[q] = static_cast<int>(attributes.size());
+      attributes.emplace_back("point3f[] points", "points_" + prims_[k]);
+    }
+  }
   if (at && at->samples_bytes.size() != attributes.size())
     throw SceneError(folder.string() + ": the checkpoint does not say where its samples end");
   for (std::size_t a = 0; a < attributes.size(); ++a) {
@@ -337,7 +371,7 @@ CacheWriter::CacheWriter(const fs::path& dir, const Simulation& sim, ExportForma
       std::ostringstream o;
       o << "# wetcloth obstacle " << mesh.name << ", " << (up == UpAxis::Z ? "z" : "y")
         << " up, metres; obstacle_" << prims_[k] << ".pc2 moves it\no " << prims_[k] << "\n";
-      for (const Vec3& x0 : mesh.points) {
+      for (const Vec3& x0 : mesh.points_at(sim.state().time)) {
         const Vec3 x = to_up(poses[k].to_world(x0), up);
         o << "v " << x.x() << " " << x.y() << " " << x.z() << "\n";
       }
@@ -356,7 +390,7 @@ CacheWriter::CacheWriter(const fs::path& dir, const Simulation& sim, ExportForma
   if (formats.vtk) {
     if (std::error_code ec; fs::create_directories(dir / "vtk", ec), ec)
       throw_output_error(dir / "vtk", "cannot make the folder", ec.value());
-    write_vtk_obstacles(dir / "vtk" / "obstacles.vtp", poses);
+    write_vtk_obstacles(dir / "vtk" / "obstacles.vtp", poses, sim.state().time);
   }
   if (formats.usd) open_usd_samples(nullptr);
 }
@@ -368,15 +402,17 @@ void CacheWriter::find_moving_obstacles() {
   prims_ = prim_names(names);
   const std::vector<RigidPose> poses = obstacle_poses(model_.params, 0);
   for (std::size_t k = 0; k < poses.size(); ++k)
-    if (poses[k].moving) moving_.push_back(k);
+    if (poses[k].moving || meshes_[k].deforming) moving_.push_back(k);
 }
 
-void CacheWriter::write_vtk_obstacles(const fs::path& path, const std::vector<RigidPose>& poses) {
+void CacheWriter::write_vtk_obstacles(const fs::path& path, const std::vector<RigidPose>& poses,
+                                      double t) {
   std::vector<Vec3> points;
   std::vector<std::array<int, 3>> tris;
   for (std::size_t k = 0; k < meshes_.size(); ++k) {
     const int base = static_cast<int>(points.size());
-    for (const Vec3& x : meshes_[k].points) points.push_back(to_up(poses[k].to_world(x), up_));
+    for (const Vec3& x : meshes_[k].points_at(t))
+      points.push_back(to_up(poses[k].to_world(x), up_));
     for (const auto& t : meshes_[k].triangles)
       tris.push_back({base + t[0], base + t[1], base + t[2]});
   }
@@ -497,7 +533,7 @@ void CacheWriter::add_frame(const Simulation& sim, double frame_code) {
       const std::size_t o = moving_[q];
       std::vector<float> points;
       points.reserve(3 * meshes_[o].points.size());
-      for (const Vec3& x0 : meshes_[o].points) {
+      for (const Vec3& x0 : meshes_[o].points_at(f.time)) {
         const Vec3 x = to_up(poses[o].to_world(x0), up_);
         points.insert(points.end(), {static_cast<float>(x.x()), static_cast<float>(x.y()),
                                      static_cast<float>(x.z())});
@@ -512,7 +548,7 @@ void CacheWriter::add_frame(const Simulation& sim, double frame_code) {
     }
   }
   if (formats_.vtk) {
-    if (!moving_.empty()) write_vtk_obstacles(dir_ / "vtk" / vtk_obstacles_name(k), poses);
+    if (!moving_.empty()) write_vtk_obstacles(dir_ / "vtk" / vtk_obstacles_name(k), poses, f.time);
     char name[32];
     std::snprintf(name, sizeof name, "cloth_%05lld.vtp", k);
     VtkArrays arrays;
@@ -548,8 +584,15 @@ void CacheWriter::add_frame(const Simulation& sim, double frame_code) {
     for (std::size_t i = 0; i < deficit.size(); ++i)
       deficit[i] = static_cast<float>(model_.params.air.p_atm - f.pressure[i]);
     spools_[8]->add(code, "[" + join(deficit, ", ") + "]");
-    for (std::size_t q = 0; q < moving_.size(); ++q)
-      spools_[std::size(kAttributes) + q]->add(code, usd_matrix(up_matrix(poses[moving_[q]], up_)));
+    for (std::size_t q = 0; q < moving_.size(); ++q) {
+      if (xform_spool_[q] >= 0)
+        spools_[xform_spool_[q]]->add(code, usd_matrix(up_matrix(poses[moving_[q]], up_)));
+      if (points_spool_[q] >= 0) {  // a deforming one's points, before its transform
+        std::vector<Vec3> points;
+        for (const Vec3& x : meshes_[moving_[q]].points_at(f.time)) points.push_back(to_up(x, up_));
+        spools_[points_spool_[q]]->add(code, "[" + tuples(points) + "]");
+      }
+    }
   }
 }
 
@@ -620,13 +663,19 @@ void CacheWriter::finish() {
           << mesh_topology(mesh.triangles, "        ") << "        point3f[] points = ["
           << tuples(points) << "]\n        uniform token subdivisionScheme = \"none\"\n";
       if (q < moving_.size() && moving_[q] == k) {
-        const Spool& spool = *spools_[std::size(kAttributes) + q++];
-        out << "        " << spool.declaration << ".timeSamples = {\n";
-        std::rewind(spool.file);
-        char buf[1 << 16];
-        for (std::size_t got; (got = std::fread(buf, 1, sizeof buf, spool.file)) > 0;)
-          out.write(buf, static_cast<std::streamsize>(got));
-        out << "        }\n        uniform token[] xformOpOrder = [\"xformOp:transform\"]\n";
+        for (const int a : {points_spool_[q], xform_spool_[q]}) {
+          if (a < 0) continue;
+          const Spool& spool = *spools_[a];
+          out << "        " << spool.declaration << ".timeSamples = {\n";
+          std::rewind(spool.file);
+          char buf[1 << 16];
+          for (std::size_t got; (got = std::fread(buf, 1, sizeof buf, spool.file)) > 0;)
+            out.write(buf, static_cast<std::streamsize>(got));
+          out << "        }\n";
+        }
+        if (xform_spool_[q] >= 0)
+          out << "        uniform token[] xformOpOrder = [\"xformOp:transform\"]\n";
+        ++q;
       }
       out << "    }\n";
     }

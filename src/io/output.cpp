@@ -282,7 +282,7 @@ std::vector<NamedMesh> analytic_meshes(const Params& p) {
   if (p.table.enabled) {
     const double h = std::max(p.cloth.size[0], p.cloth.size[1]) * 2, z = p.table.height;
     const double cx = p.cloth.center[0], cy = p.cloth.center[1];
-    NamedMesh t{"table", {}, {{0, 1, 2}, {0, 2, 3}}};
+    NamedMesh t{"table", {}, {{0, 1, 2}, {0, 2, 3}}, nullptr};
     for (auto [sx, sy] : {std::pair{-1, -1}, {1, -1}, {1, 1}, {-1, 1}})
       t.points.emplace_back(cx + sx * h, cy + sy * h, z);
     meshes.push_back(std::move(t));
@@ -290,7 +290,7 @@ std::vector<NamedMesh> analytic_meshes(const Params& p) {
   if (p.ball.enabled) {
     const int rings = 24, segs = 48;
     const Vec3 c = to_vec(p.ball.center);
-    NamedMesh b{"ball", {}, {}};
+    NamedMesh b{"ball", {}, {}, nullptr};
     for (int r = 0; r <= rings; ++r) {
       const double th = std::numbers::pi * r / rings;
       for (int s = 0; s < segs; ++s) {
@@ -311,9 +311,17 @@ std::vector<NamedMesh> analytic_meshes(const Params& p) {
 }
 }  // namespace
 
+std::vector<Vec3> NamedMesh::points_at(double t) const {
+  if (!deforming) return points;
+  std::vector<Vec3> x, v;
+  sample_cache(*deforming->cache, t, x, v);
+  return x;
+}
+
 std::vector<NamedMesh> obstacle_meshes(const Model& m) {
   std::vector<NamedMesh> meshes = analytic_meshes(m.params);
-  for (const auto& o : m.obstacles) meshes.push_back({o->name, o->points, o->triangles});
+  for (const auto& o : m.obstacles)
+    meshes.push_back({o->name, o->points, o->triangles, o->cache ? o : nullptr});
   return meshes;
 }
 
@@ -321,7 +329,7 @@ std::vector<NamedMesh> obstacle_meshes(const Params& p) {
   std::vector<NamedMesh> meshes = analytic_meshes(p);
   for (const auto& [name, unused] : p.obstacles) {
     const auto o = build_mesh_obstacle(p, name);
-    meshes.push_back({o->name, o->points, o->triangles});
+    meshes.push_back({o->name, o->points, o->triangles, o->cache ? o : nullptr});
   }
   return meshes;
 }
@@ -337,6 +345,8 @@ std::vector<RigidPose> obstacle_poses(const Params& p, double t) {
 bool obstacles_move(const Params& p) {
   for (const RigidPose& pose : obstacle_poses(p, 0))
     if (pose.moving) return true;
+  for (const auto& [name, o] : p.obstacles)
+    if (!o.cache.empty()) return true;
   return false;
 }
 
@@ -351,7 +361,7 @@ std::string obstacles_obj(const Model& m, UpAxis up, double t) {
   for (const NamedMesh& mesh : obstacle_meshes(m)) {
     const RigidPose& pose = poses[k++];
     o << "o " << mesh.name << "\n";
-    for (const Vec3& x0 : mesh.points) {
+    for (const Vec3& x0 : mesh.points_at(t)) {
       const Vec3 x = to_up(pose.to_world(x0), up);
       o << "v " << x.x() << " " << x.y() << " " << x.z() << "\n";
     }

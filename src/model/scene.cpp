@@ -568,6 +568,17 @@ std::vector<ParamDef> named_defs() {
                      "the point the motion turns the mesh about, in the file's coordinates "
                      "(placed with the mesh): a shoulder, a hinge",
                      O(pivot)),
+      obstacle_field("cache", "", 1, 0,
+                     "a deforming obstacle: its vertices per frame, an OBJ sequence "
+                     "(\"arm_####.obj\", # the zero-padded frame number, the first file found "
+                     "frame 0) or a PC2 file over obstacle.*.mesh (relative to the scene file), "
+                     "the same vertices in the same order as the mesh; placed as the mesh, then "
+                     "moved by the motion; linear between frames, held outside them (\"\": none)",
+                     O(cache)),
+      obstacle_field("cache_fps", "1/s", 1e-3, 1e6, "frames per second of obstacle.*.cache",
+                     O(cache_fps)),
+      obstacle_field("cache_start", "s", -1e6, 1e6, "the time of obstacle.*.cache's first frame",
+                     O(cache_start)),
       wet_field("at", "1", 0, 1,
                 "[wet.NAME]: a wet region at the start, its centre the particle nearest this "
                 "(u, v), as a handle's at",
@@ -1333,6 +1344,29 @@ void check_motions(const Params& p, const Complain& bad) {
   if (p.ball.motion.moves() && !p.ball.enabled)
     bad("ball.motion", "moves a ball that is not there (ball.enabled = false)");
   for (const auto& [name, o] : p.obstacles) check(o.motion, "obstacle." + name + ".motion");
+  // A cache: a PC2 file, or an OBJ sequence with one run of # in its file's
+  // name (its files are read with the mesh, check_obstacle_meshes).
+  for (const auto& [name, o] : p.obstacles) {
+    if (o.cache.empty()) continue;
+    const std::string file = std::filesystem::path(o.cache).filename().string();
+    const auto ends = [&](const std::string& e) {
+      std::string tail = file.size() >= e.size() ? file.substr(file.size() - e.size()) : "";
+      for (char& c : tail) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+      return tail == e;
+    };
+    const std::size_t hash = file.find('#');
+    const bool sequence = hash != std::string::npos && ends(".obj") &&
+                          file.find('#', file.find_first_not_of('#', hash)) == std::string::npos;
+    if (o.cache.find('#') != std::string::npos && hash == std::string::npos)
+      bad("obstacle." + name + ".cache", "\"" + o.cache +
+                                             "\": the # of an OBJ sequence's frame number goes "
+                                             "in the file's name, not its folder's");
+    if (!sequence && !(hash == std::string::npos && ends(".pc2")))
+      bad("obstacle." + name + ".cache",
+          "\"" + o.cache +
+              "\" is neither a PC2 file (.pc2) nor an OBJ sequence (one run of # in the file's "
+              "name for the zero-padded frame number, e.g. \"arm_####.obj\")");
+  }
 }
 
 // A mesh cloth placed as obstacles are, or by its centre: not both.
@@ -1592,7 +1626,8 @@ Params load_scene(const std::string& scene, const std::vector<std::string>& over
     Params p = parse_scene(text, scene, overrides, tier);
     p.scene_dir = std::filesystem::absolute(scene).parent_path().lexically_normal().string();
     check_cloth_mesh(p, scene);
-    check_obstacle_meshes(p, scene);
+    check_obstacle_meshes(p, scene,
+                          [&](const std::string& key) { return line_of(text, scene, key); });
     check_handle_vertices(p, scene);
     detail::check_humidity_map(p, scene + line_of(text, scene, "cloth.humidity_map"));
     return p;
@@ -1602,7 +1637,8 @@ Params load_scene(const std::string& scene, const std::vector<std::string>& over
       Params p = parse_scene(b.text, "scenes/" + b.name + ".toml", overrides, tier);
       p.scene_dir = "builtin:";
       check_cloth_mesh(p, "scenes/" + b.name + ".toml");
-      check_obstacle_meshes(p, "scenes/" + b.name + ".toml");
+      check_obstacle_meshes(p, "scenes/" + b.name + ".toml",
+                            [&](const std::string& key) { return line_of(b.text, b.name, key); });
       check_handle_vertices(p, "scenes/" + b.name + ".toml");
       detail::check_humidity_map(
           p, "scenes/" + b.name + ".toml" + line_of(b.text, b.name, "cloth.humidity_map"));

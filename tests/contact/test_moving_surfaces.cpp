@@ -10,6 +10,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <numbers>
 
 #include "common.hpp"
@@ -229,4 +230,211 @@ TEST(MovingSurfaces, SameBitsOnAnyThreadCountAndAfterARestore) {
   int touching = 0;
   for (int i = 0; i < sims[0].model().n; ++i) touching += sims[0].state().contact[i];
   EXPECT_GT(touching, 0);
+}
+
+// Deforming obstacles (obstacle.NAME.cache): the mesh's vertices from a
+// cache, linear between its frames; contact, friction and adhesion act on the
+// cloth's velocity relative to the surface's, the vertices' velocities
+// interpolated at the contact point.
+namespace {
+
+// An OBJ sequence meshes/STEM_NN.obj (frames 0 to frames - 1 at `fps`) of
+// the n x n grid over [-half, half]² in the xy plane, each vertex at
+// where(x, y, t): printed to 17 digits, so that the doubles are the ones given.
+void write_grid_sequence(const TempDir& dir, const std::string& stem, int n, double half,
+                         int frames, double fps,
+                         const std::function<Vec3(double, double, double)>& where) {
+  std::string faces;
+  for (int j = 0; j + 1 < n; ++j)
+    for (int i = 0; i + 1 < n; ++i) {
+      const int a = j * n + i + 1, b = a + 1, c = a + n + 1, d = a + n;
+      faces += "f " + std::to_string(a) + " " + std::to_string(b) + " " + std::to_string(c) +
+               "\nf " + std::to_string(a) + " " + std::to_string(c) + " " + std::to_string(d) +
+               "\n";
+    }
+  const auto mesh = [&](double t) {
+    std::string o;
+    for (int j = 0; j < n; ++j)
+      for (int i = 0; i < n; ++i) {
+        const double x = -half + 2 * half * i / (n - 1), y = -half + 2 * half * j / (n - 1);
+        const Vec3 p = where(x, y, t);
+        char line[128];
+        std::snprintf(line, sizeof line, "v %.17g %.17g %.17g\n", p.x(), p.y(), p.z());
+        o += line;
+      }
+    return o + faces;
+  };
+  dir.write("meshes/" + stem + ".obj", mesh(0));
+  for (int k = 0; k < frames; ++k) {
+    char name[64];
+    std::snprintf(name, sizeof name, "meshes/%s_%02d.obj", stem.c_str(), k);
+    dir.write(name, mesh(k / fps));
+  }
+}
+
+// The sliding plate of on_sliding_plate, but moved by an OBJ sequence over
+// its own mesh (a 2 x 2 grid: the same four corners and two triangles).
+Params on_cached_plate(const TempDir& dir, double speed, const std::vector<std::string>& sets) {
+  Params p = on_sliding_plate(dir, speed, sets);
+  write_grid_sequence(dir, "slide", 2, 1.0, 13, 24,
+                      [&](double x, double y, double t) { return Vec3(x + speed * t, y, 0); });
+  ObstacleParams& o = p.obstacles["plate"];
+  o.mesh = "meshes/slide.obj";
+  o.motion = Motion{};
+  o.cache = "meshes/slide_##.obj";
+  o.cache_fps = 24;
+  return p;
+}
+
+}  // namespace
+
+// A cache that slides the plate at constant velocity does what the same
+// slide by keyframes does (the one moves the mesh, the other the particle
+// into the mesh's frame: the same to rounding), in every integrator.
+TEST(MovingSurfaces, CacheOfARigidSlideMatchesTheSameSlideByKeyframes) {
+  TempDir dir("moving_cache_rigid");
+  const double v = 0.1;
+  for (const char* integrator : {"symplectic-euler", "implicit-euler", "xpbd"}) {
+    std::vector<std::string> sets = {std::string("integrator.type=\"") + integrator + "\""};
+    if (integrator[0] == 'x') sets.push_back(kXpbd[1]);
+    Simulation keyed(on_sliding_plate(dir, v, sets));
+    Simulation cached(on_cached_plate(dir, v, sets));
+    ASSERT_TRUE(keyed.advance_to(0.4)) << keyed.blow_up_reason();
+    ASSERT_TRUE(cached.advance_to(0.4)) << cached.blow_up_reason();
+    double dx = 0, dv = 0;
+    for (int i = 0; i < keyed.model().n; ++i) {
+      dx = std::max(dx, (keyed.state().x[i] - cached.state().x[i]).norm());
+      dv = std::max(dv, (keyed.state().v[i] - cached.state().v[i]).norm());
+      ASSERT_EQ(keyed.state().contact[i], cached.state().contact[i]) << integrator << " " << i;
+    }
+    // (implicit-euler's conjugate gradients carry the rounding further: 2e-8 m)
+    EXPECT_LT(dx, integrator[0] == 'i' ? 1e-7 : 1e-9) << integrator;
+    EXPECT_LT(dv, 1e-6) << integrator;
+    // And it rode along (dry friction: the slip of ClothRidesAlongOnASlidingPlate).
+    EXPECT_GT(mean_of(cached.state().x).x(), 0.03) << integrator;
+  }
+}
+
+// A cache and a motion compose: the cache's shape in the body's frame, then
+// the motion. A cache that slides the plate along x under a motion that lifts
+// it along z is the plate keyed to do both.
+TEST(MovingSurfaces, CacheUnderAMotionIsTheShapeMovedByIt) {
+  TempDir dir("moving_cache_motion");
+  const double v = 0.1, w = 0.05;
+  for (const char* integrator : {"symplectic-euler", "xpbd"}) {
+    std::vector<std::string> sets = {std::string("integrator.type=\"") + integrator + "\""};
+    if (integrator[0] == 'x') sets.push_back(kXpbd[1]);
+    Params keyed = on_sliding_plate(dir, v, sets);
+    keyed.obstacles["plate"].motion.keys = {{0, {0, 0, 0}, {0, 0, 0}},
+                                            {10, {10 * v, 0, 10 * w}, {0, 0, 0}}};
+    Params both = on_cached_plate(dir, v, sets);
+    both.obstacles["plate"].motion.keys = {{0, {0, 0, 0}, {0, 0, 0}},
+                                           {10, {0, 0, 10 * w}, {0, 0, 0}}};
+    Simulation a(keyed), b(both);
+    ASSERT_TRUE(a.advance_to(0.3)) << a.blow_up_reason();
+    ASSERT_TRUE(b.advance_to(0.3)) << b.blow_up_reason();
+    double dx = 0;
+    for (int i = 0; i < a.model().n; ++i)
+      dx = std::max(dx, (a.state().x[i] - b.state().x[i]).norm());
+    // A lifted particle sits on the surface each step, its distance 0 to
+    // rounding: whether it is pushed out flips with the rounding, by the
+    // plate's rise in a step (w dt, 5 um at most), never by its 15 mm.
+    EXPECT_LT(dx, 1e-5) << integrator;
+    EXPECT_GT(mean_of(b.state().x).z(), 0.0012 + 0.9 * w * 0.3) << integrator;  // lifted
+    EXPECT_GT(mean_of(b.state().x).x(), 0.02) << integrator;                    // and carried
+  }
+}
+
+namespace {
+
+// A plate 0.6 m square (a shell 2 mm thick, 17 x 17 vertices) whose middle
+// rises as a bump, 3 cm high at 0.4 s and held after, under a cloth lying on
+// it: the bump must lift the cloth, never through it.
+constexpr double kBumpHeight = 0.03, kBumpTime = 0.4, kBumpWidth = 0.08;
+double bump(double x, double y, double t) {
+  return kBumpHeight * std::min(t / kBumpTime, 1.0) *
+         std::exp(-(x * x + y * y) / (kBumpWidth * kBumpWidth));
+}
+Params on_growing_bump(const TempDir& dir, const std::vector<std::string>& sets) {
+  Params p = on_sliding_plate(dir, 0, sets);
+  write_grid_sequence(dir, "bump", 17, 0.3, 14, 24,
+                      [](double x, double y, double t) { return Vec3(x, y, bump(x, y, t)); });
+  ObstacleParams& o = p.obstacles["plate"];
+  o.mesh = "meshes/bump.obj";
+  o.motion = Motion{};
+  o.cache = "meshes/bump_##.obj";
+  return p;
+}
+
+}  // namespace
+
+// The bump pushes the cloth up: no particle is ever inside the shell by more
+// than rounding, and the cloth ends on the bump's top.
+TEST(MovingSurfaces, GrowingBumpInACacheLiftsTheCloth) {
+  TempDir dir("moving_cache_bump");
+  for (const char* integrator : {"symplectic-euler", "implicit-euler", "xpbd"}) {
+    std::vector<std::string> sets = {std::string("integrator.type=\"") + integrator + "\"",
+                                     "cloth.humidity=1"};
+    if (integrator[0] == 'x') sets.push_back(kXpbd[1]);
+    Simulation sim(on_growing_bump(dir, sets));
+    const Model& m = sim.model();
+    double deepest = 0;
+    for (double t = 0.05; t <= 0.5 + 1e-9; t += 0.05) {
+      ASSERT_TRUE(sim.advance_to(t)) << integrator << ": " << sim.blow_up_reason();
+      const SurfacePoses& at = detail::workspace(sim).surfaces;
+      const MeshObstacle& shape = detail::mesh_of(m, at, 0);
+      EXPECT_EQ(shape.time, sim.state().time);
+      for (int i = 0; i < m.n; ++i)
+        deepest = std::min(deepest, shape.query(sim.state().x[i]).distance);
+    }
+    EXPECT_GT(deepest, -1e-9) << integrator;
+    // The particle over the bump's middle is on its top (the shell's 1 mm
+    // over it), carried up 3 cm; the cloth's edge stays low.
+    double top = -1;
+    for (int i = 0; i < m.n; ++i) top = std::max(top, sim.state().x[i].z());
+    EXPECT_GT(top, kBumpHeight * 0.95 + 0.001) << integrator;
+    EXPECT_LT(top, kBumpHeight + 0.001 + 0.0015) << integrator;
+  }
+  // New parameters (the viewer's, Python's set) take the new cache: at half
+  // its speed the bump is half as high at 0.2 s.
+  Simulation sim(on_growing_bump(dir, {"integrator.type=\"xpbd\"", kXpbd[1]}));
+  Params slower = sim.model().params;
+  slower.obstacles["plate"].cache_fps = 12;
+  sim.set_params(slower);
+  const MeshObstacle& shape = detail::mesh_of(sim.model(), detail::workspace(sim).surfaces, 0);
+  EXPECT_EQ(shape.cache, sim.model().obstacles[0]->cache);
+  ASSERT_TRUE(sim.advance_to(0.2)) << sim.blow_up_reason();
+  double apex = 0;
+  for (const Vec3& x : detail::mesh_of(sim.model(), detail::workspace(sim).surfaces, 0).points)
+    apex = std::max(apex, x.z());
+  EXPECT_NEAR(apex, bump(0, 0, 0.1), 1e-3 * kBumpHeight);
+}
+
+// A deforming obstacle is a function of time too: the same bits on one
+// thread and on two, and from a state restored half-way.
+TEST(MovingSurfaces, CacheGivesTheSameBitsOnAnyThreadCountAndAfterARestore) {
+  TempDir dir("moving_cache_bits");
+  const auto scene = [&](const char* threads) {
+    return on_growing_bump(dir, {threads, "cloth.resolution=[51,51]", "integrator.type=\"xpbd\"",
+                                 kXpbd[1], "cloth.humidity=1"});
+  };
+  std::vector<Simulation> sims;
+  for (const char* threads : {"integrator.threads=1", "integrator.threads=2"})
+    sims.emplace_back(scene(threads));
+  ASSERT_EQ(sims[1].model().threads, 2);
+  for (auto& sim : sims) ASSERT_TRUE(sim.advance_to(0.05)) << sim.blow_up_reason();
+  const State middle = sims[0].state();
+  for (auto& sim : sims) ASSERT_TRUE(sim.advance_to(0.1)) << sim.blow_up_reason();
+  Simulation restored(scene("integrator.threads=1"));
+  restored.restore(middle);
+  ASSERT_TRUE(restored.advance_to(0.1)) << restored.blow_up_reason();
+  EXPECT_TRUE(test::same_bits(sims[0].state().x, sims[1].state().x));
+  EXPECT_TRUE(test::same_bits(sims[0].state().v, sims[1].state().v));
+  EXPECT_TRUE(test::same_bits(sims[0].state().x, restored.state().x));
+  EXPECT_TRUE(test::same_bits(sims[0].state().v, restored.state().v));
+  // A copy steps on a shape of its own (copy on write).
+  Simulation copy(sims[0]);
+  ASSERT_TRUE(copy.advance_to(0.12));
+  ASSERT_TRUE(sims[1].advance_to(0.12));
+  EXPECT_TRUE(test::same_bits(copy.state().x, sims[1].state().x));
 }

@@ -263,3 +263,115 @@ TEST(MovingOutputs, StillObstaclesWriteNoFrames) {
 }
 
 }  // namespace wetcloth
+
+namespace wetcloth {
+namespace {
+
+// A plate whose far corner rises, by a PC2 cache (float32) of 7 frames at
+// 24 fps, under a cloth dropped on the table: frames at 24 fps too.
+Params deforming_scene(const TempDir& dir) {
+  dir.write("meshes/plate.obj",
+            "v -0.1 -0.1 0\nv 0.1 -0.1 0\nv 0.1 0.1 0\nv -0.1 0.1 0\nf 1 2 3\nf 1 3 4\n");
+  std::string pc2("POINTCACHE2\0", 12);
+  const auto put = [&](const auto v) { pc2.append(reinterpret_cast<const char*>(&v), sizeof v); };
+  put(std::int32_t{1}), put(std::int32_t{4}), put(0.0f), put(1.0f), put(std::int32_t{7});
+  for (int k = 0; k < 7; ++k)
+    for (const auto& [x, y] : {std::pair{-0.1f, -0.1f}, {0.1f, -0.1f}, {0.1f, 0.1f}, {-0.1f, 0.1f}})
+      put(x), put(y), put(x > 0 && y > 0 ? 0.01f * static_cast<float>(k) : 0.0f);
+  dir.write("meshes/plate.pc2", pc2);
+  Params p = load_scene("drop-table",
+                        {"cloth.resolution=[9,9]", "cloth.center=[0,0,0.01]", "run.duration=0.25",
+                         "run.fps=24", "run.meshes=true", "run.export=\"usd,pc2,vtk\""});
+  p.scene_dir = dir.path.string();
+  ObstacleParams o;
+  o.mesh = "meshes/plate.obj";
+  o.thickness = 0.002;
+  o.translate = {0, 0.5, 0.2};
+  o.cache = "meshes/plate.pc2";
+  p.obstacles["plate"] = o;
+  return p;
+}
+
+// The cache's point i at time t (straight between its frames), placed
+// (translate), as the outputs have it.
+Vec3 cached_point(double t, int i) {
+  const float x = i == 1 || i == 2 ? 0.1f : -0.1f, y = i >= 2 ? 0.1f : -0.1f;
+  const double s = std::clamp(t * 24, 0.0, 6.0);
+  const int k = std::min(static_cast<int>(s), 5);
+  const double z0 = 0.01f * static_cast<float>(k), z1 = 0.01f * static_cast<float>(k + 1);
+  const double z = i == 2 ? z0 + (s - k) * (z1 - z0) : 0.0;
+  return Vec3(x, y, z) + Vec3(0, 0.5, 0.2);
+}
+
+}  // namespace
+
+// A deforming obstacle's outputs carry its shape each frame: obstacle_NAME.pc2
+// the cache's points (frame k at the cache's frame k: the same fps), the
+// frames' OBJs the same, USD time-sampled points and no transform, VTK a
+// frame each; scene.toml names the cache copied to OUT/caches/.
+TEST(MovingOutputs, DeformingObstacleOutputsCarryTheCachesPoints) {
+  TempDir dir("moving_outputs_deform");
+  const Params p = deforming_scene(dir);
+  EXPECT_TRUE(obstacles_move(p));
+  EXPECT_EQ(moving_obstacle_files(p), std::vector<std::string>{"plate"});
+  EXPECT_EQ(obstacle_usd_samples(p), std::vector<std::string>{"points_plate"});
+  const fs::path out = dir.path / "run";
+  ASSERT_EQ(run_scene(p, out).code, 0);
+  const std::string data = slurp(out / "obstacle_plate.pc2");
+  std::int32_t points, samples;
+  ASSERT_GE(data.size(), 32u);
+  std::memcpy(&points, data.data() + 16, 4);
+  std::memcpy(&samples, data.data() + 28, 4);
+  ASSERT_EQ(points, 4);
+  ASSERT_EQ(samples, 7);  // 0, 1/24, ... 0.25 s
+  for (int f = 0; f < 7; ++f) {
+    char name[64];
+    std::snprintf(name, sizeof name, "frames/obstacles_%05d.obj", f);
+    const std::string obj = slurp(out / name);
+    const double t = stated_time(obj);
+    EXPECT_NEAR(t, f / 24.0, 1e-4) << name;  // (the step that ends nearest)
+    const auto v = numbers(obj.substr(obj.find("o plate")));
+    for (int i = 0; i < 4; ++i) {
+      float x[3];
+      std::memcpy(x, data.data() + 32 + (static_cast<std::size_t>(f) * 4 + i) * 12, 12);
+      const Vec3 want = cached_point(t, i);
+      for (int q = 0; q < 3; ++q) {
+        EXPECT_NEAR(x[q], want[q], 1e-6) << "pc2 frame " << f << " point " << i;
+        EXPECT_NEAR(v[3 * i + q], want[q], 1e-5) << name << " point " << i;
+      }
+    }
+  }
+  const std::string usd = slurp(out / "cloth.usda");
+  const auto at = usd.find("def Mesh \"plate\"");
+  ASSERT_NE(at, std::string::npos);
+  const std::string prim = usd.substr(at, usd.find("\n    }\n", at) - at);
+  EXPECT_EQ(prim.find("xformOp"), std::string::npos);
+  const auto samples_at = prim.find("point3f[] points.timeSamples = {");
+  ASSERT_NE(samples_at, std::string::npos);
+  std::istringstream block(prim.substr(samples_at));
+  std::string line;
+  std::getline(block, line);
+  for (int f = 0; f < 7; ++f) {
+    ASSERT_TRUE(std::getline(block, line));
+    const auto v = numbers(line);
+    ASSERT_EQ(v.size(), 13u) << line;
+    EXPECT_EQ(v[0], f);
+    char name[64];
+    std::snprintf(name, sizeof name, "frames/obstacles_%05d.obj", f);
+    const double t = stated_time(slurp(out / name));
+    EXPECT_NEAR(v[1 + 3 * 2 + 2], cached_point(t, 2).z(), 1e-6) << line;
+  }
+  for (int f = 0; f < 7; ++f) {
+    char name[64];
+    std::snprintf(name, sizeof name, "vtk/obstacles_%05d.vtp", f);
+    EXPECT_TRUE(fs::exists(out / name)) << name;
+  }
+  const std::string manifest = slurp(out / kManifest);
+  for (const char* file : {"obstacle_plate.pc2", ".cloth.usda.samples/points_plate",
+                           "caches/plate.pc2", "meshes/plate.obj"})
+    EXPECT_NE(manifest.find(std::string(file) + "\n"), std::string::npos) << file;
+  EXPECT_EQ(slurp(out / "caches/plate.pc2"), slurp(dir.path / "meshes/plate.pc2"));
+  EXPECT_NE(slurp(out / "scene.toml").find("cache = \"caches/plate.pc2\""), std::string::npos);
+}
+
+}  // namespace wetcloth

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 #include <unistd.h>
 
+#include <cstdint>
 #include <filesystem>
 #include <fstream>
 
@@ -181,4 +182,82 @@ TEST(SceneMotion, VertexListHandlesHoldTheirParticles) {
   EXPECT_TRUE(has(error_of(cloth + "[handle.cuff]\nvertices = [1]\npatch = 2\n"),
                   "handle.cuff.vertices: names the handle's particles"));
   EXPECT_THROW(at_resolution(p, 21), SceneError);  // indices are not the same particles there
+}
+
+namespace {
+
+// A PC2 file of `frames` samples of `points` points, point i of sample k at
+// (i, k, 0) / 10.
+std::string pc2_bytes(int points, int frames) {
+  std::string o("POINTCACHE2\0", 12);
+  const auto put = [&](const auto v) { o.append(reinterpret_cast<const char*>(&v), sizeof v); };
+  put(std::int32_t{1}), put(points), put(0.0f), put(1.0f), put(frames);
+  for (int k = 0; k < frames; ++k)
+    for (int i = 0; i < points; ++i) put(i / 10.0f), put(k / 10.0f), put(0.0f);
+  return o;
+}
+
+}  // namespace
+
+// obstacle.NAME.cache: read with its mesh; a bad one names the scene file,
+// the key's line and the key, and what is wrong with the cache's file.
+TEST(SceneMotion, BadObstacleCachesNameTheFileLineAndKey) {
+  TempDir dir("scene_motion_cache");
+  dir.write("meshes/plate.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n");
+  dir.write("meshes/plate.pc2", pc2_bytes(4, 3));
+  dir.write("meshes/three.pc2", pc2_bytes(3, 3));
+  dir.write("meshes/short.pc2", pc2_bytes(4, 3).substr(0, 60));
+  for (int k = 0; k < 3; ++k)
+    dir.write("meshes/plate_00" + std::to_string(k + 1) + ".obj",
+              k == 1 ? "v 0 0 0\nv 1 0 0\nv 1 1 0\nf 1 2 3\n"
+                     : "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n");
+  dir.write("meshes/gap_1.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n");
+  dir.write("meshes/gap_3.obj", "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n");
+  const std::string head =
+      "[cloth]\ncenter = [0.5, 0.5, 0.3]\n[table]\nenabled = false\n[contact]\n"
+      "surface = \"none\"\n[obstacle.plate]\nmesh = \"meshes/plate.obj\"\nthickness = 0.002\n";
+  // Good: a PC2 file at 12 frames a second, from 0.5 s.
+  const Params p =
+      load_scene(dir.write("good.toml", head + "cache = \"meshes/plate.pc2\"\ncache_fps = 12\n"
+                                               "cache_start = 0.5\n")
+                     .string());
+  EXPECT_EQ(p.obstacles.at("plate").cache, "meshes/plate.pc2");
+  EXPECT_EQ(p.obstacles.at("plate").cache_fps, 12);
+  const Params back = parse_scene(to_toml(p), "back.toml");
+  EXPECT_EQ(back.obstacles.at("plate").cache, "meshes/plate.pc2");
+  EXPECT_EQ(back.obstacles.at("plate").cache_start, 0.5);
+  const auto error = [&](const std::string& name, const std::string& keys) {
+    return load_error(dir.write(name + ".toml", head + keys));
+  };
+  // Line 10: the cache's key.
+  const std::string missing = error("missing", "cache = \"meshes/none.pc2\"\n");
+  EXPECT_TRUE(has(missing, "missing.toml:10: obstacle.plate.cache: ")) << missing;
+  EXPECT_TRUE(has(missing, "none.pc2: no such file")) << missing;
+  const std::string count = error("count", "cache = \"meshes/three.pc2\"\n");
+  EXPECT_TRUE(has(count, "count.toml:10: obstacle.plate.cache: ")) << count;
+  EXPECT_TRUE(has(count, "three.pc2 has 3 vertices a frame, and obstacle.plate.mesh")) << count;
+  EXPECT_TRUE(has(count, "has 4")) << count;
+  const std::string cut = error("cut", "cache = \"meshes/short.pc2\"\n");
+  EXPECT_TRUE(has(cut, "cut.toml:10: obstacle.plate.cache: ")) << cut;
+  EXPECT_TRUE(has(cut, "short.pc2: 60 bytes where its header")) << cut;
+  const std::string frame = error("frame", "cache = \"meshes/plate_###.obj\"\n");
+  EXPECT_TRUE(has(frame, "frame.toml:10: obstacle.plate.cache: ")) << frame;
+  EXPECT_TRUE(has(frame, "plate_002.obj has 3 vertices a frame")) << frame;
+  const std::string none = error("none", "cache = \"meshes/arm_##.obj\"\n");
+  EXPECT_TRUE(has(none, "none.toml:10: obstacle.plate.cache: ")) << none;
+  EXPECT_TRUE(has(none, "arm_##.obj: no such files")) << none;
+  const std::string gap = error("gap", "cache = \"meshes/gap_#.obj\"\n");
+  EXPECT_TRUE(has(gap, "gap_2.obj: no such file, and the sequence goes on after it")) << gap;
+  const std::string fps = error("fps", "cache = \"meshes/plate.pc2\"\ncache_fps = 0\n");
+  EXPECT_TRUE(has(fps, "fps.toml:11")) << fps;
+  EXPECT_TRUE(has(fps, "obstacle.plate.cache_fps")) << fps;
+  EXPECT_TRUE(has(fps, "out of range")) << fps;
+  const std::string kind = error("kind", "cache = \"meshes/plate.txt\"\n");
+  EXPECT_TRUE(has(kind,
+                  "kind.toml:10: obstacle.plate.cache: \"meshes/plate.txt\" is neither a "
+                  "PC2 file"))
+      << kind;
+  const std::string folder = error("folder", "cache = \"m#/plate.obj\"\n");
+  EXPECT_TRUE(has(folder, "obstacle.plate.cache: \"m#/plate.obj\": the # of an OBJ sequence"))
+      << folder;
 }

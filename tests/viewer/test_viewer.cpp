@@ -4,6 +4,7 @@
 // sweep's contact sheet puts labelled tiles side by side.
 #include <gtest/gtest.h>
 #include <sys/wait.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
@@ -318,6 +319,42 @@ TEST(Stage, MovingObstaclesArePosedAtTheClothsTime) {
   pose_stage(d, still, 1.0);
   EXPECT_FALSE(d.ball_moves);
   EXPECT_EQ(d.ball_rotation, Eigen::Matrix3f::Identity());
+}
+
+// A deforming obstacle (obstacle.NAME.cache) is drawn in its shape at the
+// cloth's time: pose_stage gives the stage a new shape (a new serial, so the
+// renderer uploads it again), its box grown with it.
+TEST(Stage, DeformingObstaclesAreDrawnInTheirShapeAtTheClothsTime) {
+  using namespace wetcloth;
+  namespace fs = std::filesystem;
+  const fs::path dir =
+      fs::temp_directory_path() / ("wetcloth_stage_deform_" + std::to_string(::getpid()));
+  fs::create_directories(dir / "meshes");
+  const auto plate = [](double z) {
+    return "v -0.5 -0.5 0\nv 0.5 -0.5 0\nv 0.5 0.5 " + std::to_string(z) +
+           "\nv -0.5 0.5 0\nf 1 2 3\nf 1 3 4\n";
+  };
+  std::ofstream(dir / "meshes/plate.obj") << plate(0);
+  std::ofstream(dir / "meshes/plate_1.obj") << plate(0);
+  std::ofstream(dir / "meshes/plate_2.obj") << plate(0.1);
+  std::ofstream(dir / "s.toml")
+      << "[cloth]\ncenter = [0, 0, 0.3]\n[table]\nenabled = false\n[contact]\nsurface = "
+         "\"none\"\n[obstacle.plate]\nmesh = \"meshes/plate.obj\"\nthickness = 0.002\n"
+         "cache = \"meshes/plate_#.obj\"\ncache_fps = 24\n";
+  const Params p = load_scene((dir / "s.toml").string());
+  viewer::Stage s = viewer::stage_from(p);
+  ASSERT_TRUE(s.obstacles);
+  EXPECT_TRUE(s.obstacles->deforms);
+  EXPECT_NEAR(s.obstacles->position[2].z(), 0.0f, 1e-7f);
+  const auto before = s.obstacles->serial;
+  viewer::pose_stage(s, p, 1.0 / 48);  // half way: 5 cm up
+  EXPECT_NE(s.obstacles->serial, before);
+  EXPECT_NEAR(s.obstacles->position[2].z(), 0.05f, 1e-6f);
+  EXPECT_NEAR(s.obstacles_hi.z(), 0.05f, 1e-6f);
+  viewer::pose_stage(s, p, 5.0);  // held at the last frame
+  EXPECT_NEAR(s.obstacles->position[2].z(), 0.1f, 1e-6f);
+  EXPECT_NEAR(s.obstacles->position[0].z(), 0.0f, 1e-7f);
+  fs::remove_all(dir);
 }
 
 TEST(Panel, AnIntegratorPickedGetsAStepOfItsKind) {

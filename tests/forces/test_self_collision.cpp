@@ -60,70 +60,79 @@ TEST(SelfCollision, CandidatesSearchedAroundMoversAreTheWholeSearch) {
   EXPECT_GT(rebuilt, 0);
 }
 
+namespace {
+
+// A flat 20 x 20 cloth with self-collision on, its candidates at hand.
+struct FlatCloth {
+  Params p = [] {
+    Params q = load_scene("drop-table", {"cloth.resolution=[20,20]", "cloth.size=[0.12,0.12]"});
+    q.self_collision.enabled = true;
+    return q;
+  }();
+  Simulation sim{p};
+  const Model& m = sim.model();
+  State& s = detail::state(sim);
+  Workspace& w = detail::workspace(sim);
+  const Vec3 lift{0, 0, 0.5 * p.self_collision.distance};
+  void search() { detail::add_self_collision(m, s, w, true); }
+  bool paired(int i, int j) const {
+    return std::binary_search(w.candidates.begin(), w.candidates.end(),
+                              std::array<int, 2>{std::min(i, j), std::max(i, j)});
+  }
+};
+
+}  // namespace
+
 // Movers that meet: two particles far apart on the grid are moved next to
 // each other (both searched again, without building the hash), then a third
 // next to the first, which the hash still holds where it was.
 TEST(SelfCollision, MoversMeetingEachOtherArePaired) {
-  Params p = load_scene("drop-table", {"cloth.resolution=[20,20]", "cloth.size=[0.12,0.12]"});
-  p.self_collision.enabled = true;
-  Simulation sim(p);
-  const Model& m = sim.model();
-  State& s = detail::state(sim);
-  auto& w = detail::workspace(sim);
-  detail::add_self_collision(m, s, w, true);  // the whole search
-  const auto paired = [&](int i, int j) {
-    return std::binary_search(w.candidates.begin(), w.candidates.end(),
-                              std::array<int, 2>{std::min(i, j), std::max(i, j)});
-  };
-  const int a = m.index(3, 3), b = m.index(15, 14), c = m.index(9, 17);
-  const Vec3 lift(0, 0, 0.5 * p.self_collision.distance);
+  FlatCloth f;
+  State& s = f.s;
+  Workspace& w = f.w;
+  const Vec3& lift = f.lift;
+  f.search();  // the whole search
+  const int a = f.m.index(3, 3), b = f.m.index(15, 14), c = f.m.index(9, 17);
   detail::put(s.x[a], Vec3(s.x[b] + lift));
   detail::put(s.x[b], Vec3(s.x[b] - lift));
-  detail::add_self_collision(m, s, w, true);
+  f.search();
   ASSERT_EQ(w.candidate_movers, (std::vector<int>{a, b}));
-  EXPECT_TRUE(paired(a, b));
+  EXPECT_TRUE(f.paired(a, b));
   detail::put(s.x[c], Vec3(s.x[a] + lift));
-  detail::add_self_collision(m, s, w, true);
+  f.search();
   ASSERT_EQ(w.candidate_movers, std::vector<int>{c});
   EXPECT_FALSE(w.hash_stale.empty());  // a and b: out of the hash
-  EXPECT_TRUE(paired(c, a));
-  EXPECT_TRUE(paired(a, b));
+  EXPECT_TRUE(f.paired(c, a));
+  EXPECT_TRUE(f.paired(a, b));
 }
 
 // A cloth that moves as a whole keeps its list: 10 cm along, every pair is
 // as far apart as it was, and no particle is searched again. Then two
 // particles far apart on the grid brought within d_t there are paired.
 TEST(SelfCollision, ClothMovedAsAWholeKeepsItsCandidates) {
-  Params p = load_scene("drop-table", {"cloth.resolution=[20,20]", "cloth.size=[0.12,0.12]"});
-  p.self_collision.enabled = true;
-  Simulation sim(p);
-  const Model& m = sim.model();
-  State& s = detail::state(sim);
-  auto& w = detail::workspace(sim);
-  const Vec3 lift(0, 0, 0.5 * p.self_collision.distance);
-  const auto paired = [&](int i, int j) {
-    return std::binary_search(w.candidates.begin(), w.candidates.end(),
-                              std::array<int, 2>{std::min(i, j), std::max(i, j)});
-  };
-  const int a = m.index(3, 3), b = m.index(15, 14), c = m.index(9, 17), d = m.index(2, 10);
-  detail::put(s.x[a], Vec3(s.x[b] + lift));   // a fold: a over b
-  detail::add_self_collision(m, s, w, true);  // the whole search
-  ASSERT_TRUE(paired(a, b));
+  FlatCloth f;
+  State& s = f.s;
+  Workspace& w = f.w;
+  const Vec3& lift = f.lift;
+  const int a = f.m.index(3, 3), b = f.m.index(15, 14), c = f.m.index(9, 17), d = f.m.index(2, 10);
+  detail::put(s.x[a], Vec3(s.x[b] + lift));  // a fold: a over b
+  f.search();                                // the whole search
+  ASSERT_TRUE(f.paired(a, b));
   const auto candidates = w.candidates;
   const Vec3Array anchors = w.candidates_anchor;
   const Vec3 along(0.06, -0.08, 0.0);
-  for (int i = 0; i < m.n; ++i) detail::add(s.x[i], along);
-  detail::add_self_collision(m, s, w, true);
+  for (int i = 0; i < f.m.n; ++i) detail::add(s.x[i], along);
+  f.search();
   EXPECT_TRUE(w.candidate_movers.empty());
   EXPECT_EQ(w.candidates, candidates);
   EXPECT_TRUE(w.candidates_anchor == anchors);
   EXPECT_LT((w.candidates_motion - along).norm(), 1e-12);
   EXPECT_EQ(w.collision_pairs.size(), 1u);  // a and b, still within d_t
   detail::put(s.x[c], Vec3(s.x[d] + lift));
-  detail::add_self_collision(m, s, w, true);
+  f.search();
   EXPECT_EQ(w.candidate_movers, std::vector<int>{c});
-  EXPECT_TRUE(paired(c, d));
-  EXPECT_TRUE(paired(a, b));
+  EXPECT_TRUE(f.paired(c, d));
+  EXPECT_TRUE(f.paired(a, b));
   EXPECT_EQ(w.collision_pairs.size(), 2u);
 }
 

@@ -359,6 +359,21 @@ void add_adhesion(const Model& m, const State& s, Workspace& w);
 // Self-collision records its pairs in w.collision_pairs; with_damping adds the
 // -k_f v of colliding particles (implicit Euler takes it into its matrix).
 void add_self_collision(const Model& m, const State& s, Workspace& w, bool with_damping);
+// Eq. 15's k_t and k_f as a pair and a particle of this cloth feel them: on a
+// grid finer than self_collision.spacing (the paper's 6 mm), a pair's
+// stiffness scales as the product of the particles' areas and a particle's
+// damping as its area, so that two layers press on and damp each other
+// alike on every grid (docs/model.md section 7). A coarser cloth, or a
+// spacing of 0, keeps them as given.
+struct CollisionConstants {
+  double k, damping;
+};
+inline CollisionConstants collision_constants(const Model& m) {
+  const auto& p = m.params.self_collision;
+  const double ref = p.spacing * p.spacing, area = m.spacing * m.spacing;
+  const double scale = ref > 0 && area < ref ? area / ref : 1.0;
+  return {p.k * scale * scale, p.damping * scale};
+}
 void add_handle_forces(const Model& m, const State& s, Workspace& w);
 
 // air/air.cpp: the trapped air starts as the volume under the cloth at

@@ -278,6 +278,7 @@ struct Params {
     double distance = 5e-3;  // d_t, m
     double k = 200;          // k_t, N/m
     double damping = 5e-3;   // k_f, N·s/m
+    double spacing = 6e-3;   // the particle spacing k and damping are given for, m (0: any)
   } self_collision;
 
   struct Integrator {

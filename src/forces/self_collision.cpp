@@ -253,7 +253,8 @@ void refresh_collision_candidates(const Model& m, const State& s, Workspace& w) 
 void add_self_collision(const Model& m, const State& s, Workspace& w, bool with_damping) {
   const auto& p = m.params.self_collision;
   if (!p.enabled) return;
-  const double dt_dist = p.distance, k = p.k;
+  const auto [k, damping] = collision_constants(m);
+  const double dt_dist = p.distance;
   refresh_collision_candidates(m, s, w);
   // Flags of colliding particles: last step's cleared through last step's
   // pairs, not over the whole cloth.
@@ -286,7 +287,7 @@ void add_self_collision(const Model& m, const State& s, Workspace& w, bool with_
   }
   if (!with_damping) return;  // implicit Euler takes it into its matrix
   // The paper's friction-like damping -k_f v on every colliding particle, once.
-  for (const int q : w.colliding_particles) w.force[q] -= p.damping * s.v[q];
+  for (const int q : w.colliding_particles) w.force[q] -= damping * s.v[q];
 }
 
 }  // namespace wetcloth::detail

@@ -384,7 +384,8 @@ void assemble_spring_blocks(const Model& m, const State& s, Workspace& w, double
 // edge off the grid adds its zero block).
 void assemble_diagonal_blocks(const Model& m, Workspace& w, double h) {
   const double h2 = h * h, c = m.params.forces.viscous_damping;
-  const double kf = m.params.self_collision.damping;
+  const CollisionConstants collision = collision_constants(m);
+  const double kt = collision.k, kf = collision.damping;
   const std::vector<double>& bending = m.topology->bending.diagonal;
   w.bending_h2 = h2;
   const int nu = m.nu;
@@ -428,7 +429,7 @@ void assemble_diagonal_blocks(const Model& m, Workspace& w, double h) {
       }
   });
   for (CollisionPair& p : w.collision_pairs) {
-    p.block = outer(p.u, h2 * m.params.self_collision.k, 0);
+    p.block = outer(p.u, h2 * kt, 0);
     for (const int a : {p.i, p.j})
       for (int k = 0; k < 6; ++k) diagonal_field(m, w, k)[a] += p.block[k];
   }

@@ -263,7 +263,7 @@ void project_self_collision(const Model& m, State& s, Workspace& w, double h) {
   const auto& p = m.params.self_collision;
   if (!p.enabled || p.k <= 0) return;
   refresh_collision_candidates(m, s, w);
-  const double alpha = 1.0 / (p.k * h * h), d_t = p.distance;
+  const double alpha = 1.0 / (collision_constants(m).k * h * h), d_t = p.distance;
   for (const int q : w.colliding_particles) w.colliding[q] = 0;
   w.colliding_particles.clear();
   for (const auto& [i, j] : w.candidates) {
@@ -503,7 +503,7 @@ void xpbd_step(const Model& m, State& s, Workspace& w) {
     project_self_collision(m, s, w, h);
     collide_with_friction(m, s, w, w.touched, h);
     // The paper's damping -k_f v of colliding particles, implicit.
-    const double k_f = m.params.self_collision.damping;
+    const double k_f = collision_constants(m).damping;
     for (const int q : w.colliding_particles) s.v[q] *= 1.0 / (1.0 + h * k_f * m.inv_mass[q]);
     hold_stopped_handles(m, s);
     // The rig holds its patch against the external forces (apply_handle_constraints)

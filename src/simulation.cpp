@@ -223,7 +223,8 @@ void Simulation::set_params(const Params& p) {
     set_masses(model_, state_.humidity);
   }
   ws_->strain_springs.clear();  // their lengths may have changed: ordered again next step
-  ws_->mesh_cache.clear();      // an obstacle may have moved: its last answers bound nothing
+  ws_->strain_slots.clear();
+  ws_->mesh_cache.clear();  // an obstacle may have moved: its last answers bound nothing
   place_surfaces(model_, *ws_, state_.time);
 }
 

@@ -93,8 +93,10 @@ struct Workspace {
   std::vector<float> damping_columns;    // apply_spring_damping's columns and scratch
   std::vector<double> damping_impulses;  // and its impulses
   std::vector<int> queue;
-  // Strain limiting: structural and shear springs in adaptive order, the first
-  // spring of each level (and the end); within a level, the corrections found
+  // Strain limiting: structural and shear springs in adaptive order (their
+  // slots; a mesh cloth's springs by slot in strain_springs, a grid's from
+  // the slot, detail::strain_spring), the first spring of each level (and the
+  // end); within a level, the corrections found
   // (each spring's shortening and its ends' shares, by inverse mass), how many
   // move each particle, and their sums.
   struct StrainSpring {
@@ -107,8 +109,8 @@ struct Workspace {
     double wa = 0, wb = 0;     // a moves by wa corr, b by -wb corr (before the relaxation)
     Vec3 corr = Vec3::Zero();  // (x_b - x_a)(1 - max_len / |x_b - x_a|)
   };
-  std::vector<StrainSpring> strain_springs;
-  std::vector<int> strain_levels;
+  std::vector<StrainSpring> strain_springs;  // a mesh cloth's, by slot
+  std::vector<int> strain_slots, strain_levels;
   std::vector<StrainCorrection> strain_corrections;
   std::vector<Vec3> strain_delta;
   std::vector<int> strain_count;
@@ -117,7 +119,7 @@ struct Workspace {
   // dt²; zero elsewhere), and those particles: part of a handle's reaction.
   std::vector<Vec3> strain_reaction;
   std::vector<int> strain_reacting;
-  std::vector<int> strain_index;               // stencil slot -> its place in strain_springs
+  std::vector<int> strain_index;               // slot -> its place in strain_slots
   std::vector<std::uint8_t> strain_stretched;  // per stencil slot, at the start of a pass
   std::vector<std::uint8_t> strain_queued;     // per spring: in strain_heap
   std::vector<int> strain_heap, strain_touched;
@@ -134,7 +136,8 @@ struct Workspace {
   // Self-collision candidates: pairs (i < j, sorted) whose anchors are within
   // candidates_radius; the particles searched again this step, and their flags
   // (zero between steps).
-  std::vector<std::array<int, 2>> candidates, candidates_merged;
+  std::vector<std::array<int, 2>> candidates;
+  std::vector<std::array<int, 2>> candidates_merged;  // the movers' new pairs, merged in
   std::vector<int> candidate_movers;
   std::vector<std::uint8_t> candidate_moved;
   // Particles anchored again since the hash was built (its entries for them

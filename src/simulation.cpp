@@ -84,7 +84,6 @@ void Simulation::reset() {
   ws_->grab_k = grab_k_;
   for (auto* a : {&ws_->force, &ws_->normal, &ws_->surface_normal, &ws_->air_direction})
     a->assign(n, Vec3::Zero());
-  ws_->x_before.assign(n, Vec3::Zero());
   ws_->row_sums.assign(model_.nv, 0.0);
   ws_->row_max.assign(model_.nv, 0.0);
   ws_->distance.assign(n, kInf);

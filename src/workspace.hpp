@@ -23,7 +23,8 @@ struct CollisionPair {
   Sym block{};  // implicit Euler: its h² k_t u uᵀ
 };
 
-// compute_normals' scratch: each quad's two triangle normals, and 1 where
+// compute_normals' scratch: each thread's quads' two triangle normals (a
+// chunk of rows at a time), and 1 where
 // i + j is even (its quad splits along a-cc; see Model::triangles), else 0,
 // as a column, so that it runs over whole blocks of rows.
 struct NormalsScratch {
@@ -76,8 +77,8 @@ struct Workspace {
   SurfacePoses surfaces;
   HumidityScratch humidity;
   Vec3Array force, normal, surface_normal;
-  Vec3Array bending_force;  // xpbd: the quadratic bending's, apart (add_external_velocity)
-  std::vector<Vec3> x_before;
+  Vec3Array bending_force;     // xpbd: the quadratic bending's, apart (add_external_velocity)
+  std::vector<Vec3> x_before;  // limit_strain: where each of strain_changed started
   NormalsScratch normals_scratch;
   std::vector<double> distance;       // signed distance to the contact surface
   std::vector<std::uint8_t> touched;  // the surface each particle was pushed out of this step
@@ -154,8 +155,9 @@ struct Workspace {
   Vec3 candidates_motion = Vec3::Zero();
   double candidates_radius = 0;
   // Implicit Euler, in columns (see integrators/implicit_euler.cpp): in float, the
-  // matrix's 8 forward stencil edges' blocks and the block-Jacobi
-  // preconditioner; in double, the conjugate-gradient vectors and the
+  // blocks of the matrix's forward stencil edges that have a constant, the
+  // block-Jacobi preconditioner and the flags of the particles held on the
+  // surface; in double, the conjugate-gradient vectors and the
   // matrix's diagonal blocks; per-row sums; the particles whose velocity the
   // solve keeps (pinned, driven, held).
   std::vector<float> float_columns;

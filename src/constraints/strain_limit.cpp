@@ -387,8 +387,8 @@ class StrainLimiter {
     for (const int k : touched_) {
       if (!w.strain_saved[k]) {
         w.strain_saved[k] = 1;
-        put(w.x_before[k], s_.x[k]);
         w.strain_changed.push_back(k);
+        w.x_before.push_back(s_.x[k]);
       }
       add(s_.x[k], w.strain_delta[k]);
       put(w.strain_delta[k], Vec3::Zero());
@@ -408,8 +408,9 @@ void limit_strain(const Model& m, State& s, Workspace& w, double dt) {
   w.strain_reacting.clear();
   if (!p.enabled) return;
   update_strain_order(m, s, w);
-  // Where each particle the limiter moves started: its velocity follows at the end.
-  w.x_before.resize(m.n);
+  // Where each particle the limiter moves started (in strain_changed's order,
+  // not n of them): its velocity follows at the end.
+  w.x_before.clear();
   w.strain_saved.resize(m.n, 0);  // zero between calls
   w.strain_changed.clear();
   w.strain_delta.resize(m.n, Vec3::Zero());  // zero between levels
@@ -427,8 +428,9 @@ void limit_strain(const Model& m, State& s, Workspace& w, double dt) {
   }
   // Velocities follow the corrected positions (only moved particles' change).
   const double inv_dt = 1.0 / dt;
-  for (const int k : w.strain_changed) {
-    add(s.v[k], (s.x[k] - w.x_before[k]) * inv_dt);
+  for (std::size_t q = 0; q < w.strain_changed.size(); ++q) {
+    const int k = w.strain_changed[q];
+    add(s.v[k], (s.x[k] - w.x_before[q]) * inv_dt);
     w.strain_saved[k] = 0;
   }
 }

@@ -434,5 +434,14 @@ void collide_with_friction(const Model& m, State& s, Workspace& w,
 // held particles against it in w.strain_reaction.
 void update_strain_order(const Model& m, State& s, Workspace& w);
 void limit_strain(const Model& m, State& s, Workspace& w, double dt);
+// Spring e of the adaptive order (w.strain_slots): a mesh cloth's from its
+// list, a grid's from its stencil slot, 4 × its lower end + its offset.
+inline Workspace::StrainSpring strain_spring(const Model& m, const Workspace& w, int e) {
+  const int slot = w.strain_slots[e];
+  if (!m.grid) return w.strain_springs[slot];
+  const int a = slot / 4;
+  const StencilEdge& st = m.topology->stencil[slot % 4];
+  return {a, a + st.di + st.dj * m.nu, (1.0 + m.params.strain_limit.tau) * st.rest, slot};
+}
 
 }  // namespace wetcloth::detail

@@ -136,10 +136,10 @@ Metrics Simulation::metrics() const {
   r.inner_pressure_pa = s.inner_pressure;
   r.trapped_air_m3 = s.air_atm_volume;
   r.air_volume_m3 = s.air_volume;
-  for (std::size_t e = 0; e < m.structural.size(); ++e) {
-    const double len = (s.x[m.structural.b[e]] - s.x[m.structural.a[e]]).norm();
-    r.max_strain = std::max(r.max_strain, len / m.structural.rest[e] - 1.0);
-  }
+  for_each_spring(m, SpringKind::Structural, [&](int a, int b, double rest, double, double) {
+    const double len = (s.x[b] - s.x[a]).norm();
+    r.max_strain = std::max(r.max_strain, len / rest - 1.0);
+  });
   r.wrinkle_rad = m.contact_surface == SurfaceKind::None ? 0.0 : wrinkle_angle(m, s);
   r.front_pull_n = front_pull(m, s, ws_->surface_normal);
   // The humidity field (docs/model.md "Humidity field").

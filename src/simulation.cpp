@@ -84,7 +84,6 @@ void Simulation::reset() {
   ws_->grab_k = grab_k_;
   for (auto* a : {&ws_->force, &ws_->normal, &ws_->surface_normal, &ws_->air_direction})
     a->assign(n, Vec3::Zero());
-  ws_->x_before.assign(n, Vec3::Zero());
   ws_->row_sums.assign(model_.nv, 0.0);
   ws_->row_max.assign(model_.nv, 0.0);
   ws_->distance.assign(n, kInf);
@@ -223,7 +222,8 @@ void Simulation::set_params(const Params& p) {
     set_masses(model_, state_.humidity);
   }
   ws_->strain_springs.clear();  // their lengths may have changed: ordered again next step
-  ws_->mesh_cache.clear();      // an obstacle may have moved: its last answers bound nothing
+  ws_->strain_slots.clear();
+  ws_->mesh_cache.clear();  // an obstacle may have moved: its last answers bound nothing
   place_surfaces(model_, *ws_, state_.time);
 }
 

@@ -23,7 +23,8 @@ struct CollisionPair {
   Sym block{};  // implicit Euler: its h² k_t u uᵀ
 };
 
-// compute_normals' scratch: each quad's two triangle normals, and 1 where
+// compute_normals' scratch: each thread's quads' two triangle normals (a
+// chunk of rows at a time), and 1 where
 // i + j is even (its quad splits along a-cc; see Model::triangles), else 0,
 // as a column, so that it runs over whole blocks of rows.
 struct NormalsScratch {
@@ -76,8 +77,8 @@ struct Workspace {
   SurfacePoses surfaces;
   HumidityScratch humidity;
   Vec3Array force, normal, surface_normal;
-  Vec3Array bending_force;  // xpbd: the quadratic bending's, apart (add_external_velocity)
-  std::vector<Vec3> x_before;
+  Vec3Array bending_force;     // xpbd: the quadratic bending's, apart (add_external_velocity)
+  std::vector<Vec3> x_before;  // limit_strain: where each of strain_changed started
   NormalsScratch normals_scratch;
   std::vector<double> distance;       // signed distance to the contact surface
   std::vector<std::uint8_t> touched;  // the surface each particle was pushed out of this step
@@ -93,8 +94,10 @@ struct Workspace {
   std::vector<float> damping_columns;    // apply_spring_damping's columns and scratch
   std::vector<double> damping_impulses;  // and its impulses
   std::vector<int> queue;
-  // Strain limiting: structural and shear springs in adaptive order, the first
-  // spring of each level (and the end); within a level, the corrections found
+  // Strain limiting: structural and shear springs in adaptive order (their
+  // slots; a mesh cloth's springs by slot in strain_springs, a grid's from
+  // the slot, detail::strain_spring), the first spring of each level (and the
+  // end); within a level, the corrections found
   // (each spring's shortening and its ends' shares, by inverse mass), how many
   // move each particle, and their sums.
   struct StrainSpring {
@@ -107,8 +110,8 @@ struct Workspace {
     double wa = 0, wb = 0;     // a moves by wa corr, b by -wb corr (before the relaxation)
     Vec3 corr = Vec3::Zero();  // (x_b - x_a)(1 - max_len / |x_b - x_a|)
   };
-  std::vector<StrainSpring> strain_springs;
-  std::vector<int> strain_levels;
+  std::vector<StrainSpring> strain_springs;  // a mesh cloth's, by slot
+  std::vector<int> strain_slots, strain_levels;
   std::vector<StrainCorrection> strain_corrections;
   std::vector<Vec3> strain_delta;
   std::vector<int> strain_count;
@@ -117,7 +120,7 @@ struct Workspace {
   // dt²; zero elsewhere), and those particles: part of a handle's reaction.
   std::vector<Vec3> strain_reaction;
   std::vector<int> strain_reacting;
-  std::vector<int> strain_index;               // stencil slot -> its place in strain_springs
+  std::vector<int> strain_index;               // slot -> its place in strain_slots
   std::vector<std::uint8_t> strain_stretched;  // per stencil slot, at the start of a pass
   std::vector<std::uint8_t> strain_queued;     // per spring: in strain_heap
   std::vector<int> strain_heap, strain_touched;
@@ -134,7 +137,8 @@ struct Workspace {
   // Self-collision candidates: pairs (i < j, sorted) whose anchors are within
   // candidates_radius; the particles searched again this step, and their flags
   // (zero between steps).
-  std::vector<std::array<int, 2>> candidates, candidates_merged;
+  std::vector<std::array<int, 2>> candidates;
+  std::vector<std::array<int, 2>> candidates_merged;  // the movers' new pairs, merged in
   std::vector<int> candidate_movers;
   std::vector<std::uint8_t> candidate_moved;
   // Particles anchored again since the hash was built (its entries for them
@@ -151,8 +155,9 @@ struct Workspace {
   Vec3 candidates_motion = Vec3::Zero();
   double candidates_radius = 0;
   // Implicit Euler, in columns (see integrators/implicit_euler.cpp): in float, the
-  // matrix's 8 forward stencil edges' blocks and the block-Jacobi
-  // preconditioner; in double, the conjugate-gradient vectors and the
+  // blocks of the matrix's forward stencil edges that have a constant, the
+  // block-Jacobi preconditioner and the flags of the particles held on the
+  // surface; in double, the conjugate-gradient vectors and the
   // matrix's diagonal blocks; per-row sums; the particles whose velocity the
   // solve keeps (pinned, driven, held).
   std::vector<float> float_columns;

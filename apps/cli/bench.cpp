@@ -96,7 +96,8 @@ json measure(const Grid& g, int repetitions) {
     if (const std::string why = sim.blow_up_reason(); !why.empty()) return {{"blow_up", why}};
     const Model& m = sim.model();
     r["particles"] = m.n;
-    r["springs"] = m.structural.size() + m.shear.size() + m.bending.size();
+    r["springs"] = spring_count(m, SpringKind::Structural) + spring_count(m, SpringKind::Shear) +
+                   spring_count(m, SpringKind::Bending);
   }
   r["wall_s"] = wall;
   r["peak_bytes"] = peak_rss_bytes();
@@ -396,7 +397,9 @@ json report_peer_grid(const Options& o, const Grid& g, const Model& model, long 
   const double ours_us = 1e6 * median(r.ours_wall) / g.steps;
   const double peer_us = 1e6 * median(r.peer_wall) / peer_steps;
   const double ratio_median = median(r.ratio);
-  const long long springs = model.structural.size() + model.shear.size() + model.bending.size();
+  const long long springs = spring_count(model, SpringKind::Structural) +
+                            spring_count(model, SpringKind::Shear) +
+                            spring_count(model, SpringKind::Bending);
   double area = 0;
   for (double a : model.area) area += a;
   std::printf("%5lld  %9d  %7lld  %5.2f  %8.1f  %11.4f  %7d  %5.0f  %7.1f  %11.4f  %11.3f\n",

@@ -100,12 +100,11 @@ Legend cloth_mesh(const Simulation& sim, ColorBy mode, float& scale, ClothMesh& 
     case ColorBy::Strain: {
       // Stretch of the structural springs; the scale ends at the strain limit.
       std::vector<float> strain(n, 0.0f);
-      const SpringSet& sp = m.structural;
-      for (std::size_t k = 0; k < sp.size(); ++k) {
-        const float e = static_cast<float>((s.x[sp.a[k]] - s.x[sp.b[k]]).norm() / sp.rest[k] - 1.0);
-        strain[sp.a[k]] = std::max(strain[sp.a[k]], e);
-        strain[sp.b[k]] = std::max(strain[sp.b[k]], e);
-      }
+      for_each_spring(m, SpringKind::Structural, [&](int a, int b, double rest, double, double) {
+        const float e = static_cast<float>((s.x[a] - s.x[b]).norm() / rest - 1.0);
+        strain[a] = std::max(strain[a], e);
+        strain[b] = std::max(strain[b], e);
+      });
       const float hi = range > 0 ? range
                        : m.params.strain_limit.tau > 0
                            ? static_cast<float>(m.params.strain_limit.tau)

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <initializer_list>
 #include <memory>
 #include <string>
@@ -134,6 +135,9 @@ struct Model {
   // The field then lives in State::humidity; mass and inv_mass follow it.
   std::vector<double> initial_humidity;
   std::vector<std::uint8_t> in_wind;  // inside the wind region
+  // A mesh cloth's springs. Empty on the grid, whose stencil is all of its
+  // springs (128 B a particle kept out of a large grid's memory):
+  // spring_set and for_each_spring give any cloth's.
   SpringSet structural, shear, bending;
   int threads =
       1;  // threads of the step (integrator.threads resolved; the bits do not depend on it)
@@ -165,6 +169,17 @@ struct Model {
 };
 
 Model build_model(const Params& p);
+
+// The springs of a kind, of any cloth: a mesh cloth's set, or the grid's from
+// its stencil in rows, particles, then offsets (the order a set of them was
+// built in), the rest length the distance of the ends' rest positions.
+enum class SpringKind { Structural, Shear, Bending };
+void for_each_spring(
+    const Model& m, SpringKind kind,
+    const std::function<void(int a, int b, double rest, double k, double damping)>& f);
+std::size_t spring_count(const Model& m, SpringKind kind);
+// The same as a set (a copy: for tests and tools, not for a large grid's step).
+SpringSet spring_set(const Model& m, SpringKind kind);
 // XPBD's substeps a step: integrator.substeps, or when 0 10, and one more per
 // 10 particles past 101 along the longer side (a stretch must cross the cloth
 // in a step's sweeps).

@@ -60,45 +60,63 @@ void distances_from(const Model& m, const std::vector<int>& sources, State& s, W
   }
 }
 
-// The structural and shear springs, sorted by level (the smaller distance of
-// their ends), stable so that a level keeps grid order.
+// The structural and shear springs' slots, sorted by level (the smaller
+// distance of their ends), stable so that a level keeps grid order. A mesh
+// cloth's springs are listed once, by slot (their index, structural then
+// shear); a grid's are its stencil slots.
 void order_springs(const Model& m, const State& s, Workspace& w) {
-  w.strain_springs.clear();
-  w.strain_springs.reserve(m.structural.size() + m.shear.size());  // grown, up to twice that
-  const double stretch = 1.0 + m.params.strain_limit.tau;
-  for (const SpringSet* set : {&m.structural, &m.shear})
-    for (std::size_t k = 0; k < set->size(); ++k) {
-      const int a = set->a[k], b = set->b[k];
-      if (!m.grid) {  // its slot: its index, structural then shear
+  w.strain_slots.clear();
+  const std::size_t count =
+      spring_count(m, SpringKind::Structural) + spring_count(m, SpringKind::Shear);
+  w.strain_slots.reserve(count);
+  if (!m.grid && w.strain_springs.empty()) {
+    w.strain_springs.reserve(count);
+    const double stretch = 1.0 + m.params.strain_limit.tau;
+    for (const SpringKind kind : {SpringKind::Structural, SpringKind::Shear})
+      for_each_spring(m, kind, [&](int a, int b, double rest, double, double) {
         const int slot = static_cast<int>(w.strain_springs.size());
-        w.strain_springs.push_back({a, b, stretch * set->rest[k], slot});
-        continue;
-      }
-      // Its stencil slot: the lower end and the forward offset, one of the first four.
-      int di = b % m.nu - a % m.nu, dj = b / m.nu - a / m.nu, lower = a;
-      if (dj < 0 || (dj == 0 && di < 0)) {
-        di = -di;
-        dj = -dj;
-        lower = b;
-      }
-      int e = 0;
-      while (m.topology->stencil[e].di != di || m.topology->stencil[e].dj != dj) ++e;
-      w.strain_springs.push_back(
-          {a, b, stretch * m.topology->stencil[e].rest, kStrainOffsets * lower + e});
+        w.strain_springs.push_back({a, b, stretch * rest, slot});
+      });
+  }
+  if (!m.grid)
+    for (std::size_t e = 0; e < w.strain_springs.size(); ++e)
+      w.strain_slots.push_back(static_cast<int>(e));
+  else
+    for (const SpringKind kind : {SpringKind::Structural, SpringKind::Shear})
+      for_each_spring(m, kind, [&](int a, int b, double, double, double) {
+        // Its stencil slot: the lower end and the forward offset, one of the first four.
+        int di = b % m.nu - a % m.nu, dj = b / m.nu - a / m.nu, lower = a;
+        if (dj < 0 || (dj == 0 && di < 0)) {
+          di = -di;
+          dj = -dj;
+          lower = b;
+        }
+        int e = 0;
+        while (m.topology->stencil[e].di != di || m.topology->stencil[e].dj != dj) ++e;
+        w.strain_slots.push_back(kStrainOffsets * lower + e);
+      });
+  auto level = [&](int slot) {
+    int a, b;
+    if (m.grid) {
+      const StencilEdge& st = m.topology->stencil[slot % kStrainOffsets];
+      a = slot / kStrainOffsets;
+      b = a + st.di + st.dj * m.nu;
+    } else {
+      a = w.strain_springs[slot].a;
+      b = w.strain_springs[slot].b;
     }
-  auto level = [&](const Workspace::StrainSpring& e) {
-    return std::min(s.source_distance[e.a], s.source_distance[e.b]);
+    return std::min(s.source_distance[a], s.source_distance[b]);
   };
-  std::stable_sort(w.strain_springs.begin(), w.strain_springs.end(),
-                   [&](const auto& x, const auto& y) { return level(x) < level(y); });
-  w.strain_index.assign(m.grid ? kStrainOffsets * std::size_t(m.n) : w.strain_springs.size(), -1);
-  for (std::size_t e = 0; e < w.strain_springs.size(); ++e)
-    w.strain_index[w.strain_springs[e].slot] = static_cast<int>(e);
+  std::stable_sort(w.strain_slots.begin(), w.strain_slots.end(),
+                   [&](int x, int y) { return level(x) < level(y); });
+  w.strain_index.assign(m.grid ? kStrainOffsets * std::size_t(m.n) : w.strain_slots.size(), -1);
+  for (std::size_t e = 0; e < w.strain_slots.size(); ++e)
+    w.strain_index[w.strain_slots[e]] = static_cast<int>(e);
   w.strain_levels.clear();
-  for (std::size_t e = 0; e < w.strain_springs.size(); ++e)
-    if (e == 0 || level(w.strain_springs[e]) != level(w.strain_springs[e - 1]))
+  for (std::size_t e = 0; e < w.strain_slots.size(); ++e)
+    if (e == 0 || level(w.strain_slots[e]) != level(w.strain_slots[e - 1]))
       w.strain_levels.push_back(static_cast<int>(e));
-  w.strain_levels.push_back(static_cast<int>(w.strain_springs.size()));
+  w.strain_levels.push_back(static_cast<int>(w.strain_slots.size()));
 }
 
 }  // namespace
@@ -107,7 +125,7 @@ void order_springs(const Model& m, const State& s, Workspace& w) {
 // particles to touch an obstacle. Until there are any, every spring is split
 // evenly, in grid order.
 void update_strain_order(const Model& m, State& s, Workspace& w) {
-  if (s.sources_found && !w.strain_springs.empty()) return;
+  if (s.sources_found && !w.strain_slots.empty()) return;
   std::vector<int> sources;
   for (const Handle& h : m.handles)
     sources.insert(sources.end(), h.particles.begin(), h.particles.end());
@@ -132,7 +150,7 @@ void update_strain_order(const Model& m, State& s, Workspace& w) {
   }
   if (sources.empty()) {
     s.source_distance.assign(m.n, 0);
-    if (w.strain_springs.empty()) order_springs(m, s, w);
+    if (w.strain_slots.empty()) order_springs(m, s, w);
     return;
   }
   s.sources_found = true;
@@ -259,9 +277,8 @@ class StrainLimiter {
 
   // A mesh cloth's first pass: every stretched spring, in the springs' order.
   void queue_stretched_mesh() {
-    const auto& springs = w_.strain_springs;
-    for (std::size_t e = 0; e < springs.size(); ++e) {
-      const auto& sp = springs[e];
+    for (std::size_t e = 0; e < w_.strain_slots.size(); ++e) {
+      const auto& sp = w_.strain_springs[w_.strain_slots[e]];
       if ((s_.x[sp.b] - s_.x[sp.a]).squaredNorm() > sp.max_len * sp.max_len) {
         heap_.push_back(static_cast<int>(e));
         w_.strain_queued[e] = 1;
@@ -328,7 +345,7 @@ class StrainLimiter {
   // Spring e's correction, if it is stretched and an end can move; returns
   // whether it made one.
   bool correct(int e) {
-    const auto& sp = w_.strain_springs[e];
+    const Workspace::StrainSpring sp = strain_spring(m_, w_, e);
     const Vec3 d = s_.x[sp.b] - s_.x[sp.a];
     const double len2 = d.squaredNorm();
     if (len2 <= sp.max_len * sp.max_len) return false;
@@ -370,8 +387,8 @@ class StrainLimiter {
     for (const int k : touched_) {
       if (!w.strain_saved[k]) {
         w.strain_saved[k] = 1;
-        put(w.x_before[k], s_.x[k]);
         w.strain_changed.push_back(k);
+        w.x_before.push_back(s_.x[k]);
       }
       add(s_.x[k], w.strain_delta[k]);
       put(w.strain_delta[k], Vec3::Zero());
@@ -391,16 +408,17 @@ void limit_strain(const Model& m, State& s, Workspace& w, double dt) {
   w.strain_reacting.clear();
   if (!p.enabled) return;
   update_strain_order(m, s, w);
-  // Where each particle the limiter moves started: its velocity follows at the end.
-  w.x_before.resize(m.n);
+  // Where each particle the limiter moves started (in strain_changed's order,
+  // not n of them): its velocity follows at the end.
+  w.x_before.clear();
   w.strain_saved.resize(m.n, 0);  // zero between calls
   w.strain_changed.clear();
   w.strain_delta.resize(m.n, Vec3::Zero());  // zero between levels
   w.strain_count.resize(m.n, 0);
   w.strain_reaction.resize(m.n, Vec3::Zero());  // zero but for strain_reacting
   w.strain_corrections.clear();
-  w.strain_stretched.resize(m.grid ? kStrainOffsets * std::size_t(m.n) : w.strain_springs.size());
-  w.strain_queued.resize(w.strain_springs.size(), 0);  // zero between passes
+  w.strain_stretched.resize(m.grid ? kStrainOffsets * std::size_t(m.n) : w.strain_slots.size());
+  w.strain_queued.resize(w.strain_slots.size(), 0);  // zero between passes
   // The levels run in order, one after the other, but most springs are not
   // stretched: each pass looks at those that can be, in the order of the levels.
   StrainLimiter limiter(m, s, w, dt);
@@ -410,8 +428,9 @@ void limit_strain(const Model& m, State& s, Workspace& w, double dt) {
   }
   // Velocities follow the corrected positions (only moved particles' change).
   const double inv_dt = 1.0 / dt;
-  for (const int k : w.strain_changed) {
-    add(s.v[k], (s.x[k] - w.x_before[k]) * inv_dt);
+  for (std::size_t q = 0; q < w.strain_changed.size(); ++q) {
+    const int k = w.strain_changed[q];
+    add(s.v[k], (s.x[k] - w.x_before[q]) * inv_dt);
     w.strain_saved[k] = 0;
   }
 }

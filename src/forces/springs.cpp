@@ -314,22 +314,30 @@ constexpr int kGroups = 2;
 // and after it, for the slots two springs beyond the grid's ends and those
 // the last row's last vector runs into (damp_offset). In double, in
 // w.damping_impulses: each group's impulses from its offsets along the
-// columns of the grid.
+// columns of the grid. A group with no damped offset (the bending's, with
+// the quadratic bending) has none of its own: its impulses would all be
+// zero, and adding them changes no sum (apply_spring_damping).
 struct DampingColumns {
   static constexpr int kPad = kWhole, kGrid = 7, kScratch = 7, kBack = 3;
   int n, threads;
   std::size_t stride;
   Workspace& w;
-  DampingColumns(const Model& m, Workspace& ws)
-      : n(m.n), threads(std::min(m.threads, kGroups)), stride(std::size_t(m.n) + 2 * kPad), w(ws) {
-    w.damping_columns.resize((2 * kGrid + kScratch * threads + kBack * kGroups) * stride);
-    w.damping_impulses.resize(3 * kGroups * std::size_t(n));
+  std::array<int, kGroups> slot{};  // each damped group's place among them (-1: none)
+  DampingColumns(const Model& m, Workspace& ws, const std::array<bool, kGroups>& live)
+      : n(m.n), stride(std::size_t(m.n) + 2 * kPad), w(ws) {
+    int groups = 0;
+    for (int g = 0; g < kGroups; ++g) slot[g] = live[g] ? groups++ : -1;
+    threads = std::min(m.threads, groups);
+    w.damping_columns.resize((2 * kGrid + kScratch * threads + kBack * groups) * stride);
+    w.damping_impulses.resize(3 * groups * std::size_t(n));
   }
   Real* col(int k) const { return w.damping_columns.data() + k * stride + kPad; }
   Real* back(int group, int k) const {  // λ u_k
-    return col(2 * kGrid + kScratch * threads + kBack * group + k);
+    return col(2 * kGrid + kScratch * threads + kBack * slot[group] + k);
   }
-  double* impulse(int k) const { return w.damping_impulses.data() + k * std::size_t(n); }
+  double* impulse(int group, int k) const {
+    return w.damping_impulses.data() + (3 * slot[group] + k) * std::size_t(n);
+  }
 };
 
 // The grid's positions, velocities and inverse masses in float, and their transposes.
@@ -377,7 +385,7 @@ void solve_damping_groups(const Model& m, double h, int damped, const DampingCol
       // A horizontal offset's chains are vertical on the transposed grid.
       const bool transposed = st.dj == 0;
       const Real* g = d.col(transposed ? kGrid : 0);
-      double* j = d.impulse(3 * group);
+      double* j = d.impulse(group, 0);
       const DampingGrid grid{transposed ? nv : nu,
                              transposed ? nu : nv,
                              g,
@@ -408,14 +416,16 @@ void solve_damping_groups(const Model& m, double h, int damped, const DampingCol
   };
   // On one thread no region: even one its `if` turns off costs a futex call.
   if (d.threads <= 1) {
-    for (int group = 0; group < kGroups; ++group) solve_group(group, 0);
+    for (int group = 0; group < kGroups; ++group)
+      if (d.slot[group] >= 0) solve_group(group, 0);
   } else {
 #pragma omp parallel for schedule(static) num_threads(d.threads)
     for (int group = 0; group < kGroups; ++group) solve_group(group, omp_get_thread_num());
   }
   for (int group = 0; group < kGroups; ++group) {
+    if (d.slot[group] < 0) continue;
     if (first[group])
-      for (int k = 0; k < 3; ++k) std::fill_n(d.impulse(3 * group + k), n, 0.0);
+      for (int k = 0; k < 3; ++k) std::fill_n(d.impulse(group, k), n, 0.0);
     for (int k = 0; k < 3; ++k)  // and the zeros before the first row (see below)
       std::fill(d.back(group, k) - DampingColumns::kPad, d.back(group, k) + (solved[group] ? 0 : n),
                 Real(0));
@@ -433,10 +443,13 @@ void apply_spring_damping(const Model& m, State& s, Workspace& w, double h) {
   for (const StencilEdge& st : m.topology->stencil) damped += st.damping > 0;
   if (damped == 0) return;
   std::array<int, kGroups> horizontal{};  // each group's horizontal offset, di
+  std::array<bool, kGroups> live{};       // each group: some offset of it damped
   for (int group = 0; group < kGroups; ++group)
-    for (int e = group * kEdges / kGroups; e < (group + 1) * kEdges / kGroups; ++e)
+    for (int e = group * kEdges / kGroups; e < (group + 1) * kEdges / kGroups; ++e) {
       if (m.topology->stencil[e].dj == 0) horizontal[group] = m.topology->stencil[e].di;
-  const DampingColumns d(m, w);
+      live[group] = live[group] || m.topology->stencil[e].damping > 0;
+    }
+  const DampingColumns d(m, w, live);
   load_damping_columns(m, s, d);
   bool first[kGroups] = {true, true};     // per group: nothing in its impulses yet
   bool solved[kGroups] = {false, false};  // per group: its horizontal λ solved
@@ -445,27 +458,36 @@ void apply_spring_damping(const Model& m, State& s, Workspace& w, double h) {
   // offsets along the columns, then its horizontal one, whose spring starting
   // at a particle gives it +λ u and the one ending there −λ u. (Before the
   // di first particles of a row, where no spring ends, are the zeros of the
-  // row before it, where none starts: x − 0 is x.)
+  // row before it, where none starts: x − 0 is x.) A group without damped
+  // offsets would add +0 to a sum that is not −0 (0 + x never is): left out.
   static_assert(kGroups == 2);
   const double share = 1.0 / damped;
   const int di0 = horizontal[0], di1 = horizontal[1];
-  for_each_particle_block(m, [&](int first, int end) {
-    for (int k = 0; k < 3; ++k) {
-      const double* __restrict jv0 = d.impulse(k);
-      const double* __restrict jv1 = d.impulse(3 + k);
-      const Real* __restrict lu0 = d.back(0, k);
-      const Real* __restrict lu1 = d.back(1, k);
-      const double* __restrict inv_mass = m.inv_mass.data();
-      double* __restrict out = s.v.column(k);
+  const auto add_groups = [&]<bool kFirst, bool kSecond>() {
+    for_each_particle_block(m, [&](int first, int end) {
+      for (int k = 0; k < 3; ++k) {
+        const double* __restrict jv0 = kFirst ? d.impulse(0, k) : nullptr;
+        const double* __restrict jv1 = kSecond ? d.impulse(1, k) : nullptr;
+        const Real* __restrict lu0 = kFirst ? d.back(0, k) : nullptr;
+        const Real* __restrict lu1 = kSecond ? d.back(1, k) : nullptr;
+        const double* __restrict inv_mass = m.inv_mass.data();
+        double* __restrict out = s.v.column(k);
 #pragma GCC ivdep
-      for (int a = first; a < end; ++a) {
-        double sum = 0;
-        sum += jv0[a] + (double(lu0[a]) - double(lu0[a - di0]));
-        sum += jv1[a] + (double(lu1[a]) - double(lu1[a - di1]));
-        out[a] += share * inv_mass[a] * sum;
+        for (int a = first; a < end; ++a) {
+          double sum = 0;
+          if constexpr (kFirst) sum += jv0[a] + (double(lu0[a]) - double(lu0[a - di0]));
+          if constexpr (kSecond) sum += jv1[a] + (double(lu1[a]) - double(lu1[a - di1]));
+          out[a] += share * inv_mass[a] * sum;
+        }
       }
-    }
-  });
+    });
+  };
+  if (live[0] && live[1])
+    add_groups.template operator()<true, true>();
+  else if (live[0])
+    add_groups.template operator()<true, false>();
+  else
+    add_groups.template operator()<false, true>();
 }
 
 }  // namespace wetcloth::detail

@@ -53,23 +53,40 @@ T* column(const Model& m, std::vector<T>& store, int k) {
 // The diagonal blocks are summed in double from the same float fields, so the
 // matrix stays symmetric and each row's blocks add up as they should; only
 // the vectors' precision decides how the solve converges.
+// An edge with neither stiffness nor damping (the Provot bending offsets
+// under the quadratic bending) has no fields (64 B a particle): its block
+// would be zero everywhere, and every loop leaves it out (a zero block adds
+// ±0, which changes no sum but an exact −0's sign).
 // The block-Jacobi preconditioner follows them in the same store, six float
 // columns (Sym's order): it only steers the solve, which converges on the
-// double residual.
-constexpr int kBlockFields = 4, kPreconditionerColumn = 8 * kBlockFields,
-              kFloatColumns = kPreconditionerColumn + 6;
+// double residual. Then one column of flags: 1 for a particle held on the
+// contact surface (set_up_solve), whose normal is then w.surface_normal's.
+constexpr int kBlockFields = 4;
+bool has_block(const Model& m, int e) {
+  return m.topology->stencil[e].k != 0 || m.topology->stencil[e].damping != 0;
+}
+int edges_with_blocks(const Model& m) {
+  int count = 0;
+  for (int e = 0; e < 8; ++e) count += has_block(m, e);
+  return count;
+}
+int float_columns(const Model& m) { return kBlockFields * edges_with_blocks(m) + 7; }
 float* edge_field(const Model& m, Workspace& w, int e, int k) {
-  return column(m, w.float_columns, kBlockFields * e + k);
+  int slot = 0;  // edge e's place among those with blocks
+  for (int f = 0; f < e; ++f) slot += has_block(m, f);
+  return column(m, w.float_columns, kBlockFields * slot + k);
 }
 float* preconditioner_field(const Model& m, Workspace& w, int k) {
-  return column(m, w.float_columns, kPreconditionerColumn + k);
+  return column(m, w.float_columns, kBlockFields * edges_with_blocks(m) + k);
 }
+float* held_flags(const Model& m, Workspace& w) { return preconditioner_field(m, w, 6); }
 
-// The solver's vectors in columns, three each (x, y, z), then the normal of
-// each particle held on the contact surface (zero for the others), then the
-// matrix's diagonal blocks (Sym's order): every loop over a row vectorises.
-enum Vector { kX, kR, kZ, kP, kQ };
-constexpr int kHeldColumn = 15, kDiagonalColumn = 18, kSolverColumns = 24;
+// The solver's vectors in columns, three each (x, y, z), then the matrix's
+// diagonal blocks (Sym's order): every loop over a row vectorises. z = P r
+// and q = A p share their columns: each is dead when the other is written
+// (q once r is updated from it, z once p is).
+enum Vector { kX, kR, kZ, kP, kQ = kZ };
+constexpr int kDiagonalColumn = 12, kSolverColumns = 18;
 struct Columns {
   double* c[3];
   Vec3 at(int a) const { return {c[0][a], c[1][a], c[2][a]}; }
@@ -83,19 +100,32 @@ Columns columns(const Model& m, Workspace& w, Vector v) {
       {solver_column(m, w, 3 * v), solver_column(m, w, 3 * v + 1), solver_column(m, w, 3 * v + 2)}};
 }
 
+// The normal of each particle held on the contact surface, zero for the others.
+struct HeldNormals {
+  const float* held;
+  const double *x, *y, *z;
+  HeldNormals(const Model& m, Workspace& w)
+      : held(held_flags(m, w)),
+        x(w.surface_normal.column(0)),
+        y(w.surface_normal.column(1)),
+        z(w.surface_normal.column(2)) {}
+};
+
 // v -= (v·n) n for the particles held on the surface (Baraff & Witkin's
 // filter S = I - n nᵀ; n is zero for the others).
 void filter(const Model& m, Workspace& w, Vector v) {
   const Columns c = columns(m, w, v);
-  const double *n0 = solver_column(m, w, kHeldColumn), *n1 = solver_column(m, w, kHeldColumn + 1),
-               *n2 = solver_column(m, w, kHeldColumn + 2);
+  const HeldNormals normals(m, w);
   for_each_row_block(m, [&](int j0, int j1, int) {
+    const HeldNormals h = normals;
 #pragma GCC ivdep
     for (int a = j0 * m.nu; a < j1 * m.nu; ++a) {
-      const double d = c.c[0][a] * n0[a] + c.c[1][a] * n1[a] + c.c[2][a] * n2[a];
-      c.c[0][a] -= d * n0[a];
-      c.c[1][a] -= d * n1[a];
-      c.c[2][a] -= d * n2[a];
+      const bool held = h.held[a] != 0;
+      const double n0 = held ? h.x[a] : 0.0, n1 = held ? h.y[a] : 0.0, n2 = held ? h.z[a] : 0.0;
+      const double d = c.c[0][a] * n0 + c.c[1][a] * n1 + c.c[2][a] * n2;
+      c.c[0][a] -= d * n0;
+      c.c[1][a] -= d * n1;
+      c.c[2][a] -= d * n2;
     }
   });
 }
@@ -162,6 +192,7 @@ void multiply(const Model& m, const State& s, Workspace& w, Vector in, Vector ou
         }
       }
       for (int e = 0; e < 8; ++e) {
+        if (!has_block(m, e)) continue;
         // Edge e's block sits at its lower end: particle a's forward edge (to
         // a + off) at a, its backward edge (from a - off) at a - off.
         const int off = m.topology->stencil[e].di + m.topology->stencil[e].dj * m.nu;
@@ -236,8 +267,7 @@ std::pair<double, double> precondition(const Model& m, Workspace& w) {
   const Columns r = columns(m, w, kR), z = columns(m, w, kZ);
   const float* P[6];
   for (int k = 0; k < 6; ++k) P[k] = preconditioner_field(m, w, k);
-  const double* N[3];
-  for (int k = 0; k < 3; ++k) N[k] = solver_column(m, w, kHeldColumn + k);
+  const HeldNormals normals(m, w);
   const double *r0 = r.c[0], *r1 = r.c[1], *r2 = r.c[2], *inv_mass = m.inv_mass.data();
   double* __restrict z0 = z.c[0];
   double* __restrict z1 = z.c[1];
@@ -254,10 +284,13 @@ std::pair<double, double> precondition(const Model& m, Workspace& w) {
       const double a0 = P[0][a] * r0[a] + P[3][a] * r1[a] + P[4][a] * r2[a];
       const double a1 = P[3][a] * r0[a] + P[1][a] * r1[a] + P[5][a] * r2[a];
       const double a2 = P[4][a] * r0[a] + P[5][a] * r1[a] + P[2][a] * r2[a];
-      const double d = a0 * N[0][a] + a1 * N[1][a] + a2 * N[2][a];
-      z0[a] = a0 - d * N[0][a];
-      z1[a] = a1 - d * N[1][a];
-      z2[a] = a2 - d * N[2][a];
+      const bool held = normals.held[a] != 0;
+      const double n0 = held ? normals.x[a] : 0.0, n1 = held ? normals.y[a] : 0.0,
+                   n2 = held ? normals.z[a] : 0.0;
+      const double d = a0 * n0 + a1 * n1 + a2 * n2;
+      z0[a] = a0 - d * n0;
+      z1[a] = a1 - d * n1;
+      z2[a] = a2 - d * n2;
     }
     for (int j = j0; j < j1; ++j) {
       const int b = j * m.nu, e = b + m.nu;
@@ -291,6 +324,7 @@ void add_forces_at_new_velocities(const Model& m, const State& s, Workspace& w, 
   if (m.grid)
     for (const int a : w.fixed_particles)
       for (int e = 0; e < 8; ++e) {
+        if (!has_block(m, e)) continue;
         // An edge off the grid has a zero block (its far end in the padding).
         const int off = m.topology->stencil[e].di + m.topology->stencil[e].dj * m.nu;
         for (const int at : {a, a - off}) {
@@ -348,6 +382,7 @@ void assemble_spring_blocks(const Model& m, const State& s, Workspace& w, double
     parallel_for(m, m.nv, [&](int j) {
       const int row = j * nu;
       for (int e = 0; e < 8; ++e) {
+        if (!has_block(m, e)) continue;
         const StencilEdge& st = m.topology->stencil[e];
         const int off = st.di + st.dj * nu;
         // Particles of the row whose edge e stays on the grid (every forward edge has dj >= 0).
@@ -420,6 +455,7 @@ void assemble_diagonal_blocks(const Model& m, Workspace& w, double h) {
     }
     for (int e = 0; e < 8; ++e)
       for (const int sign : {1, -1}) {
+        if (!has_block(m, e)) continue;
         const StencilEdge& st = m.topology->stencil[e];
         const int at = sign > 0 ? 0 : -(st.di + st.dj * nu);
         const float *s0 = edge_field(m, w, e, 0) + at, *s1 = edge_field(m, w, e, 1) + at,
@@ -496,15 +532,14 @@ void set_up_solve(const Model& m, const State& s, Workspace& w, double h) {
       b = m.mass[a] * v + h * w.force[a];
       if (guess) start += h * s.acceleration[a];
     }
-    Vec3 held = Vec3::Zero();
-    if (!fixed(m, s, a) && w.distance[a] <= kOnSurface && w.force[a].dot(w.surface_normal[a]) < 0 &&
+    const bool held =
+        !fixed(m, s, a) && w.distance[a] <= kOnSurface && w.force[a].dot(w.surface_normal[a]) < 0 &&
         (!moving ||
-         surface_velocity(w.surfaces, m.contact_code(), s.x[a]).dot(w.surface_normal[a]) == 0))
-      held = w.surface_normal[a];
+         surface_velocity(w.surfaces, m.contact_code(), s.x[a]).dot(w.surface_normal[a]) == 0);
+    held_flags(m, w)[a] = held ? 1.0f : 0.0f;
     for (int k = 0; k < 3; ++k) {
       r.c[k][a] = b[k];
       x.c[k][a] = start[k];
-      solver_column(m, w, kHeldColumn + k)[a] = held[k];
     }
   });
   filter(m, w, kX);
@@ -567,7 +602,7 @@ int conjugate_gradients(const Model& m, const State& s, Workspace& w) {
 void implicit_euler_velocities(const Model& m, State& s, Workspace& w, double h) {
   // The solver's arrays are sized at the first implicit step: the explicit
   // integrators need none of them. Every one is written before it is read.
-  w.float_columns.resize(padded_size(m, kFloatColumns));  // the padding stays zero
+  w.float_columns.resize(padded_size(m, float_columns(m)));  // the padding stays zero
   w.cg_columns.resize(padded_size(m, kSolverColumns));
   assemble_spring_blocks(m, s, w, h);
   assemble_diagonal_blocks(m, w, h);

@@ -185,19 +185,18 @@ double explicit_step_limit(const Model& m) {
 
 namespace {
 
-void add_spring(SpringSet& s, const Model& m, const StencilEdge& st, int i0, int j0) {
+// The grid's spring of stencil offset st from (i0, j0), if both ends are on
+// the grid and it has a constant: f(a, b, rest, k, damping).
+template <class F>
+void grid_spring(const Model& m, const StencilEdge& st, int i0, int j0, F&& f) {
   const int i1 = i0 + st.di, j1 = j0 + st.dj;
   auto inside = [&](int i, int j) { return i >= 0 && j >= 0 && i < m.nu && j < m.nv; };
   if (!inside(i0, j0) || !inside(i1, j1) || (st.k == 0 && st.damping == 0)) return;
   const int a = m.index(i0, j0), b = m.index(i1, j1);
-  s.a.push_back(a);
-  s.b.push_back(b);
-  s.rest.push_back((m.rest_position[b] - m.rest_position[a]).norm());
-  s.k.push_back(st.k);
-  s.damping.push_back(st.damping);
+  f(a, b, (m.rest_position[b] - m.rest_position[a]).norm(), st.k, st.damping);
 }
 
-// The grid: particles, areas, springs by stencil offset, triangles.
+// The grid: particles, areas, the springs' stencil offsets, triangles.
 void build_grid(Model& m, Topology& t, const Params& p);
 
 int nearest(double t, int n) {
@@ -346,26 +345,8 @@ void build_grid(Model& m, Topology& t, const Params& p) {
   const int wanted = p.integrator.threads > 0 ? static_cast<int>(p.integrator.threads)
                                               : std::max(1, omp_get_num_procs());
   m.threads = std::clamp(m.n / kParticlesPerThread, 1, wanted);
-  // Each set's springs at most two a particle (four for Provot's bending): as
-  // they are pushed, their arrays would grow to up to twice that.
-  const auto reserve = [&](SpringSet& set, std::size_t count) {
-    for (auto* a : {&set.a, &set.b}) a->reserve(count);
-    for (auto* a : {&set.rest, &set.k, &set.damping}) a->reserve(count);
-  };
-  reserve(m.structural, 2 * std::size_t(m.n));
-  reserve(m.shear, 2 * std::size_t(m.n));
-  if (t.stencil[4].k != 0 || t.stencil[4].damping != 0) reserve(m.bending, 4 * std::size_t(m.n));
   for (int j = 0; j < m.nv; ++j) {
     for (int i = 0; i < m.nu; ++i) {
-      // Stencil offsets 0-7 (above), each from (i0, j0) to (i0 + di, j0 + dj).
-      add_spring(m.structural, m, t.stencil[0], i, j);
-      add_spring(m.structural, m, t.stencil[1], i, j);
-      add_spring(m.shear, m, t.stencil[2], i, j);
-      add_spring(m.shear, m, t.stencil[3], i + 1, j);
-      add_spring(m.bending, m, t.stencil[4], i, j);
-      add_spring(m.bending, m, t.stencil[5], i, j);
-      add_spring(m.bending, m, t.stencil[6], i, j);
-      add_spring(m.bending, m, t.stencil[7], i + 2, j);
       if (i + 1 < m.nu && j + 1 < m.nv) {
         const int a = m.index(i, j), b = m.index(i + 1, j), cc = m.index(i + 1, j + 1),
                   d = m.index(i, j + 1);
@@ -385,6 +366,55 @@ void build_grid(Model& m, Topology& t, const Params& p) {
 }
 
 }  // namespace
+
+void for_each_spring(const Model& m, SpringKind kind,
+                     const std::function<void(int, int, double, double, double)>& f) {
+  if (!m.grid) {
+    const SpringSet& set = kind == SpringKind::Structural ? m.structural
+                           : kind == SpringKind::Shear    ? m.shear
+                                                          : m.bending;
+    for (std::size_t e = 0; e < set.size(); ++e)
+      f(set.a[e], set.b[e], set.rest[e], set.k[e], set.damping[e]);
+    return;
+  }
+  // Stencil offsets 0-7 (build_grid), each from (i0, j0) to (i0 + di, j0 + dj).
+  const auto& st = m.topology->stencil;
+  for (int j = 0; j < m.nv; ++j)
+    for (int i = 0; i < m.nu; ++i) switch (kind) {
+        case SpringKind::Structural:
+          grid_spring(m, st[0], i, j, f);
+          grid_spring(m, st[1], i, j, f);
+          break;
+        case SpringKind::Shear:
+          grid_spring(m, st[2], i, j, f);
+          grid_spring(m, st[3], i + 1, j, f);
+          break;
+        case SpringKind::Bending:
+          grid_spring(m, st[4], i, j, f);
+          grid_spring(m, st[5], i, j, f);
+          grid_spring(m, st[6], i, j, f);
+          grid_spring(m, st[7], i + 2, j, f);
+          break;
+      }
+}
+
+std::size_t spring_count(const Model& m, SpringKind kind) {
+  std::size_t count = 0;
+  for_each_spring(m, kind, [&](int, int, double, double, double) { ++count; });
+  return count;
+}
+
+SpringSet spring_set(const Model& m, SpringKind kind) {
+  SpringSet set;
+  for_each_spring(m, kind, [&](int a, int b, double rest, double k, double damping) {
+    set.a.push_back(a);
+    set.b.push_back(b);
+    set.rest.push_back(rest);
+    set.k.push_back(k);
+    set.damping.push_back(damping);
+  });
+  return set;
+}
 
 void set_humidity(Model& m, double omega) {
   m.params.cloth.humidity = omega;

@@ -9,11 +9,11 @@ namespace {
 double max_stretch(const Simulation& sim) {
   const Model& m = sim.model();
   double worst = 0;
-  for (const SpringSet* set : {&m.structural, &m.shear})
-    for (std::size_t e = 0; e < set->size(); ++e) {
-      const double len = (sim.state().x[set->b[e]] - sim.state().x[set->a[e]]).norm();
-      worst = std::max(worst, len / set->rest[e] - 1);
-    }
+  for (const SpringKind kind : {SpringKind::Structural, SpringKind::Shear})
+    for_each_spring(m, kind, [&](int a, int b, double rest, double, double) {
+      const double len = (sim.state().x[b] - sim.state().x[a]).norm();
+      worst = std::max(worst, len / rest - 1);
+    });
   return worst;
 }
 }  // namespace
@@ -74,7 +74,7 @@ void limit_strain_plainly(const Model& m, State& s, const Workspace& w, double d
       std::vector<Correction> level;
       std::vector<int> count(m.n, 0);
       for (int e = w.strain_levels[l]; e < w.strain_levels[l + 1]; ++e) {
-        const auto& sp = w.strain_springs[e];
+        const Workspace::StrainSpring sp = detail::strain_spring(m, w, e);
         const Vec3 d = s.x[sp.b] - s.x[sp.a];
         const double len2 = d.squaredNorm();
         if (len2 <= sp.max_len * sp.max_len) continue;

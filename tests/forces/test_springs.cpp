@@ -58,11 +58,10 @@ TEST(Springs, UndampedSpringKeepsEnergyUnderSymplecticEuler) {
     const State& s = detail::state(sim);
     double e = 0;
     for (int i = 0; i < m.n; ++i) e += 0.5 * m.mass[i] * s.v[i].squaredNorm();
-    for (std::size_t k = 0; k < m.structural.size(); ++k) {
-      const double ext =
-          (s.x[m.structural.b[k]] - s.x[m.structural.a[k]]).norm() - m.structural.rest[k];
-      e += 0.5 * m.constants(m.structural, k).k * ext * ext;
-    }
+    for_each_spring(m, SpringKind::Structural, [&](int a, int b, double rest, double k, double) {
+      const double ext = (s.x[b] - s.x[a]).norm() - rest;
+      e += 0.5 * k * ext * ext;
+    });
     return e;
   };
   const double e0 = energy();

@@ -22,10 +22,10 @@ const char* kLargeStep = "integrator.dt=0.004166666666666667";  // 1/240 s
 double max_spring_strain(const Simulation& sim) {
   double worst = 0;
   const Model& m = sim.model();
-  for (const SpringSet* set : {&m.structural, &m.shear})
-    for (std::size_t e = 0; e < set->size(); ++e)
-      worst = std::max(
-          worst, (sim.state().x[set->b[e]] - sim.state().x[set->a[e]]).norm() / set->rest[e] - 1);
+  for (const SpringKind kind : {SpringKind::Structural, SpringKind::Shear})
+    for_each_spring(m, kind, [&](int a, int b, double rest, double, double) {
+      worst = std::max(worst, (sim.state().x[b] - sim.state().x[a]).norm() / rest - 1);
+    });
   return worst;
 }
 

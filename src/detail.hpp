@@ -380,14 +380,17 @@ void add_handle_forces(const Model& m, const State& s, Workspace& w);
 // atmospheric pressure; update_air advances it over dt (eqs. 2, 4, 5).
 void start_air(const Model& m, State& s, Workspace& w);
 void update_air(const Model& m, State& s, Workspace& w, double dt);
-// The air term taken implicitly, after the explicit velocity update.
-void correct_air_implicitly(const Model& m, State& s, Workspace& w, double dt);
+// The air term taken implicitly, after the explicit velocity update; with
+// `move`, after the constraints, moving the free particles by Δt times the
+// velocity it changes (the symplectic step's order).
+void correct_air_implicitly(const Model& m, State& s, Workspace& w, double dt, bool move = false);
 // integrators/explicit_euler.cpp: forward Euler (x, then v) and symplectic
 // Euler (v with the damping, then x) over dt, from the forces in w.force.
 void integrate_explicit_euler(const Model& m, State& s, Workspace& w, double dt);
 void integrate_symplectic_euler(const Model& m, State& s, Workspace& w, double dt);
 // The air term taken implicitly on the new velocities, then x += h v.
 void move_at_new_velocities(const Model& m, State& s, Workspace& w, double h);
+void move_at_velocities(const Model& m, State& s, double h);  // x += h v
 // integrators/step_control.cpp: backward Euler over dt / 2^k, k raised while
 // the springs change more than integrator.max_step_strain; returns the
 // substep taken, and its springs' largest change in `strain`.

@@ -298,8 +298,10 @@ void add_air_pressure(const Model& m, const State& s, Workspace& w) {
 // much too slowly), and the growth is a rank-one stiffness per pocket:
 // (I + Δt² c M⁻¹ a bᵀ) v = v*, solved exactly by Sherman-Morrison in O(n).
 // Without it the air film's kHz ringing and the follower direction of eq. 3
-// make explicit steps blow up.
-void correct_air_implicitly(const Model& m, State& s, Workspace& w, double dt) {
+// make explicit steps blow up. With `move`, after the constraints: the
+// velocities the strain limiter gave are in Σ b·v, and each free particle
+// moves by Δt times its change (docs/model.md section 8).
+void correct_air_implicitly(const Model& m, State& s, Workspace& w, double dt, bool move) {
   const std::size_t pockets = s.pocket_air.size();
   // Air open to the room (or `off`) has no stiffness and nothing to seep:
   // every change below would be zero.
@@ -343,7 +345,14 @@ void correct_air_implicitly(const Model& m, State& s, Workspace& w, double dt) {
     const int k = s.pocket[i];
     if (k < 0) return;
     const double dv = given_back(i, k) - w.pocket_sums[3 * k];
-    if (dv != 0) add(s.v[i], (dv * m.inv_mass[i]) * w.air_direction[i]);
+    if (dv == 0) return;
+    if (!move) {
+      add(s.v[i], (dv * m.inv_mass[i]) * w.air_direction[i]);
+    } else if (!m.driven[i] && !s.held[i]) {
+      const Vec3 change = (dv * m.inv_mass[i]) * w.air_direction[i];
+      add(s.v[i], change);
+      add(s.x[i], dt * change);
+    }
   });
 }
 

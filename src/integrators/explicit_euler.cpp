@@ -19,7 +19,8 @@ void integrate_explicit_euler(const Model& m, State& s, Workspace& w, double dt)
 // damping is taken at the end of the step: the viscous drag on each
 // particle's own velocity, v += Δt F / (m + Δt c A), then the springs'
 // (apply_spring_damping). Explicit, the 0.01 N·s/m of a particle's springs
-// is unstable at Δt = 5e-5 s from 51 × 51 up: h Σk_d / m ≈ 2.
+// is unstable at Δt = 5e-5 s from 51 × 51 up: h Σk_d / m ≈ 2. The air term's
+// implicit part comes after the constraints (take_air_after_constraints).
 void integrate_symplectic_euler(const Model& m, State& s, Workspace& w, double dt) {
   const double c = m.params.forces.viscous_damping;
   for_each_particle_block(m, [&](int first, int end) {
@@ -35,12 +36,16 @@ void integrate_symplectic_euler(const Model& m, State& s, Workspace& w, double d
     }
   });
   apply_spring_damping(m, s, w, dt);
-  move_at_new_velocities(m, s, w, dt);
+  move_at_velocities(m, s, dt);
 }
 
 // The air term taken implicitly on the new velocities, then x += h v.
 void move_at_new_velocities(const Model& m, State& s, Workspace& w, double h) {
   correct_air_implicitly(m, s, w, h);
+  move_at_velocities(m, s, h);
+}
+
+void move_at_velocities(const Model& m, State& s, double h) {
   for_each_particle_block(m, [&](int first, int end) {
     const double* __restrict vx = s.v.column(0), * __restrict vy = s.v.column(1), * __restrict vz = s.v.column(2);
     double* __restrict x = s.x.column(0), * __restrict y = s.x.column(1), * __restrict z = s.x.column(2);

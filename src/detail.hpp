@@ -382,8 +382,8 @@ void start_air(const Model& m, State& s, Workspace& w);
 void update_air(const Model& m, State& s, Workspace& w, double dt);
 // The air term taken implicitly, after the explicit velocity update; with
 // `move`, after the constraints, moving the free particles by Δt times the
-// velocity it changes (the symplectic step's order).
-void correct_air_implicitly(const Model& m, State& s, Workspace& w, double dt, bool move = false);
+// velocity it changes (the symplectic step's order). False: no air to take.
+bool correct_air_implicitly(const Model& m, State& s, Workspace& w, double dt, bool move = false);
 // integrators/explicit_euler.cpp: forward Euler (x, then v) and symplectic
 // Euler (v with the damping, then x) over dt, from the forces in w.force.
 void integrate_explicit_euler(const Model& m, State& s, Workspace& w, double dt);

@@ -297,9 +297,7 @@ void limit_strain_outside_surfaces(const Model& m, State& s, Workspace& w, doubl
 // 4 % at 5e−5 s and by 9 % at 1e−4 s (docs/performance.md, tenth stop).
 // A particle it moves into a surface is put back out.
 void take_air_after_constraints(const Model& m, State& s, Workspace& w, double h) {
-  if (s.pocket_air.empty()) return;
-  correct_air_implicitly(m, s, w, h, true);
-  collide(m, s, nullptr, nullptr, &w);
+  if (correct_air_implicitly(m, s, w, h, true)) collide(m, s, nullptr, nullptr, &w);
 }
 
 // 6. Update the contact state and the trapped air.

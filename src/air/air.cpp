@@ -301,14 +301,14 @@ void add_air_pressure(const Model& m, const State& s, Workspace& w) {
 // make explicit steps blow up. With `move`, after the constraints: the
 // velocities the strain limiter gave are in Σ b·v, and each free particle
 // moves by Δt times its change (docs/model.md section 8).
-void correct_air_implicitly(const Model& m, State& s, Workspace& w, double dt, bool move) {
+bool correct_air_implicitly(const Model& m, State& s, Workspace& w, double dt, bool move) {
   const std::size_t pockets = s.pocket_air.size();
   // Air open to the room (or `off`) has no stiffness and nothing to seep:
   // every change below would be zero.
   const auto inert = [](const PocketAir& a) {
     return a.gas == 0 && a.spring == 0 && a.seep_rate == 0;
   };
-  if (std::all_of(s.pocket_air.begin(), s.pocket_air.end(), inert)) return;
+  if (std::all_of(s.pocket_air.begin(), s.pocket_air.end(), inert)) return false;
   const double p_atm = m.params.air.p_atm;
   // Per pocket: Σ b·v (with the seeped deficit given back), Σ b·M⁻¹a, and the
   // share of the deficit that seeps away over the step.
@@ -354,6 +354,7 @@ void correct_air_implicitly(const Model& m, State& s, Workspace& w, double dt, b
       add(s.x[i], dt * change);
     }
   });
+  return true;
 }
 
 }  // namespace wetcloth::detail

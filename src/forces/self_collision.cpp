@@ -61,9 +61,8 @@ double row_most(const Model& m, const AnchorGap& gap, int j) {
 }
 
 // The particles farther than far2 (squared) from their anchors moved by c,
-// in their order: looked for in the rows whose largest gap is, alone (a
-// swinging cloth's pinned corners: a row or two), where a scan of every
-// particle took a sixth of a hanging cloth's step.
+// in their order: looked for in the rows whose largest gap is, alone,
+// where every particle was scanned one by one.
 void find_movers(const Model& m, const AnchorGap& gap, double far2, std::vector<int>& movers) {
   for (int j = 0; j < m.nv; ++j)
     if (row_most(m, gap, j) > far2)

@@ -294,7 +294,7 @@ void limit_strain_outside_surfaces(const Model& m, State& s, Workspace& w, doubl
 // the cloth the limiter pulled up as sinking under the suction, and its
 // answer (a gas spring and a seepage time of about 1e−4 s, as short as a
 // step) took the suction off by Δt/τ: the oblique pull's hand force fell by
-// 4 % at 5e−5 s and by 9 % at 1e−4 s (docs/performance.md, tenth stop).
+// 4 % at 5e−5 s and by 9 % at 1e−4 s (docs/performance.md, eleventh stop).
 // A particle it moves into a surface is put back out.
 void take_air_after_constraints(const Model& m, State& s, Workspace& w, double h) {
   if (correct_air_implicitly(m, s, w, h, true)) collide(m, s, nullptr, nullptr, &w);

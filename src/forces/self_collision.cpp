@@ -50,16 +50,29 @@ Vec3 common_motion(const Model& m, const Vec3Array& p, const Vec3Array& anchor) 
   return {sum[0], sum[1], sum[2]};
 }
 
-// The largest of them: a maximum over columns, which vectorises (and is the
-// same in any order).
-double farthest(const Model& m, const AnchorGap& gap) {
-  const auto row_most = [&](int j) {
-    const AnchorGap local = gap;  // a copy: through the reference GCC gathered
-    double row = 0;
+// The largest of them in row j: a maximum over columns, which vectorises
+// (and is the same in any order).
+double row_most(const Model& m, const AnchorGap& gap, int j) {
+  const AnchorGap local = gap;  // a copy: through the reference GCC gathered
+  double row = 0;
 #pragma omp simd reduction(max : row)
-    for (int i = j * m.nu; i < (j + 1) * m.nu; ++i) row = std::max(row, local(i));
-    return row;
-  };
+  for (int i = j * m.nu; i < (j + 1) * m.nu; ++i) row = std::max(row, local(i));
+  return row;
+}
+
+// The particles farther than far2 (squared) from their anchors moved by c,
+// in their order: looked for in the rows whose largest gap is, alone,
+// where every particle was scanned one by one.
+void find_movers(const Model& m, const AnchorGap& gap, double far2, std::vector<int>& movers) {
+  for (int j = 0; j < m.nv; ++j)
+    if (row_most(m, gap, j) > far2)
+      for (int i = j * m.nu; i < (j + 1) * m.nu; ++i)
+        if (gap(i) > far2) movers.push_back(i);
+}
+
+// The largest of them over the cloth, by rows on the step's threads.
+double farthest(const Model& m, const AnchorGap& gap) {
+  const auto row_most = [&](int j) { return detail::row_most(m, gap, j); };
   double most = 0;
   if (m.threads <= 1) {  // no region: even one its `if` turns off costs a futex call
     for (int j = 0; j < m.nv; ++j) most = std::max(most, row_most(j));
@@ -246,9 +259,10 @@ void refresh_collision_candidates(const Model& m, const State& s, Workspace& w) 
   w.candidates_motion = common;
   const double far2 = 0.25 * margin * margin;
   const AnchorGap gap(s.x, anchor, common);
-  if (!search_all && farthest(m, gap) > far2) {
-    for (int i = 0; i < m.n; ++i)
-      if (gap(i) > far2) movers.push_back(i);
+  // On one thread the rows' largest gaps are found once, the movers with
+  // them; on more, the largest over the cloth first, on the threads.
+  if (!search_all && (m.threads <= 1 || farthest(m, gap) > far2)) {
+    find_movers(m, gap, far2, movers);
     search_all = 4 * movers.size() > std::size_t(m.n);
   }
   w.hash_stale_flag.resize(m.n, 0);

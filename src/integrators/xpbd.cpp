@@ -440,21 +440,34 @@ void add_external_velocity(const Model& m, State& s, const Workspace& w, double 
   const double c = m.params.forces.viscous_damping;
   const BendingMatrix& b = m.topology->bending;
   const double stable = 1.0 / (h * h);
+  const bool bending = !b.start.empty();
+  // One pass: each particle's two factors found once, for its three
+  // components (the same sums, in the same order, as a pass for each).
   for_each_particle_block(m, [&](int first, int end) {
-    for (int q = 0; q < 3; ++q) {
-      const double* __restrict f = w.force.column(q);
-      double* __restrict v = s.v.column(q);
-#pragma GCC ivdep
+    const double *__restrict fx = w.force.column(0), *__restrict fy = w.force.column(1),
+                             *__restrict fz = w.force.column(2);
+    double* __restrict vx = s.v.column(0), * __restrict vy = s.v.column(1), * __restrict vz = s.v.column(2);
+    const double* __restrict inv_mass = m.inv_mass.data(), * __restrict area = m.area.data();
+    if (!bending) {
+#pragma omp simd
       for (int i = first; i < end; ++i) {
-        const double hm = h * m.inv_mass[i];
-        v[i] += hm / (1 + hm * c * m.area[i]) * f[i];
+        const double hm = h * inv_mass[i], a = hm / (1 + hm * c * area[i]);
+        vx[i] += a * fx[i];
+        vy[i] += a * fy[i];
+        vz[i] += a * fz[i];
       }
-      if (b.start.empty()) continue;
-      const double* __restrict fb = w.bending_force.column(q);
-      const double* __restrict bound = b.bound.data();
-#pragma GCC ivdep
-      for (int i = first; i < end; ++i)
-        v[i] += h * std::min(m.inv_mass[i], stable / bound[i]) * fb[i];
+      return;
+    }
+    const double *__restrict bx = w.bending_force.column(0), *__restrict by = w.bending_force.column(1),
+                             *__restrict bz = w.bending_force.column(2),
+                             *__restrict bound = b.bound.data();
+#pragma omp simd
+    for (int i = first; i < end; ++i) {
+      const double hm = h * inv_mass[i], a = hm / (1 + hm * c * area[i]);
+      const double e = h * std::min(inv_mass[i], stable / bound[i]);
+      vx[i] = (vx[i] + a * fx[i]) + e * bx[i];
+      vy[i] = (vy[i] + a * fy[i]) + e * by[i];
+      vz[i] = (vz[i] + a * fz[i]) + e * bz[i];
     }
   });
 }

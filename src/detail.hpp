@@ -390,7 +390,6 @@ void integrate_explicit_euler(const Model& m, State& s, Workspace& w, double dt)
 void integrate_symplectic_euler(const Model& m, State& s, Workspace& w, double dt);
 // The air term taken implicitly on the new velocities, then x += h v.
 void move_at_new_velocities(const Model& m, State& s, Workspace& w, double h);
-void move_at_velocities(const Model& m, State& s, double h);  // x += h v
 // integrators/step_control.cpp: backward Euler over dt / 2^k, k raised while
 // the springs change more than integrator.max_step_strain; returns the
 // substep taken, and its springs' largest change in `strain`.

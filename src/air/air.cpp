@@ -345,14 +345,10 @@ bool correct_air_implicitly(const Model& m, State& s, Workspace& w, double dt, b
     const int k = s.pocket[i];
     if (k < 0) return;
     const double dv = given_back(i, k) - w.pocket_sums[3 * k];
-    if (dv == 0) return;
-    if (!move) {
-      add(s.v[i], (dv * m.inv_mass[i]) * w.air_direction[i]);
-    } else if (!m.driven[i] && !s.held[i]) {
-      const Vec3 change = (dv * m.inv_mass[i]) * w.air_direction[i];
-      add(s.v[i], change);
-      add(s.x[i], dt * change);
-    }
+    if (dv == 0 || (move && (m.driven[i] || s.held[i]))) return;
+    const Vec3 change = (dv * m.inv_mass[i]) * w.air_direction[i];
+    add(s.v[i], change);
+    if (move) add(s.x[i], dt * change);
   });
   return true;
 }

@@ -5,6 +5,22 @@
 
 namespace wetcloth::detail {
 
+namespace {
+// x += h v.
+void move_at_velocities(const Model& m, State& s, double h) {
+  for_each_particle_block(m, [&](int first, int end) {
+    const double* __restrict vx = s.v.column(0), * __restrict vy = s.v.column(1), * __restrict vz = s.v.column(2);
+    double* __restrict x = s.x.column(0), * __restrict y = s.x.column(1), * __restrict z = s.x.column(2);
+#pragma GCC ivdep
+    for (int i = first; i < end; ++i) {
+      x[i] += h * vx[i];
+      y[i] += h * vy[i];
+      z[i] += h * vz[i];
+    }
+  });
+}
+}  // namespace
+
 // Forward Euler: x by the old velocities, then v by the forces; the air term
 // implicit after.
 void integrate_explicit_euler(const Model& m, State& s, Workspace& w, double dt) {
@@ -43,19 +59,6 @@ void integrate_symplectic_euler(const Model& m, State& s, Workspace& w, double d
 void move_at_new_velocities(const Model& m, State& s, Workspace& w, double h) {
   correct_air_implicitly(m, s, w, h);
   move_at_velocities(m, s, h);
-}
-
-void move_at_velocities(const Model& m, State& s, double h) {
-  for_each_particle_block(m, [&](int first, int end) {
-    const double* __restrict vx = s.v.column(0), * __restrict vy = s.v.column(1), * __restrict vz = s.v.column(2);
-    double* __restrict x = s.x.column(0), * __restrict y = s.x.column(1), * __restrict z = s.x.column(2);
-#pragma GCC ivdep
-    for (int i = first; i < end; ++i) {
-      x[i] += h * vx[i];
-      y[i] += h * vy[i];
-      z[i] += h * vz[i];
-    }
-  });
 }
 
 }  // namespace wetcloth::detail

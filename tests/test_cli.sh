@@ -160,9 +160,13 @@ expect_bad disk       "with run.meshes) need about" hang --set run.fps=1000 --se
   --set integrator.type=implicit-euler --duration 1e6
 # Positions so far out that they lose the springs' precision (1e14 m wrote inf).
 expect_bad center     "cloth.center: value 1e+14 is out of range [-10000, 10000]" hang --set 'cloth.center=[0,0,1e14]'
-# A stiff shear spring blows the explicit step up: the message says the step is
-# over the limit and gives the shear springs' constant.
-"$W" run hang --set springs.shear_k=1e7 --duration 0.01 --out "$T/shear" --quiet 2>"$T/err"; code=$?
+# A stiff shear spring blows a given explicit step up: the message says the
+# step is over the limit and gives the shear springs' constant. Given no step,
+# the scene gets a step that fraction of its own limit, and runs.
+"$W" check hang --set springs.shear_k=1e7 | grep -q '^dt = 7.8[0-9]*e-07$' &&
+  ok "shear_k = 1e7, no dt: the step falls with the limit" ||
+  bad "shear_k = 1e7, no dt: $("$W" check hang --set springs.shear_k=1e7 | grep '^dt ')"
+"$W" run hang --set springs.shear_k=1e7 --set integrator.dt=5e-5 --duration 0.01 --out "$T/shear" --quiet 2>"$T/err"; code=$?
 [ $code -eq 3 ] && grep -q "integrator.dt = 5e-05 s is too large for the springs (structural 200 N/m, shear 1e+07 N/m" "$T/err" &&
   ok "shear_k = 1e7: exit 3, the step named over the limit with the shear constant" ||
   bad "shear_k = 1e7: exit $code: $(cat "$T/err")"
@@ -240,8 +244,8 @@ expect_bad up_axis "--up" pull-straight --up x
 # --grid: the same cloth on a finer grid (handle patch in metres, explicit step
 # shrunk with the spacing), or at a time step the command line sets; a grid out
 # of range is bad input.
-"$W" run pull-straight --grid 101 --duration 5e-5 --quiet --out "$T/g"
-grep -q '^resolution = \[101, 101\]' "$T/g/scene.toml" && grep -q '^dt = 2.463323195410733e-05' "$T/g/scene.toml" &&
+"$W" run pull-straight --grid 101 --duration 1e-4 --quiet --out "$T/g"
+grep -q '^resolution = \[101, 101\]' "$T/g/scene.toml" && grep -q '^dt = 4.926646390821466e-05' "$T/g/scene.toml" &&
   grep -q '^patch = 2' "$T/g/scene.toml" && ok "--grid 101: resolution, dt, patch" ||
   bad "--grid 101: $(grep -E '^(resolution|dt|patch) ' "$T/g/scene.toml" | tr '\n' ' ')"
 "$W" run pull-straight --grid 101 --set integrator.dt=4e-5 --duration 4e-5 --quiet --out "$T/g2"

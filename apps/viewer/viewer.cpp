@@ -615,8 +615,7 @@ class Viewer {
       break;
     }
     if (combo("integrator", params_.integrator.type)) {
-      params_.integrator.dt =
-          step_for_integrator(params_.integrator.type, scene_integrator_, scene_dt_);
+      params_.integrator.dt = step_for_integrator(params_, scene_integrator_, scene_dt_);
       apply_params();
     }
     float dt = static_cast<float>(params_.integrator.dt);

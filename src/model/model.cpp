@@ -126,14 +126,26 @@ double step_limit(double omega2) { return omega2 > 0 ? 2.0 / std::sqrt(omega2) :
 
 }  // namespace
 
-double default_step(IntegratorType t) {
-  return t == IntegratorType::Xpbd || t == IntegratorType::ImplicitEuler ? 1.0 / 240 : 5e-5;
+// The small steps' 1e-4 s is the default fabric's at 51 x 51 (the accurate
+// tier, measured: docs/performance.md, twelfth stop). Every other grid cloth
+// gets the same fraction of its own explicit limit, taken dry (the lightest
+// the cloth gets): a finer grid or a lighter fabric a shorter step. The
+// limit's formula is conservative (the dry drape at 51 x 51 runs to 1.4e-4 s
+// and blows up at 1.5e-4 s, 2.9 times it), and the ratio keeps that margin.
+double default_step(const Params& p) {
+  if (takes_large_steps(p.integrator.type)) return 1.0 / 240;
+  const double step = Params::Integrator{}.dt;
+  if (!p.cloth.mesh.empty()) return step;
+  Params dry = p;
+  dry.cloth.humidity = 0;
+  return step * std::min(1.0, explicit_step_limit(dry) / explicit_step_limit(Params{}));
 }
 
 // The tiers' settings, chosen by measurement (docs/performance.md, "Work
 // against precision", tools/work_precision.py): accurate, symplectic Euler at
-// 5e-5 s (median error 1 %, worst 6 %: nothing cheaper came within 5 %);
-// live, xpbd at 1/240 s in its default substeps (9 times cheaper, median 26 %).
+// 1e-4 s on the default cloth (default_step; median error 1.3 %, worst 3.0 %,
+// a rig read by its mean force); live, xpbd at 1/240 s in its default
+// substeps (about 4 times cheaper, median 26 %).
 void apply_tier(Params& p, IntegratorTier tier) {
   Params::Integrator& i = p.integrator;
   const Params::Integrator accurate;
@@ -144,7 +156,7 @@ void apply_tier(Params& p, IntegratorTier tier) {
   i.max_step_strain = accurate.max_step_strain;
   if (tier == IntegratorTier::Live) {
     i.type = IntegratorType::Xpbd;
-    i.dt = default_step(i.type);
+    i.dt = default_step(p);
   }
 }
 

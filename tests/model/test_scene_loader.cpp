@@ -257,6 +257,46 @@ TEST(SceneLoader, AtResolutionKeepsTheClothInMetres) {
   }
 }
 
+// A scene that gives no step gets the same fraction of its cloth's explicit
+// limit as the default cloth's 1e-4 s at 51 x 51: a finer grid or a lighter
+// fabric a shorter step, the cloth taken dry (its lightest), a mesh cloth and
+// the large-step integrators their fixed steps, and a step given is kept.
+TEST(SceneLoader, AStepNotGivenFollowsTheClothsExplicitLimit) {
+  const Params base = load_scene("drape-ball");
+  EXPECT_EQ(base.integrator.dt, 1e-4);
+  EXPECT_EQ(load_scene("drape-ball", {"cloth.humidity=1"}).integrator.dt, 1e-4);
+  EXPECT_EQ(load_scene("drape-ball", {"cloth.resolution=[25,25]"}).integrator.dt, 1e-4);
+  const Params fine = load_scene("drape-ball", {"cloth.resolution=[101,101]"});
+  Params dry = fine;
+  dry.cloth.humidity = 0;
+  EXPECT_DOUBLE_EQ(fine.integrator.dt,
+                   1e-4 * explicit_step_limit(dry) / explicit_step_limit(Params{}));
+  EXPECT_NEAR(fine.integrator.dt, 4.93e-5, 0.01e-5);
+  const Params light = load_scene("drape-ball", {"cloth.areal_density=0.03"});
+  EXPECT_NEAR(light.integrator.dt, 5e-5, 1e-9);  // a quarter of the mass: half the limit
+  EXPECT_EQ(
+      load_scene("drape-ball", {"cloth.resolution=[101,101]", "integrator.dt=3e-5"}).integrator.dt,
+      3e-5);
+  EXPECT_EQ(load_scene("sleeve-pull", {"integrator.type=\"symplectic-euler\""}).integrator.dt,
+            1e-4);
+  EXPECT_EQ(load_scene("drape-ball", {"integrator.type=\"xpbd\""}).integrator.dt, 1.0 / 240);
+  // A tier named after a step sets its own, and a step named with it is kept.
+  const std::vector<std::string> fine_then_tier = {
+      "cloth.resolution=[101,101]", "integrator.dt=3e-5", "integrator.tier=\"accurate\""};
+  EXPECT_EQ(load_scene("drape-ball", fine_then_tier).integrator.dt, fine.integrator.dt);
+  EXPECT_EQ(parse_scene("[integrator]\ntier = \"live\"\ndt = 3e-5\n", "s.toml").integrator.dt,
+            3e-5);
+
+  // The dry drape on 101 x 101 at its step runs; at the default cloth's step it
+  // blows up within 2 ms.
+  for (const bool given : {false, true}) {
+    std::vector<std::string> sets = {"cloth.resolution=[101,101]", "cloth.humidity=0"};
+    if (given) sets.push_back("integrator.dt=1e-4");
+    Simulation sim(load_scene("drape-ball", sets));
+    EXPECT_EQ(sim.advance_to(0.01), !given) << sim.blow_up_reason();
+  }
+}
+
 // Params made in code get the checks a scene file gets: a Simulation is not
 // built on values out of range (it used to run, and do nothing or blow up).
 TEST(SceneLoader, ParamsMadeInCodeAreChecked) {

@@ -365,12 +365,14 @@ TEST(Panel, AnIntegratorPickedGetsAStepOfItsKind) {
   ASSERT_EQ(pull.integrator.type, IntegratorType::SymplecticEuler);
   ASSERT_EQ(sleeve.integrator.type, IntegratorType::Xpbd);
   const auto from = [](const wetcloth::Params& p, IntegratorType picked) {
-    return step_for_integrator(picked, p.integrator.type, p.integrator.dt);
+    wetcloth::Params q = p;
+    q.integrator.type = picked;
+    return step_for_integrator(q, p.integrator.type, p.integrator.dt);
   };
   EXPECT_EQ(from(pull, IntegratorType::Xpbd), 1.0 / 240);
   EXPECT_EQ(from(pull, IntegratorType::ImplicitEuler), 1.0 / 240);
   EXPECT_EQ(from(pull, IntegratorType::ExplicitEuler), pull.integrator.dt);
-  EXPECT_EQ(from(sleeve, IntegratorType::SymplecticEuler), 5e-5);
+  EXPECT_EQ(from(sleeve, IntegratorType::SymplecticEuler), 1e-4);  // a mesh cloth
   EXPECT_EQ(from(sleeve, IntegratorType::ImplicitEuler), sleeve.integrator.dt);
 
   wetcloth::Params p = pull;

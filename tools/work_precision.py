@@ -7,7 +7,7 @@ Usage: work_precision.py BUILD_DIR [--scenes A,B] [--humidity 0,0.7,1]
                          [--jobs N] [--out DIR] [--table FILE]
 
 For every scene and humidity it runs the reference (symplectic Euler at
-half the default step, 2.5e-5 s at 51 x 51) and every setting, each
+a quarter of the default step at 51 x 51, 2.5e-5 s) and every setting, each
 `wetcloth run SCENE --threads 1` in a process of its own, and records:
 
   cpu_per_s   the run's CPU seconds (user + system, from the child's rusage)

@@ -148,10 +148,11 @@ struct Workspace {
   std::vector<std::vector<std::array<int, 2>>>
       thread_candidates;                      // each thread's share of the search
   std::vector<std::uint8_t> candidate_close;  // candidate within d_t this step
-  // Where each particle was last searched from, less the cloth's common
-  // motion then; the common motion at the last refresh (each particle is
-  // within margin / 2 of its anchor plus it).
+  // Where each particle was last searched from, taken back through the
+  // cloth's rigid motion then; the rigid motion at the last refresh, x ≈ R a
+  // + c (each particle is within margin / 2 of its anchor moved by it).
   Vec3Array candidates_anchor;
+  Eigen::Matrix3d candidates_rotation = Eigen::Matrix3d::Identity();
   Vec3 candidates_motion = Vec3::Zero();
   double candidates_radius = 0;
   // Implicit Euler, in columns (see integrators/implicit_euler.cpp): in float, the

@@ -27,6 +27,7 @@
 //   neighbours do not depend on the split).
 #include <Eigen/SVD>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <stdexcept>
 
@@ -244,6 +245,47 @@ namespace {
 // every row held some 500 bytes a particle at its peak).
 constexpr int kBand = 4;
 
+// The grid's 5 x 5 stencil (offsets as dj nu + di, |di|, |dj| <= 2, but
+// itself) has kGridStencil of them.
+constexpr int kGridStencil = 24;
+
+// The mirror groups of Stencil::mirror, by (|di|, |dj|).
+constexpr int kMirrorGroups = 8;
+constexpr int kMirror[kMirrorGroups][2] = {{1, 0}, {0, 1}, {2, 0}, {0, 2},
+                                           {1, 1}, {1, 2}, {2, 1}, {2, 2}};
+
+// A grid of rectangular cells has a stencil the same under di → -di and
+// dj → -dj, but for the fits' rounding: where each group of mirror images
+// agrees within 1e-9, each takes the group's mean and the group is noted,
+// so that bending_rows sums it once (mirrored_rows). The mean changes the
+// row by rounding, as making opposite offsets equal did.
+void make_mirrored(int nu, BendingMatrix::Stencil& st) {
+  if (st.offset.size() != static_cast<std::size_t>(kGridStencil)) return;
+  std::array<std::vector<std::size_t>, kMirrorGroups> members;
+  for (std::size_t e = 0; e < st.offset.size(); ++e) {
+    const int dj = (st.offset[e] + 2 * nu + 2) / nu - 2, di = st.offset[e] - dj * nu;
+    const int g =
+        static_cast<int>(std::find_if(std::begin(kMirror), std::end(kMirror),
+                                      [&](const int(&k)[2]) {
+                                        return k[0] == std::abs(di) && k[1] == std::abs(dj);
+                                      }) -
+                         std::begin(kMirror));
+    if (g == kMirrorGroups) return;
+    members[g].push_back(e);
+  }
+  std::vector<double> mean(kMirrorGroups, 0.0);
+  for (int g = 0; g < kMirrorGroups; ++g) {
+    if (members[g].size() != (g < 4 ? 2u : 4u)) return;
+    for (const std::size_t e : members[g]) mean[g] += st.value[e];
+    mean[g] /= static_cast<double>(members[g].size());
+    for (const std::size_t e : members[g])
+      if (std::abs(st.value[e] - mean[g]) > 1e-9 * std::abs(mean[g])) return;
+  }
+  for (int g = 0; g < kMirrorGroups; ++g)
+    for (const std::size_t e : members[g]) st.value[e] = mean[g];
+  st.mirror = std::move(mean);
+}
+
 // The rows of a grid's matrix that are its centre row's stencil, within
 // rounding, made that stencil exactly, in their columns and their
 // transposes; each row's diagonal and bound from its final values. Symmetry
@@ -263,6 +305,7 @@ void find_stencil(const Model& m, BendingMatrix& b, const std::vector<std::uint8
     const std::size_t opposite = size - 1 - e;
     if (e < opposite) st.value[e] = st.value[opposite] = 0.5 * (st.value[e] + st.value[opposite]);
   }
+  make_mirrored(m.nu, st);
   const auto same = [&](int a) {
     if (!built[a]) return true;
     if (static_cast<std::size_t>(b.start[a + 1] - b.start[a]) != size) return false;
@@ -345,8 +388,55 @@ BendingMatrix build_bending_matrix(const Model& m, double rigidity) {
 // order of its columns, so that any thread count gives the same bits. The
 // stencil's runs of a row take that order too, offset by offset over a chunk
 // of particles, a loop that vectorises.
-// A grid's stencil: the 5 x 5 particles about one, but itself.
-constexpr int kGridStencil = 24;
+// Q x on differences at the particles [i0, i1) of grid row j, from a
+// mirrored stencil (Stencil::mirror): Σ_g c_g Σ_{(di,dj) in g} (x_{i+di+dj nu} -
+// x_i), each group's sum made from the second differences along rows,
+// a1 = (x_{i-1} - x_i) + (x_{i+1} - x_i) and a2 the same two apart, which
+// the particles of five rows share, and those across them, b1 and b2:
+//   (±1, 0): a1(i)   (0, ±1): b1(i)   (±2, 0): a2(i)   (0, ±2): b2(i)
+//   (±1, ±1): a1(i - nu) + a1(i + nu) + 2 b1(i)
+//   (±1, ±2): a1(i - 2 nu) + a1(i + 2 nu) + 2 b2(i)
+//   (±2, ±1): a2(i - nu) + a2(i + nu) + 2 b1(i)
+//   (±2, ±2): a2(i - 2 nu) + a2(i + 2 nu) + 2 b2(i)
+// Every term is a difference of near particles, so a cloth far from the origin
+// loses no precision; some 40 operations a particle and component where
+// the offsets one by one took 72. `ring` holds a1 and a2 of rows
+// [next - 5, next), slot r % 5 for row r, and is filled as j advances.
+template <bool Assign>
+void mirrored_rows(const Model& m, const double* __restrict x, double* __restrict out, double scale,
+                   int j, int i0, int i1, double* __restrict ring, int& next) {
+  const int nu = m.nu;
+  const auto a1 = [&](int r) { return ring + (r % 5) * 2 * nu; };
+  const auto a2 = [&](int r) { return ring + (r % 5) * 2 * nu + nu; };
+  for (int r = std::max(next, j - 2); r <= j + 2; ++r) {
+    const double* __restrict row = x + r * nu;
+    double* __restrict to1 = a1(r), * __restrict to2 = a2(r);
+#pragma omp simd
+    for (int i = 1; i < nu - 1; ++i) to1[i] = (row[i - 1] - row[i]) + (row[i + 1] - row[i]);
+#pragma omp simd
+    for (int i = 2; i < nu - 2; ++i) to2[i] = (row[i - 2] - row[i]) + (row[i + 2] - row[i]);
+  }
+  next = j + 3;
+  const std::vector<double>& c = m.topology->bending.stencil.mirror;
+  const double c10 = c[0], c01 = c[1], c20 = c[2], c02 = c[3], c11 = c[4], c12 = c[5], c21 = c[6],
+               c22 = c[7];
+  const double* __restrict a1m2 = a1(j - 2), * __restrict a1m1 = a1(j - 1), * __restrict a10 = a1(j), * __restrict a1p1 = a1(j + 1), * __restrict a1p2 = a1(j + 2);
+  const double* __restrict a2m2 = a2(j - 2), * __restrict a2m1 = a2(j - 1), * __restrict a20 = a2(j), * __restrict a2p1 = a2(j + 1), * __restrict a2p2 = a2(j + 2);
+  const double* __restrict y = x + j * nu;
+  double* __restrict o = out + j * nu;
+#pragma omp simd
+  for (int i = i0; i < i1; ++i) {
+    const double b1 = (y[i - nu] - y[i]) + (y[i + nu] - y[i]);
+    const double b2 = (y[i - 2 * nu] - y[i]) + (y[i + 2 * nu] - y[i]);
+    const double sum = c10 * a10[i] + c01 * b1 + c20 * a20[i] + c02 * b2 +
+                       c11 * ((a1m1[i] + a1p1[i]) + 2 * b1) + c12 * ((a1m2[i] + a1p2[i]) + 2 * b2) +
+                       c21 * ((a2m1[i] + a2p1[i]) + 2 * b1) + c22 * ((a2m2[i] + a2p2[i]) + 2 * b2);
+    if constexpr (Assign)
+      o[i] = scale * sum;
+    else
+      o[i] += scale * sum;
+  }
+}
 
 template <bool Difference, bool Assign = false>
 void bending_rows(const Model& m, const double* __restrict x, double* __restrict out, double scale,
@@ -370,6 +460,11 @@ void bending_rows(const Model& m, const double* __restrict x, double* __restrict
   const int size = static_cast<int>(st.offset.size());
   const int* const offset = st.offset.data();
   const double* const coefficient = st.value.data();
+  // The mirrored stencil's second differences, five rows of them, this thread's.
+  static thread_local std::vector<double> ring;
+  const bool mirrored = Difference && !st.mirror.empty();
+  if (mirrored && ring.size() < std::size_t(10) * m.nu) ring.resize(std::size_t(10) * m.nu);
+  int next = 0;  // the first row not in the ring
   for (int a = a0; a < a1;) {
     const int j = a / m.nu, row = j * m.nu, lo = row + st.first[j], hi = row + st.last[j];
     const int end = std::min(a1, row + m.nu);
@@ -390,6 +485,11 @@ void bending_rows(const Model& m, const double* __restrict x, double* __restrict
         else
           out[i] += scale * sum;
       }
+      a = to;
+      continue;
+    }
+    if (mirrored) {
+      mirrored_rows<Assign>(m, x, out, scale, j, a - row, to - row, ring.data(), next);
       a = to;
       continue;
     }

@@ -3,7 +3,7 @@
 // The force. Each spring is evaluated once, as a forward edge of the grid's
 // stencil (Topology::stencil): particle (i, j) to (i + di, j + dj). A row's edges
 // go into rows of numbers (the force on the lower end), zero where the spring
-// is off the grid, and each particle then gathers its 16 springs from them in
+// is off the grid, and each particle then gathers its springs from them in
 // a fixed order: forward edge of an offset, then the backward one (minus the
 // force stored at its other end). Rows are independent, so any number of
 // threads gives the same bits, and both passes are loops over a row the
@@ -13,6 +13,8 @@
 //
 // The damping, in the symplectic step, is taken implicitly on its own
 // (apply_spring_damping, below).
+#include <span>
+
 #include "forces/spring_edges.hpp"
 
 namespace wetcloth::detail {
@@ -23,20 +25,36 @@ constexpr int kReach = 2;          // the stencil's longest offset, in grid step
 constexpr int kRing = kReach + 1;  // edge rows a thread keeps
 constexpr int kEdges = 8;          // forward offsets of the stencil
 
-// Each particle of a row sums its springs: per offset the forward edge (+F)
-// and the backward one (-F), and adds the sum to its force, out[k][i].
+// Each particle of a row sums its springs: per live offset the forward edge
+// (+F) and the backward one (-F), and adds the sum to its force, out[k][i].
+// kLive > 0: that many offsets, the loop over them unrolled; 0: `live`.
+template <int kLive>
 void gather_row(const double* const fwd[kEdges][kSpringFields],
-                const double* const bwd[kEdges][kSpringFields], const int nu,
+                const double* const bwd[kEdges][kSpringFields], const int live, const int nu,
                 double* const force[kSpringFields]) {
+  const int count = kLive > 0 ? kLive : live;
   for (int k = 0; k < kSpringFields; ++k) {
     double* __restrict out = force[k];
 #pragma GCC ivdep
     for (int i = 0; i < nu; ++i) {
       double total = 0;
 #pragma GCC unroll 8
-      for (int e = 0; e < kEdges; ++e) total = total + fwd[e][k][i] - bwd[e][k][i];
+      for (int e = 0; e < count; ++e) total = total + fwd[e][k][i] - bwd[e][k][i];
       out[i] += total;
     }
+  }
+}
+
+void gather_row(const double* const fwd[kEdges][kSpringFields],
+                const double* const bwd[kEdges][kSpringFields], const int live, const int nu,
+                double* const force[kSpringFields]) {
+  switch (live) {  // a grid's springs without Provot's bending, and with them
+    case 4:
+      return gather_row<4>(fwd, bwd, live, nu, force);
+    case 8:
+      return gather_row<8>(fwd, bwd, live, nu, force);
+    default:
+      return gather_row<0>(fwd, bwd, live, nu, force);
   }
 }
 
@@ -50,6 +68,15 @@ void add_spring_forces(const Model& m, const State& s, Workspace& w) {
   std::fill(zero_row, zero_row + kSpringFields * stride, 0.0);
   const SpringColumns<double> c{s.x.column(0), s.x.column(1), s.x.column(2),
                                 s.v.column(0), s.v.column(1), s.v.column(2)};
+  // The offsets that hold springs, in order: with the quadratic bending,
+  // Provot's bending offsets have none (k = 0, no damping), and their zero
+  // forces, half the stencil, are neither computed nor summed (a sum's +0
+  // changes no bit of a force).
+  int live[kEdges], lives = 0;
+  for (int e = 0; e < kEdges; ++e) {
+    const StencilEdge& st = m.topology->stencil[e];
+    if (st.k != 0 || (damped && st.damping != 0)) live[lives++] = e;
+  }
   for_each_row_block(m, [&](int j0, int j1, int thread) {
     double* const ring = zero_row + kSpringFields * stride + per_thread * thread;
     // Field k of offset e's edge row j, at its particle i = 0.
@@ -66,7 +93,7 @@ void add_spring_forces(const Model& m, const State& s, Workspace& w) {
         }
       }
     for (int j = std::max(0, j0 - kReach); j < j1; ++j) {
-      for (int e = 0; e < kEdges; ++e) {
+      for (const int e : std::span(live, lives)) {
         if (j + m.topology->stencil[e].dj >= m.nv) continue;  // gathered from the zero row instead
         double* out[kSpringFields];
         for (int k = 0; k < kSpringFields; ++k) out[k] = edges(j, e, k);
@@ -77,16 +104,17 @@ void add_spring_forces(const Model& m, const State& s, Workspace& w) {
       // +F) and the one ending here, which starts at (i - di, j - dj) (-F).
       const double* fwd[kEdges][kSpringFields];
       const double* bwd[kEdges][kSpringFields];
-      for (int e = 0; e < kEdges; ++e) {
+      for (int q = 0; q < lives; ++q) {
+        const int e = live[q];
         const StencilEdge& st = m.topology->stencil[e];
         for (int k = 0; k < kSpringFields; ++k) {
-          fwd[e][k] = j + st.dj < m.nv ? edges(j, e, k) : zero_row + kReach;
-          bwd[e][k] = (j >= st.dj ? edges(j - st.dj, e, k) : zero_row + kReach) - st.di;
+          fwd[q][k] = j + st.dj < m.nv ? edges(j, e, k) : zero_row + kReach;
+          bwd[q][k] = (j >= st.dj ? edges(j - st.dj, e, k) : zero_row + kReach) - st.di;
         }
       }
       double* force[kSpringFields];
       for (int k = 0; k < kSpringFields; ++k) force[k] = w.force.column(k) + j * nu;
-      gather_row(fwd, bwd, nu, force);
+      gather_row(fwd, bwd, lives, nu, force);
     }
   });
 }

@@ -35,6 +35,10 @@ struct BendingMatrix {
     int nu = 0;  // the grid's row length
     std::vector<int> offset, first, last;
     std::vector<double> value;
+    // A 5 x 5 stencil the same under di → -di and dj → -dj (a grid of
+    // rectangular cells): the value of each group of mirror images, (di, dj)
+    // = (1,0), (0,1), (2,0), (0,2), (1,1), (1,2), (2,1), (2,2); empty otherwise.
+    std::vector<double> mirror;
   } stencil;
 
   bool in_stencil(int i) const {

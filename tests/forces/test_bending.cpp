@@ -174,6 +174,7 @@ TEST(QuadraticBending, TheGridsStencilIsItsMatrixRows) {
   const Model& m = sim.model();
   const BendingMatrix& b = m.topology->bending;
   ASSERT_EQ(b.stencil.offset.size(), 24u);  // 5 x 5 about the particle
+  ASSERT_EQ(b.stencil.mirror.size(), 8u);   // the same under di → -di, dj → -dj: by groups
   for (int j = 3; j + 3 < m.nv; ++j) {
     EXPECT_LE(b.stencil.first[j], 3) << j;
     EXPECT_GE(b.stencil.last[j], m.nu - 3) << j;

@@ -42,7 +42,8 @@ TEST(SelfCollision, CandidatesSearchedAroundMoversAreTheWholeSearch) {
     rebuilt += moved && w.hash_stale.empty();
     std::vector<std::array<int, 2>> expected;
     for (int i = 0; i < m.n; ++i) {
-      ASSERT_LE((x[i] - a[i] - w.candidates_motion).norm(), 0.5 * margin) << "particle " << i;
+      ASSERT_LE((x[i] - (w.candidates_rotation * a[i] + w.candidates_motion)).norm(), 0.5 * margin)
+          << "particle " << i;
       for (int j = i + 1; j < m.n; ++j) {
         const double len2 = (a[i] - a[j]).squaredNorm();
         const bool grid =
@@ -134,6 +135,28 @@ TEST(SelfCollision, ClothMovedAsAWholeKeepsItsCandidates) {
   EXPECT_TRUE(f.paired(c, d));
   EXPECT_TRUE(f.paired(a, b));
   EXPECT_EQ(w.collision_pairs.size(), 2u);
+}
+
+// A cloth that swings as a whole keeps its list too: turned by 40° about a
+// pin at its corner, no particle is searched again, the fitted motion is
+// the turn, and the fold's pair is still within d_t.
+TEST(SelfCollision, ClothTurnedAsAWholeKeepsItsCandidates) {
+  FlatCloth f;
+  State& s = f.s;
+  Workspace& w = f.w;
+  const int a = f.m.index(3, 3), b = f.m.index(15, 14);
+  detail::put(s.x[a], Vec3(s.x[b] + f.lift));  // a fold: a over b
+  f.search();
+  ASSERT_TRUE(f.paired(a, b));
+  const auto candidates = w.candidates;
+  const Eigen::Matrix3d turn = Eigen::AngleAxisd(0.7, Vec3(1, 0, 0)).toRotationMatrix();
+  const Vec3 pin = s.x[0];
+  for (int i = 0; i < f.m.n; ++i) detail::put(s.x[i], Vec3(pin + turn * (s.x[i] - pin)));
+  f.search();
+  EXPECT_TRUE(w.candidate_movers.empty());
+  EXPECT_EQ(w.candidates, candidates);
+  EXPECT_LT((w.candidates_rotation - turn).norm(), 1e-9);
+  EXPECT_EQ(w.collision_pairs.size(), 1u);
 }
 
 // A cloth folded onto itself on the table: the top layer rests on the bottom one.

@@ -383,11 +383,6 @@ BendingMatrix build_bending_matrix(const Model& m, double rigidity) {
   return b;
 }
 
-// out_i += scale Σ_j Q_ij (x_j - x_i) (Difference) or scale Σ_j Q_ij x_j over
-// j ≠ i, for the particles [a0, a1): each particle sums its own row in the
-// order of its columns, so that any thread count gives the same bits. The
-// stencil's runs of a row take that order too, offset by offset over a chunk
-// of particles, a loop that vectorises.
 // Q x on differences at the particles [i0, i1) of grid row j, from a
 // mirrored stencil (Stencil::mirror): Σ_g c_g Σ_{(di,dj) in g} (x_{i+di+dj nu} -
 // x_i), each group's sum made from the second differences along rows,
@@ -438,21 +433,30 @@ void mirrored_rows(const Model& m, const double* __restrict x, double* __restric
   }
 }
 
-template <bool Difference, bool Assign = false>
-void bending_rows(const Model& m, const double* __restrict x, double* __restrict out, double scale,
-                  int a0, int a1) {
+// out_i += scale Σ_j Q_ij (x_j - x_i) (Difference) or scale Σ_j Q_ij x_j over
+// j ≠ i, for the particles [a0, a1), each of the C components: each particle
+// sums its own row in a fixed order, so that any thread count gives the same
+// bits. The stencil's runs of a row go over a chunk of particles at a time, in
+// loops that vectorise: by mirror groups (mirrored_rows), or offset by offset.
+template <bool Difference, bool Assign, int C>
+void bending_rows(const Model& m, const std::array<const double*, C>& x,
+                  const std::array<double*, C>& out, double scale, int a0, int a1) {
   const BendingMatrix& b = m.topology->bending;
   const int *const start = b.start.data(), *const column = b.column.data();
   const double* const value = b.value.data();
+  // Matrix rows: each entry's column and value read once for the C components.
   const auto rows = [&](int first, int end) {
     for (int i = first; i < end; ++i) {
-      double sum = 0;
+      double sum[C] = {};
       for (int e = start[i]; e < start[i + 1]; ++e)
-        sum += value[e] * (Difference ? x[column[e]] - x[i] : x[column[e]]);
-      if constexpr (Assign)
-        out[i] = scale * sum;
-      else
-        out[i] += scale * sum;
+        for (int k = 0; k < C; ++k)
+          sum[k] += value[e] * (Difference ? x[k][column[e]] - x[k][i] : x[k][column[e]]);
+      for (int k = 0; k < C; ++k) {
+        if constexpr (Assign)
+          out[k][i] = scale * sum[k];
+        else
+          out[k][i] += scale * sum[k];
+      }
     }
   };
   const BendingMatrix::Stencil& st = b.stencil;
@@ -460,11 +464,13 @@ void bending_rows(const Model& m, const double* __restrict x, double* __restrict
   const int size = static_cast<int>(st.offset.size());
   const int* const offset = st.offset.data();
   const double* const coefficient = st.value.data();
-  // The mirrored stencil's second differences, five rows of them, this thread's.
+  // The mirrored stencil's second differences, five rows of them per
+  // component, this thread's.
   static thread_local std::vector<double> ring;
   const bool mirrored = Difference && !st.mirror.empty();
-  if (mirrored && ring.size() < std::size_t(10) * m.nu) ring.resize(std::size_t(10) * m.nu);
-  int next = 0;  // the first row not in the ring
+  const std::size_t per_component = std::size_t(10) * m.nu;
+  if (mirrored && ring.size() < C * per_component) ring.resize(C * per_component);
+  int next[C] = {};  // per component, the first row not in its ring
   for (int a = a0; a < a1;) {
     const int j = a / m.nu, row = j * m.nu, lo = row + st.first[j], hi = row + st.last[j];
     const int end = std::min(a1, row + m.nu);
@@ -475,64 +481,70 @@ void bending_rows(const Model& m, const double* __restrict x, double* __restrict
       continue;
     }
     const int to = std::min(hi, end);
-    if (size != kGridStencil) {  // not a grid's 5 x 5 (none is met): a particle at a time
+    for (int k = 0; k < C; ++k) {
+      const double* __restrict y = x[k];
+      double* __restrict f = out[k];
+      if (size != kGridStencil) {  // not a grid's 5 x 5 (none is met): a particle at a time
+        for (int i = a; i < to; ++i) {
+          double sum = 0;
+          for (int e = 0; e < size; ++e)
+            sum += coefficient[e] * (Difference ? y[i + offset[e]] - y[i] : y[i + offset[e]]);
+          if constexpr (Assign)
+            f[i] = scale * sum;
+          else
+            f[i] += scale * sum;
+        }
+        continue;
+      }
+      if (mirrored) {
+        mirrored_rows<Assign>(m, y, f, scale, j, a - row, to - row, ring.data() + k * per_component,
+                              next[k]);
+        continue;
+      }
+      // Vectorised across the particles, each one's sum held in a register
+      // over the stencil's 24 offsets (unrolled: its size is known here).
+      int o[kGridStencil];
+      double c[kGridStencil];
+      std::copy_n(offset, kGridStencil, o);
+      std::copy_n(coefficient, kGridStencil, c);
+#pragma omp simd
       for (int i = a; i < to; ++i) {
         double sum = 0;
-        for (int e = 0; e < size; ++e)
-          sum += coefficient[e] * (Difference ? x[i + offset[e]] - x[i] : x[i + offset[e]]);
-        if constexpr (Assign)
-          out[i] = scale * sum;
-        else
-          out[i] += scale * sum;
-      }
-      a = to;
-      continue;
-    }
-    if (mirrored) {
-      mirrored_rows<Assign>(m, x, out, scale, j, a - row, to - row, ring.data(), next);
-      a = to;
-      continue;
-    }
-    // Vectorised across the particles, each one's sum held in a register
-    // over the stencil's 24 offsets (unrolled: its size is known here).
-    int o[kGridStencil];
-    double c[kGridStencil];
-    std::copy_n(offset, kGridStencil, o);
-    std::copy_n(coefficient, kGridStencil, c);
-#pragma omp simd
-    for (int i = a; i < to; ++i) {
-      double sum = 0;
 #pragma GCC unroll 24
-      for (int e = 0; e < kGridStencil; ++e)
-        sum += c[e] * (Difference ? x[i + o[e]] - x[i] : x[i + o[e]]);
-      if constexpr (Assign)
-        out[i] = scale * sum;
-      else
-        out[i] += scale * sum;
+        for (int e = 0; e < kGridStencil; ++e)
+          sum += c[e] * (Difference ? y[i + o[e]] - y[i] : y[i + o[e]]);
+        if constexpr (Assign)
+          f[i] = scale * sum;
+        else
+          f[i] += scale * sum;
+      }
     }
     a = to;
   }
 }
 
+template <bool Assign>
+void bending_rows_xyz(const Model& m, const State& s, Vec3Array& f, int first, int end) {
+  bending_rows<true, Assign, 3>(m, {s.x.column(0), s.x.column(1), s.x.column(2)},
+                                {f.column(0), f.column(1), f.column(2)}, -1.0, first, end);
+}
+
 // f -= Q x on differences, so that a cloth far from the origin loses no precision.
 void add_bending_forces(const Model& m, const State& s, Vec3Array& f) {
   if (m.topology->bending.start.empty()) return;
-  for_each_particle_block(m, [&](int first, int end) {
-    for (int k = 0; k < 3; ++k) bending_rows<true>(m, s.x.column(k), f.column(k), -1.0, first, end);
-  });
+  for_each_particle_block(
+      m, [&](int first, int end) { bending_rows_xyz<false>(m, s, f, first, end); });
 }
 
 // f = -Q x, every particle's row written: xpbd's own array, no zeroing pass.
 void bending_forces(const Model& m, const State& s, Vec3Array& f) {
-  for_each_particle_block(m, [&](int first, int end) {
-    for (int k = 0; k < 3; ++k)
-      bending_rows<true, true>(m, s.x.column(k), f.column(k), -1.0, first, end);
-  });
+  for_each_particle_block(m,
+                          [&](int first, int end) { bending_rows_xyz<true>(m, s, f, first, end); });
 }
 
 void add_bending_off_diagonal(const Model& m, const double* x, double* y, double scale, int a0,
                               int a1) {
-  bending_rows<false>(m, x, y, scale, a0, a1);
+  bending_rows<false, false, 1>(m, {x}, {y}, scale, a0, a1);
 }
 
 // ½ xᵀ Q x = -¼ Σ_i Σ_j≠i Q_ij |x_j - x_i|² (the rows sum to zero).

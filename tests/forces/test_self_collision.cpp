@@ -26,8 +26,9 @@ TEST(SelfCollision, CandidatesSearchedAroundMoversAreTheWholeSearch) {
   // Crumple: a pseudo-random height field, so that layers meet as it falls.
   for (int i = 0; i < m.n; ++i) detail::state(sim).x[i].z() += 0.01 * std::sin(1.7 * i);
   const double d_t = p.self_collision.distance, step = 0.12 / 19;
-  const double margin = std::min(0.5 * d_t, 1.5 * step);
   const int reach = std::max(2, static_cast<int>(std::ceil(d_t / step)));
+  const double margin = std::max(std::min(0.5 * d_t, 1.5 * step),
+                                 std::min({d_t, 1.5 * step, 0.9 * ((reach + 1) * step - d_t)}));
   int partial = 0, with_stale = 0, rebuilt = 0;
   for (int k = 0; k < 400; ++k) {
     const Vec3Array x = sim.state().x;  // where the step found the pairs
@@ -95,7 +96,7 @@ TEST(SelfCollision, MoversMeetingEachOtherArePaired) {
   f.search();  // the whole search
   const int a = f.m.index(3, 3), b = f.m.index(15, 14), c = f.m.index(9, 17);
   detail::put(s.x[a], Vec3(s.x[b] + lift));
-  detail::put(s.x[b], Vec3(s.x[b] - lift));
+  detail::put(s.x[b], Vec3(s.x[b] - 2 * lift));  // beyond half the margin, d_t / 2
   f.search();
   ASSERT_EQ(w.candidate_movers, (std::vector<int>{a, b}));
   EXPECT_TRUE(f.paired(a, b));

@@ -139,8 +139,9 @@ def main():
     parser.add_argument("build")
     parser.add_argument("--scenes", default=",".join(METRICS))
     parser.add_argument("--humidity", default="0,0.7,1")
-    parser.add_argument("--settings", default="symplectic-5e-5,implicit-0.1,implicit-0.05,"
-                        "xpbd-10,xpbd-20,xpbd-40,xpbd-80")
+    # The accurate tier (symplectic-1e-4) and the live one (xpbd-10) first.
+    parser.add_argument("--settings", default="symplectic-1e-4,xpbd-10,symplectic-5e-5,"
+                        "implicit-0.1,implicit-0.05,xpbd-20,xpbd-40,xpbd-80")
     parser.add_argument("--grid", type=int, default=0)
     parser.add_argument("--duration", type=float, default=0)
     parser.add_argument("--jobs", type=int, default=os.cpu_count() or 1)

@@ -220,6 +220,15 @@ void Simulation::set_params(const Params& p) {
       start_film(model_, state_);
     note_humidity_changed(state_, *ws_);
     set_masses(model_, state_.humidity);
+    // A new step keeps the clock: every integrator reads the time as steps
+    // times Δt, so the count is the time over the new step (the time snapped
+    // to it, within half a step). Kept as it was, a viewer switched from the
+    // accurate tier's 1e-4 s to 1/240 s at 2 s would have jumped to 83 s,
+    // its handles and moving surfaces with it.
+    if (p.integrator.dt != before.integrator.dt) {
+      state_.steps = std::llround(state_.time / p.integrator.dt);
+      state_.time = static_cast<double>(state_.steps) * p.integrator.dt;
+    }
   }
   ws_->strain_springs.clear();  // their lengths may have changed: ordered again next step
   ws_->strain_slots.clear();

@@ -328,6 +328,23 @@ TEST(SceneLoader, ParamsMadeInCodeAreChecked) {
   EXPECT_NO_THROW(sim.set_humidity(1.0));
 }
 
+// A step changed between steps (the viewer's integrator, Python's set) keeps
+// the clock: the time goes on from where it was, not from the steps taken
+// times the new step.
+TEST(SceneLoader, ANewStepKeepsTheClock) {
+  Simulation sim(load_scene("drag-corner", {"cloth.resolution=[21,21]"}));
+  ASSERT_TRUE(sim.advance_to(0.05));
+  Params p = sim.model().params;
+  p.integrator.type = IntegratorType::Xpbd;
+  p.integrator.dt = 1.0 / 240;
+  sim.set_params(p);
+  EXPECT_NEAR(sim.state().time, 0.05, 0.5 * p.integrator.dt);
+  const long long steps = sim.state().steps;
+  ASSERT_TRUE(sim.advance_to(0.1)) << sim.blow_up_reason();
+  EXPECT_NEAR(sim.state().time, 0.1, 0.5 * p.integrator.dt);
+  EXPECT_EQ(sim.state().steps - steps, 12);  // 0.05 s of 1/240 s
+}
+
 // A handle's name is part of its keys (and of scene.toml): a bare key.
 TEST(SceneLoader, HandleNamesAreBareKeys) {
   EXPECT_NE(error_of("[handle.\"my pull\"]\ntype = \"pin\"\n")

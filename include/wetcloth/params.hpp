@@ -293,6 +293,7 @@ struct Params {
     double cg_tolerance = 1e-4;  // implicit-euler: largest velocity error, m/s
     long long cg_max_iterations = 300;  // implicit-euler
     double max_step_strain = 0.025;  // implicit-euler: a step is halved past this (Baraff & Witkin)
+    double landing_dt = 2.5e-5;      // s; symplectic: the longest substep while the cloth lands
   } integrator;
 
   struct Run {

@@ -235,6 +235,10 @@ struct State {
   // from v + h times it; empty: from v).
   int halvings = 0;
   Vec3Array acceleration;
+  // The symplectic step: until when it runs in substeps of at most
+  // integrator.landing_dt, the cushion of air a landing cloth trapped ringing
+  // (two of its periods from the first contact).
+  double landing_until = 0;
   // The humidity field (docs/model.md "Humidity field"): ω of each particle,
   // moved by wicking, drying and uptake from a wet surface once a step; the
   // water (kg) left in the contact surface's film under each particle (empty

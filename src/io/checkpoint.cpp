@@ -1,7 +1,8 @@
 // Layout: "WETCLOTH-STATE\0\0", the format version (u32), the scene as TOML
 // (u64 length, bytes), then the State's fields in declaration order (arrays
 // as a u64 count and their elements; Vec3Arrays x, y, z columns; format 4
-// adds the humidity field, its film and the water evaporated), then
+// adds the humidity field, its film and the water evaporated, format 5 the
+// end of a landing's substeps), then
 // (format 2) the run's own record (u64 length, bytes), then the FNV-1a 64
 // hash of everything before it. Little-endian, as the machines we
 // run on.
@@ -22,7 +23,7 @@ namespace {
 
 constexpr char kMagic[16] = "WETCLOTH-STATE";
 // 1 had no run record, 2 no scene folder, 3 no humidity field: still read
-constexpr std::uint32_t kVersion = 4;
+constexpr std::uint32_t kVersion = 5;
 
 std::uint64_t fnv1a(const std::string& bytes) {
   std::uint64_t h = 1469598103934665603ULL;
@@ -122,6 +123,8 @@ void fields(IO& io, State& s, std::uint32_t version) {
   io.vec(s.humidity);
   io.vec(s.film);
   scalar(s.water_evaporated);
+  if (version < 5) return;  // no landing under way
+  scalar(s.landing_until);
 }
 
 }  // namespace

@@ -485,6 +485,12 @@ std::vector<ParamDef> solver_defs() {
           "implicit-euler: a step is halved when a spring changes by more than this times its rest "
           "length in it, and doubled only when none changed by half as much",
           P(integrator.max_step_strain)),
+      field("integrator.landing_dt", "s", 0, 1,
+            "symplectic-euler: the longest substep while a cloth lands on its contact surface, "
+            "from two steps before its first contact to two periods of the cushion of air it "
+            "traps after (the cushion's first ringing decides where the cloth settles; 0: no "
+            "substeps)",
+            P(integrator.landing_dt)),
       field("integrator.max_speed", "m/s", 1e-3, 1e6, "speed taken as a blow-up",
             P(integrator.max_speed)),
       field("run.duration", "s", 0, 1e6, "simulated time", P(run.duration)),

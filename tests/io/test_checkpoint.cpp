@@ -60,6 +60,27 @@ TEST(Checkpoint, ResumesFromAFileWithTheSameBits) {
   fs::remove(file);
 }
 
+// A run saved while a landing's substeps are under way (integrator.landing_dt)
+// resumes them: the file keeps when they end.
+TEST(Checkpoint, ResumesALandingInItsSubsteps) {
+  namespace fs = std::filesystem;
+  const fs::path file = fs::temp_directory_path() / "wetcloth_test_checkpoint_landing.state";
+  const Params p = load_scene("drop-ball", {"cloth.resolution=[21,21]", "cloth.humidity=1"});
+  Simulation first(p);
+  ASSERT_TRUE(first.advance_to(0.098));
+  ASSERT_GT(first.state().landing_until, first.state().time);  // landed at 0.0963 s
+  save_checkpoint(file, first.model().params, first.state());
+  ASSERT_TRUE(first.advance_to(0.11));
+
+  const Checkpoint c = load_checkpoint(file);
+  fs::remove(file);
+  Simulation second(c.params);
+  second.restore(c.state);
+  ASSERT_TRUE(second.advance_to(0.11));
+  EXPECT_TRUE(test::same_bits(second.state().x, first.state().x));
+  EXPECT_TRUE(test::same_bits(second.state().v, first.state().v));
+}
+
 // A program's own record (`wetcloth run`'s: where its outputs stood) comes
 // back as it was written, and is covered by the checksum.
 TEST(Checkpoint, KeepsTheRunsRecord) {

@@ -329,12 +329,22 @@ void transpose(const Model& m, const Real* __restrict in, Real* __restrict out, 
 
 namespace {
 
-// The offsets in two fixed groups (structural and shear; bending), each
-// adding its offsets in stencil order into its own impulses: the groups may
-// run on two threads, and the sums are the same for any number of threads.
-// Each group has one horizontal offset, solved on the transposed grid; its
-// λ u come back to the grid and its impulses are taken there, at the end.
+// The offsets in two fixed groups, each adding its offsets in stencil order
+// into its own impulses: the groups may run on two threads, and the sums are
+// the same for any number of threads. With damped bending springs
+// (Provot's), structural and shear, then bending; without them (the
+// quadratic bending), structural, then shear, so that two threads still
+// share the solve (one group had run on one thread: 11 % of the dry pull's
+// step, serial). A group's horizontal offset, if it has one, is solved on the
+// transposed grid; its λ u come back to the grid and its impulses are taken
+// there, at the end.
 constexpr int kGroups = 2;
+using GroupBounds = std::array<int, kGroups + 1>;  // group g: offsets [bound[g], bound[g + 1])
+GroupBounds group_bounds(const Model& m) {
+  for (int e = kEdges / 2; e < kEdges; ++e)
+    if (m.topology->stencil[e].damping > 0) return {0, kEdges / 2, kEdges};
+  return {0, kEdges / 4, kEdges / 2};
+}
 
 // apply_spring_damping's columns in w.damping_columns, in float: the grid
 // (x y z, v, 1/m) and its transpose; each thread's chain scratch; per group
@@ -393,7 +403,8 @@ void load_damping_columns(const Model& m, const State& s, const DampingColumns& 
 // first whether nothing is in its impulses yet, solved whether its horizontal
 // λ u are.
 void solve_damping_groups(const Model& m, double h, int damped, const DampingColumns& d,
-                          bool (&first)[kGroups], bool (&solved)[kGroups]) {
+                          const GroupBounds& bound, bool (&first)[kGroups],
+                          bool (&solved)[kGroups]) {
   const int n = m.n, nu = m.nu, nv = m.nv;
   const std::size_t stride = d.stride;
   constexpr int kGrid = DampingColumns::kGrid, kScratch = DampingColumns::kScratch;
@@ -406,7 +417,7 @@ void solve_damping_groups(const Model& m, double h, int damped, const DampingCol
                                t + 4 * stride,
                                t + 5 * stride,
                                t + 6 * stride};
-    for (int e = group * kEdges / kGroups; e < (group + 1) * kEdges / kGroups; ++e) {
+    for (int e = bound[group]; e < bound[group + 1]; ++e) {
       const StencilEdge& st = m.topology->stencil[e];
       if (st.damping == 0) continue;
       const Real c = Real(damped * h * st.damping);
@@ -472,8 +483,9 @@ void apply_spring_damping(const Model& m, State& s, Workspace& w, double h) {
   if (damped == 0) return;
   std::array<int, kGroups> horizontal{};  // each group's horizontal offset, di
   std::array<bool, kGroups> live{};       // each group: some offset of it damped
+  const GroupBounds bound = group_bounds(m);
   for (int group = 0; group < kGroups; ++group)
-    for (int e = group * kEdges / kGroups; e < (group + 1) * kEdges / kGroups; ++e) {
+    for (int e = bound[group]; e < bound[group + 1]; ++e) {
       if (m.topology->stencil[e].dj == 0) horizontal[group] = m.topology->stencil[e].di;
       live[group] = live[group] || m.topology->stencil[e].damping > 0;
     }
@@ -481,7 +493,7 @@ void apply_spring_damping(const Model& m, State& s, Workspace& w, double h) {
   load_damping_columns(m, s, d);
   bool first[kGroups] = {true, true};     // per group: nothing in its impulses yet
   bool solved[kGroups] = {false, false};  // per group: its horizontal λ solved
-  solve_damping_groups(m, h, damped, d, first, solved);
+  solve_damping_groups(m, h, damped, d, bound, first, solved);
   // v += the mean change, by component in the groups' order: per group its
   // offsets along the columns, then its horizontal one, whose spring starting
   // at a particle gives it +λ u and the one ending there −λ u. (Before the

@@ -331,7 +331,7 @@ void finish_substep(const Model& m, State& s, Workspace& w, double h) {
 
 // A cloth landing on its contact surface traps a cushion of air that rings
 // as a gas spring, P_atm A² / V_sum against the lifted cloth's mass (a period
-// of 1.9 ms under `drop-ball`'s cloth). Where the cloth settles is decided in
+// of 3.3 ms under `drop-ball`'s wet cloth). Where the cloth settles is decided in
 // the cushion's first ringing: in the step in which the pocket closes,
 // exchange() takes it as closed from the step's start, and at 1e-4 s that
 // deficit, a step early, bounced the wet cloth off the ball into another

@@ -448,7 +448,7 @@ std::vector<ParamDef> solver_defs() {
             P(self_collision.spacing)),
       field("integrator.tier", "", 1, 0,
             "the integrator's settings by name: accurate (symplectic Euler at 1e-4 s on the "
-            "default cloth, median error 1.3 % against the reference on the paper's scenes) or "
+            "default cloth, median error 0.7 % against the reference on the paper's scenes) or "
             "live (xpbd at 1/240 s, 4 times cheaper, the viewer's; median error 26 %; "
             "docs/performance.md); sets "
             "integrator.type, dt, substeps and max_step_strain, and any of them the scene or a "

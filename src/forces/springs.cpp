@@ -293,18 +293,23 @@ void damp_offset(const DampingGrid& g, int di, int dj, Real c, const ChainScratc
 // drops; Eigen silences the same warning inside itself.
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wignored-attributes"
-// out[i rows + j] = in[j cols + i]: by blocks of a vector's width square,
+// out[i rows + j] = in[j cols + i] for each of `count` arrays, the k-th at
+// in + k stride and out + k stride: by blocks of a vector's width square,
 // each transposed in registers (Eigen's packet transpose); the rows and
-// columns left over one by one.
-void transpose(const Model& m, const Real* __restrict in, Real* __restrict out, int rows,
-               int cols) {
+// columns left over one by one. All the arrays in one region (one a column
+// had cost a region each, 7 a step, and left the threads' shares uneven).
+void transpose(const Model& m, const Real* __restrict first_in, Real* __restrict first_out,
+               int rows, int cols, int count = 1, std::size_t stride = 0) {
   namespace ei = Eigen::internal;
   // Half a vector: 8 floats with AVX-512, where 16 left a 51-wide grid a
   // fifth in the scalar edges.
   using Packet = ei::unpacket_traits<ei::packet_traits<Real>::type>::half;
   constexpr int kWidth = ei::unpacket_traits<Packet>::size;
   const int strips = rows / kWidth;
-  parallel_for(m, strips + 1, [&](int strip) {
+  parallel_for(m, count * (strips + 1), [&](int item) {
+    const int strip = item % (strips + 1);
+    const Real* __restrict const in = first_in + (item / (strips + 1)) * stride;
+    Real* __restrict const out = first_out + (item / (strips + 1)) * stride;
     const int j0 = strip * kWidth;
     if (strip == strips) {  // the rows left over
       for (int i = 0; i < cols; ++i)
@@ -395,8 +400,8 @@ void load_damping_columns(const Model& m, const State& s, const DampingColumns& 
     Real* __restrict to_w = d.col(6);
     for (int a = first; a < end; ++a) to_w[a] = Real(inv_mass[a]);
   });
-  for (int k = 0; k < DampingColumns::kGrid; ++k)  // transposed: particle (i, j) at i nv + j
-    transpose(m, d.col(k), d.col(DampingColumns::kGrid + k), m.nv, m.nu);
+  // Transposed: particle (i, j) at i nv + j.
+  transpose(m, d.col(0), d.col(DampingColumns::kGrid), m.nv, m.nu, DampingColumns::kGrid, d.stride);
 }
 
 // Each group's offsets solved (damp_offset), on up to two threads: per group,
@@ -445,8 +450,8 @@ void solve_damping_groups(const Model& m, double h, int damped, const DampingCol
           Real* __restrict lu = u[k];
           const Real* __restrict lambda = scratch.lambda;
           for (int a = 0; a < n; ++a) lu[a] = lambda[a] * lu[a];
-          transpose(m, lu, d.back(group, k), nu, nv);
         }
+        transpose(m, scratch.ux, d.back(group, 0), nu, nv, 3, stride);  // u's and back's columns
         solved[group] = true;
       } else {
         first[group] = false;

@@ -145,10 +145,30 @@ void project_quads(Sweep s, const OffsetSprings o, int a0, int count, bool tail)
   if (tail) project_spring<kind>(s, o, a0 + 4 * count, a0 + 4 * count + 2);
 }
 
+// Whether any spring a -> a + off, a in [first, first + count), is longer than
+// its limit (slightly shorter, so that rounding never skips one that is). A
+// row with none is left to the limit-only pass as it is: it would move no
+// particle, and the check reads what the projection reads but writes nothing.
+bool any_over_limit(const Sweep& s, const OffsetSprings& o, int first, int count) {
+  const double* __restrict xa = s.x + first, * __restrict ya = s.y + first, * __restrict za = s.z + first;
+  const double* __restrict xb = xa + o.off, * __restrict yb = ya + o.off, * __restrict zb = za + o.off;
+  double most = 0;
+#pragma omp simd reduction(max : most)
+  for (int k = 0; k < count; ++k) {
+    const double dx = xb[k] - xa[k], dy = yb[k] - ya[k], dz = zb[k] - za[k];
+    const double len2 = dx * dx + dy * dy + dz * dz;
+    most = most > len2 ? most : len2;
+  }
+  return most > o.max_len * o.max_len * (1 - 1e-9);
+}
+
 // Class c of one row j.
 template <Projection kind>
 void project_class_row(const Sweep& s, const OffsetSprings& o, int nu, int j, int c) {
   const int row = j * nu;
+  // (Along a row the check takes both classes' springs: a superset.)
+  if constexpr (kind == Projection::LimitOnly)
+    if (!any_over_limit(s, o, row + o.lo, o.hi - o.lo)) return;
   if (o.by_row) return project_run<kind>(s, o, row + o.lo, o.hi - o.lo);
   if (o.off == 1) return project_pairs<kind>(s, o, row + c, (o.hi - c + 1) / 2);
   const int first = 2 * c, full = std::max(0, (o.hi - first + 2) / 4);
@@ -443,7 +463,7 @@ void add_external_velocity(const Model& m, State& s, const Workspace& w, double 
   const bool bending = !b.start.empty();
   // One pass: each particle's two factors found once, for its three
   // components (the same sums, in the same order, as a pass for each).
-  for_each_particle_block(m, [&](int first, int end) {
+  for_each_particle_block(m, [&, h, c, stable](int first, int end) {
     const double *__restrict fx = w.force.column(0), *__restrict fy = w.force.column(1),
                              *__restrict fz = w.force.column(2);
     double* __restrict vx = s.v.column(0), * __restrict vy = s.v.column(1), * __restrict vz = s.v.column(2);
@@ -464,7 +484,8 @@ void add_external_velocity(const Model& m, State& s, const Workspace& w, double 
 #pragma omp simd
     for (int i = first; i < end; ++i) {
       const double hm = h * inv_mass[i], a = hm / (1 + hm * c * area[i]);
-      const double e = h * std::min(inv_mass[i], stable / bound[i]);
+      const double heavier = stable / bound[i];  // (not std::min: a reference, a gather)
+      const double e = h * (inv_mass[i] < heavier ? inv_mass[i] : heavier);
       vx[i] = (vx[i] + a * fx[i]) + e * bx[i];
       vy[i] = (vy[i] + a * fy[i]) + e * by[i];
       vz[i] = (vz[i] + a * fz[i]) + e * bz[i];

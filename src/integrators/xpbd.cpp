@@ -27,8 +27,13 @@ namespace wetcloth::detail {
 // infinitely heavy.
 void xpbd_begin_substep(const Model& m, const State& s, Workspace& w) {
   w.free_inv_mass.resize(m.n);
-  for_each_particle(
-      m, [&](int i) { w.free_inv_mass[i] = m.driven[i] || s.held[i] ? 0.0 : m.inv_mass[i]; });
+  for_each_particle_block(m, [&](int first, int end) {
+    const std::uint8_t* __restrict driven = m.driven.data(), * __restrict held = s.held.data();
+    const double* __restrict inv = m.inv_mass.data();
+    double* __restrict free = w.free_inv_mass.data();
+#pragma omp simd
+    for (int i = first; i < end; ++i) free[i] = (driven[i] | held[i]) != 0 ? 0.0 : inv[i];
+  });
   // The measured handle's particles while it holds them (a move or pin
   // handle, a force handle stopped at its cap): the constraints' impulses on
   // them are part of the rig's force.

@@ -67,17 +67,21 @@ void detail::compute_normals(const Model& m, const double* X, Vec3Array& normal,
           // Corners a, b = a + 1, cc = a + nu + 1, d = a + nu. Even quads split
           // along a-cc: {a, b, cc}, {a, cc, d}; odd ones along b-d: {a, b, d},
           // {b, cc, d}. Eigen's cross, in scalars.
+          // Every corner loaded and the split's chosen among the values: an
+          // index chosen per quad made the loop gather.
           const bool even = even_at[a] != 0;
           const int b = a + 1, cc = a + nu + 1, d = a + nu;
-          const double ux = x[b] - x[a], uy = y[b] - y[a], uz = z[b] - z[a];
-          const double vx = (even ? x[cc] : x[d]) - x[a], vy = (even ? y[cc] : y[d]) - y[a],
-                       vz = (even ? z[cc] : z[d]) - z[a];
+          const double ax = x[a], ay = y[a], az = z[a], bx = x[b], by = y[b], bz = z[b];
+          const double cx = x[cc], cy = y[cc], cz = z[cc], dx = x[d], dy = y[d], dz = z[d];
+          const double ux = bx - ax, uy = by - ay, uz = bz - az;
+          const double vx = (even ? cx : dx) - ax, vy = (even ? cy : dy) - ay,
+                       vz = (even ? cz : dz) - az;
           t0[a] = uy * vz - uz * vy;
           t1[a] = uz * vx - ux * vz;
           t2[a] = ux * vy - uy * vx;
-          const int o = even ? a : b;
-          const double px = x[cc] - x[o], py = y[cc] - y[o], pz = z[cc] - z[o];
-          const double qx = x[d] - x[o], qy = y[d] - y[o], qz = z[d] - z[o];
+          const double ox = even ? ax : bx, oy = even ? ay : by, oz = even ? az : bz;
+          const double px = cx - ox, py = cy - oy, pz = cz - oz;
+          const double qx = dx - ox, qy = dy - oy, qz = dz - oz;
           t3[a] = py * qz - pz * qy;
           t4[a] = pz * qx - px * qz;
           t5[a] = px * qy - py * qx;

@@ -309,13 +309,15 @@ class StrainLimiter {
         // flags: one loop over both would run 64 springs to a vector.
         for (int a0 = row + lo; a0 < row + hi; a0 += kChunk) {
           const int count = std::min(kChunk, row + hi - a0);
-          double len2[kChunk];
-#pragma omp simd
+          double len2[kChunk], most = 0;
+#pragma omp simd reduction(max : most)
           for (int k = 0; k < count; ++k) {
             const int a = a0 + k;
             const double dx = X[a + off] - X[a], dy = Y[a + off] - Y[a], dz = Z[a + off] - Z[a];
             len2[k] = dx * dx + dy * dy + dz * dz;
+            most = most > len2[k] ? most : len2[k];
           }
+          if (!(most > limit)) continue;  // the flags stay zero: most chunks
           for (int k = 0; k < count; ++k)
             flag[kStrainOffsets * (a0 + k - row) + e] = len2[k] > limit;
         }

@@ -50,7 +50,12 @@ struct AnchorGap {
 // fit; a good one follows a cloth that swings about its pins or tumbles as it
 // falls, where the mean translation alone left a hundred particles to be
 // searched again every substep (hang, 51 x 51).
-RigidMotion rigid_motion(const Model& m, const Vec3Array& p, const Vec3Array& anchor) {
+// The last refresh's motion is kept while it carries the sample's anchors'
+// mean to within `keep` of the sample's mean now (a cloth lying on its
+// surface: no fit a step); the list is exact with any motion, and the pairs
+// the step uses, those within d_t in the list's order, are the same bits.
+RigidMotion rigid_motion(const Model& m, const Vec3Array& p, const Vec3Array& anchor,
+                         const RigidMotion& last, double keep) {
   const int stride = std::max(1, m.n / 256);
   Vec3 mean_a = Vec3::Zero(), mean_x = Vec3::Zero();
   int count = 0;
@@ -60,6 +65,7 @@ RigidMotion rigid_motion(const Model& m, const Vec3Array& p, const Vec3Array& an
   }
   mean_a /= count;
   mean_x /= count;
+  if ((last.rotation * mean_a + last.shift - mean_x).squaredNorm() <= keep * keep) return last;
   Eigen::Matrix3d h = Eigen::Matrix3d::Zero();
   for (int i = 0; i < m.n; i += stride) h += (anchor[i] - mean_a) * (p[i] - mean_x).transpose();
   const Eigen::JacobiSVD<Eigen::Matrix3d> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
@@ -284,10 +290,13 @@ void refresh_collision_candidates(const Model& m, const State& s, Workspace& w) 
   // (x_i = R a_i + c + g_i with every |g_i| <= margin / 2 keeps a pair off
   // the list at least d_t apart). A falling, sliding or swinging cloth then
   // keeps its list; the pairs, and so the results, are the same bits either way.
-  const RigidMotion motion = search_all ? RigidMotion{} : rigid_motion(m, s.x, anchor);
+  const double far2 = 0.25 * margin * margin;
+  const RigidMotion motion =
+      search_all ? RigidMotion{}
+                 : rigid_motion(m, s.x, anchor, {w.candidates_rotation, w.candidates_motion},
+                                0.125 * margin);
   w.candidates_rotation = motion.rotation;
   w.candidates_motion = motion.shift;
-  const double far2 = 0.25 * margin * margin;
   const AnchorGap gap(s.x, anchor, motion);
   // On one thread the rows' largest gaps are found once, the movers with
   // them; on more, the largest over the cloth first, on the threads.

@@ -470,9 +470,11 @@ void solve_damping_groups(const Model& m, double h, int damped, const DampingCol
     if (d.slot[group] < 0) continue;
     if (first[group])
       for (int k = 0; k < 3; ++k) std::fill_n(d.impulse(group, k), n, 0.0);
-    for (int k = 0; k < 3; ++k)  // and the zeros before the first row (see below)
-      std::fill(d.back(group, k) - DampingColumns::kPad, d.back(group, k) + (solved[group] ? 0 : n),
-                Real(0));
+    // The zeros before the first row (see below); a group with no horizontal
+    // offset has no λ u to add (apply_spring_damping skips them).
+    if (solved[group])
+      for (int k = 0; k < 3; ++k)
+        std::fill(d.back(group, k) - DampingColumns::kPad, d.back(group, k), Real(0));
   }
 }
 
@@ -508,6 +510,10 @@ void apply_spring_damping(const Model& m, State& s, Workspace& w, double h) {
   static_assert(kGroups == 2);
   const double share = 1.0 / damped;
   const int di0 = horizontal[0], di1 = horizontal[1];
+  // A group with no horizontal offset (the shear's) has no λ u: its term
+  // would be J + (0 - 0), which adds to the sum what J does (the sum is
+  // never −0), so its zeroed columns are neither written nor read.
+  const bool back0 = solved[0], back1 = solved[1];
   const auto add_groups = [&]<bool kFirst, bool kSecond>() {
     for_each_particle_block(m, [&](int first, int end) {
       for (int k = 0; k < 3; ++k) {
@@ -520,8 +526,10 @@ void apply_spring_damping(const Model& m, State& s, Workspace& w, double h) {
 #pragma GCC ivdep
         for (int a = first; a < end; ++a) {
           double sum = 0;
-          if constexpr (kFirst) sum += jv0[a] + (double(lu0[a]) - double(lu0[a - di0]));
-          if constexpr (kSecond) sum += jv1[a] + (double(lu1[a]) - double(lu1[a - di1]));
+          if constexpr (kFirst)
+            sum += back0 ? jv0[a] + (double(lu0[a]) - double(lu0[a - di0])) : jv0[a];
+          if constexpr (kSecond)
+            sum += back1 ? jv1[a] + (double(lu1[a]) - double(lu1[a - di1])) : jv1[a];
           out[a] += share * inv_mass[a] * sum;
         }
       }

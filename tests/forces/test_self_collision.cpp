@@ -139,6 +139,23 @@ TEST(SelfCollision, ClothMovedAsAWholeKeepsItsCandidates) {
   EXPECT_EQ(w.collision_pairs.size(), 2u);
 }
 
+// A cloth nudged by less than an eighth of the margin keeps the motion the
+// last refresh fitted (no fit a step for a cloth at rest), and its list.
+TEST(SelfCollision, ClothNudgedKeepsItsFittedMotion) {
+  FlatCloth f;
+  State& s = f.s;
+  Workspace& w = f.w;
+  f.search();
+  const auto candidates = w.candidates;
+  const Vec3 nudge(3e-4, -2e-4, 1e-4);  // 0.37 mm; the margin here is d_t = 5 mm
+  for (int i = 0; i < f.m.n; ++i) detail::add(s.x[i], nudge);
+  f.search();
+  EXPECT_TRUE(w.candidate_movers.empty());
+  EXPECT_EQ(w.candidates, candidates);
+  EXPECT_EQ(w.candidates_motion, Vec3::Zero());  // kept, not fitted to the nudge
+  EXPECT_TRUE(w.candidates_rotation == Eigen::Matrix3d::Identity());
+}
+
 // A cloth that swings as a whole keeps its list too: turned by 40° about a
 // pin at its corner, no particle is searched again, the fitted motion is
 // the turn, and the fold's pair is still within d_t.

@@ -29,6 +29,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <stdexcept>
 
 #include "detail.hpp"
@@ -53,6 +54,55 @@ void set_diagonal_and_bound(BendingMatrix& b) {
     });
     b.bound[j] += std::abs(b.diagonal[j]);
   }
+}
+
+// The stored rows in groups of kLanes of one length (BendingMatrix::Groups):
+// rows taken in ascending order, each into its length's open group, so that a
+// group's rows are near one another (a border's rows, or the same place on
+// kLanes grid rows). What no group fills is summed a row at a time.
+void group_rows(BendingMatrix& b) {
+  constexpr int L = BendingMatrix::kLanes;
+  BendingMatrix::Groups& g = b.groups;
+  const int n = static_cast<int>(b.start.size()) - 1;
+  g = {};
+  g.group_of.assign(n, -1);
+  std::vector<std::vector<int>> open;  // by length, the rows waiting for a group
+  for (int i = 0; i < n; ++i) {
+    if (b.in_stencil(i)) continue;
+    g.stored.push_back(i);
+    const int length = b.start[i + 1] - b.start[i];
+    if (length == 0) continue;
+    if (static_cast<int>(open.size()) <= length) open.resize(length + 1);
+    std::vector<int>& waiting = open[length];
+    waiting.push_back(i);
+    if (static_cast<int>(waiting.size()) < L) continue;
+    const int k = static_cast<int>(g.length.size());
+    g.length.push_back(length);
+    g.entry.push_back(static_cast<int>(g.column.size()));
+    for (int e = 0; e < length; ++e)
+      for (const int r : waiting) {
+        g.column.push_back(b.column[b.start[r] + e]);
+        g.value.push_back(b.value[b.start[r] + e]);
+      }
+    bool side_by_side = true;
+    for (int l = 0; l < L; ++l) {
+      const int r = waiting[l];
+      side_by_side &= r == waiting[0] + l;
+      for (int e = 0; e < length; ++e)
+        side_by_side &=
+            b.column[b.start[r] + e] - r == b.column[b.start[waiting[0]] + e] - waiting[0];
+      g.row.push_back(r);
+      g.group_of[r] = k;
+    }
+    g.side_by_side.push_back(side_by_side);
+    waiting.clear();
+  }
+}
+
+// The rows' diagonals, bounds and groups, from their final entries.
+void finish_rows(BendingMatrix& b) {
+  set_diagonal_and_bound(b);
+  group_rows(b);
 }
 
 void add_to(Row& row, int column, double value) {
@@ -233,7 +283,7 @@ BendingMatrix build_bending_matrix(const std::vector<Vec3>& rest,
                                    const std::vector<std::vector<std::array<int, 3>>>& splits,
                                    const std::vector<std::uint8_t>& on_border, double rigidity) {
   BendingMatrix b = build_rows(rest, splits, on_border, rigidity, {});
-  set_diagonal_and_bound(b);  // each row sums to zero
+  finish_rows(b);  // each row sums to zero
   return b;
 }
 
@@ -351,7 +401,7 @@ void find_stencil(const Model& m, BendingMatrix& b, const std::vector<std::uint8
   b.start = std::move(start);
   b.column = std::move(column);
   b.value = std::move(value);
-  set_diagonal_and_bound(b);
+  finish_rows(b);
 }
 
 }  // namespace
@@ -370,7 +420,7 @@ BendingMatrix build_bending_matrix(const Model& m, double rigidity) {
     }
   if (m.nu < 5 || m.nv < 5) {
     BendingMatrix b = build_rows(m.rest_position, {one, other}, m.on_border, rigidity, {});
-    set_diagonal_and_bound(b);
+    finish_rows(b);
     return b;
   }
   std::vector<std::uint8_t> built(m.n, 0);
@@ -433,34 +483,84 @@ void mirrored_rows(const Model& m, const double* __restrict x, double* __restric
   }
 }
 
+// The stored rows (BendingMatrix::Groups) among [a0, a1): a group whose rows
+// all lie there in one vector loop, its lanes its rows, each summing its
+// entries in their order; any other row alone, in the same order.
+template <bool Difference, bool Assign, int C>
+void stored_rows(const BendingMatrix& b, const std::array<const double*, C>& x,
+                 const std::array<double*, C>& out, double scale, int a0, int a1) {
+  constexpr int L = BendingMatrix::kLanes;
+  const BendingMatrix::Groups& g = b.groups;
+  const auto put = [&](int k, int i, double sum) {
+    if constexpr (Assign)
+      out[k][i] = scale * sum;
+    else
+      out[k][i] += scale * sum;
+  };
+  const auto one_row = [&](int i) {
+    double sum[C] = {};
+    for (int e = b.start[i]; e < b.start[i + 1]; ++e)
+      for (int k = 0; k < C; ++k)
+        sum[k] += b.value[e] * (Difference ? x[k][b.column[e]] - x[k][i] : x[k][b.column[e]]);
+    for (int k = 0; k < C; ++k) put(k, i, sum[k]);
+  };
+  // A group's lanes in one vector (GCC's vector extension, which Clang has
+  // too), each component's sum a chain of its own.
+  using Lanes = double __attribute__((vector_size(L * sizeof(double))));
+  // A group's rows side by side (a border's own rows, each entry's columns
+  // consecutive) load a vector at once.
+  const auto group = [&]<bool SideBySide>(int q) {
+    const int* const row = g.row.data() + q * L;
+    const int* __restrict column = g.column.data() + g.entry[q];
+    const double* __restrict value = g.value.data() + g.entry[q];
+    Lanes own[C], sum[C];
+    for (int k = 0; k < C; ++k) {
+      if constexpr (SideBySide)
+        std::memcpy(&own[k], x[k] + row[0], sizeof(Lanes));
+      else
+        for (int l = 0; l < L; ++l) own[k][l] = x[k][row[l]];
+      sum[k] = Lanes{};
+    }
+    for (int e = 0; e < g.length[q]; ++e, column += L, value += L) {
+      Lanes v;
+      std::memcpy(&v, value, sizeof v);
+      for (int k = 0; k < C; ++k) {
+        Lanes y;
+        if constexpr (SideBySide)
+          std::memcpy(&y, x[k] + column[0], sizeof y);
+        else
+          for (int l = 0; l < L; ++l) y[l] = x[k][column[l]];
+        sum[k] += v * (Difference ? y - own[k] : y);
+      }
+    }
+    for (int k = 0; k < C; ++k)
+      for (int l = 0; l < L; ++l) put(k, row[l], sum[k][l]);
+  };
+  for (auto it = std::lower_bound(g.stored.begin(), g.stored.end(), a0);
+       it != g.stored.end() && *it < a1; ++it) {
+    const int i = *it, q = g.group_of[i];
+    if (q < 0 || g.row[q * L] < a0 || g.row[q * L + L - 1] >= a1)
+      one_row(i);
+    else if (i == g.row[q * L] && g.side_by_side[q])
+      group.template operator()<true>(q);
+    else if (i == g.row[q * L])
+      group.template operator()<false>(q);
+  }
+}
+
 // out_i += scale Σ_j Q_ij (x_j - x_i) (Difference) or scale Σ_j Q_ij x_j over
 // j ≠ i, for the particles [a0, a1), each of the C components: each particle
 // sums its own row in a fixed order, so that any thread count gives the same
-// bits. The stencil's runs of a row go over a chunk of particles at a time, in
-// loops that vectorise: by mirror groups (mirrored_rows), or offset by offset.
+// bits. The stored rows go by stored_rows; the stencil's runs of a row a chunk
+// of particles at a time, in loops that vectorise: by mirror groups
+// (mirrored_rows), or offset by offset.
 template <bool Difference, bool Assign, int C>
 void bending_rows(const Model& m, const std::array<const double*, C>& x,
                   const std::array<double*, C>& out, double scale, int a0, int a1) {
   const BendingMatrix& b = m.topology->bending;
-  const int *const start = b.start.data(), *const column = b.column.data();
-  const double* const value = b.value.data();
-  // Matrix rows: each entry's column and value read once for the C components.
-  const auto rows = [&](int first, int end) {
-    for (int i = first; i < end; ++i) {
-      double sum[C] = {};
-      for (int e = start[i]; e < start[i + 1]; ++e)
-        for (int k = 0; k < C; ++k)
-          sum[k] += value[e] * (Difference ? x[k][column[e]] - x[k][i] : x[k][column[e]]);
-      for (int k = 0; k < C; ++k) {
-        if constexpr (Assign)
-          out[k][i] = scale * sum[k];
-        else
-          out[k][i] += scale * sum[k];
-      }
-    }
-  };
+  stored_rows<Difference, Assign, C>(b, x, out, scale, a0, a1);
   const BendingMatrix::Stencil& st = b.stencil;
-  if (st.first.empty()) return rows(a0, a1);
+  if (st.first.empty()) return;
   const int size = static_cast<int>(st.offset.size());
   const int* const offset = st.offset.data();
   const double* const coefficient = st.value.data();
@@ -474,10 +574,8 @@ void bending_rows(const Model& m, const std::array<const double*, C>& x,
   for (int a = a0; a < a1;) {
     const int j = a / m.nu, row = j * m.nu, lo = row + st.first[j], hi = row + st.last[j];
     const int end = std::min(a1, row + m.nu);
-    if (a < lo || a >= hi) {  // the row's matrix rows up to its stencil run, or to its end
-      const int to = a < lo ? std::min(lo, end) : end;
-      rows(a, to);
-      a = to;
+    if (a < lo || a >= hi) {  // stored rows (above) up to the row's stencil run, or to its end
+      a = a < lo ? std::min(lo, end) : end;
       continue;
     }
     const int to = std::min(hi, end);

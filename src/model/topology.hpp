@@ -40,6 +40,18 @@ struct BendingMatrix {
     // = (1,0), (0,1), (2,0), (0,2), (1,1), (1,2), (2,1), (2,2); empty otherwise.
     std::vector<double> mirror;
   } stencil;
+  // The stored rows (those not in the stencil), ascending, and as many as
+  // can be in groups of kLanes rows of one length: group g's rows are
+  // row[kLanes g ...] (ascending), its entries from entry[g] interleaved
+  // (entry e of lane l at e kLanes + l), so that a group sums in one vector
+  // loop, each row in its own order: the bits of a row at a time.
+  // group_of[i]: row i's group, or -1 (summed alone).
+  static constexpr int kLanes = 4;
+  struct Groups {
+    std::vector<int> stored, group_of, row, entry, length, column;
+    std::vector<double> value;
+    std::vector<std::uint8_t> side_by_side;  // rows r, r + 1, ..., the same offsets
+  } groups;
 
   bool in_stencil(int i) const {
     if (stencil.first.empty()) return false;

@@ -4,6 +4,7 @@
 // the forces sum to zero.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <numbers>
@@ -204,4 +205,44 @@ TEST(QuadraticBending, TheGridsStencilIsItsMatrixRows) {
   expect_symmetric(b, m.n);
   for (int i = 0; i < m.n; ++i)
     if (b.in_stencil(i)) EXPECT_EQ(b.start[i + 1], b.start[i]) << i;
+}
+
+// The rows stored beside the stencil are summed kLanes at a time in groups
+// (BendingMatrix::Groups): each still sums its own entries in their order,
+// so a row gives the bits of a row summed alone, and any cut of the
+// particles (as threads make) the bits of none.
+TEST(QuadraticBending, GroupedRowsGiveTheBitsOfARowAtATime) {
+  Params p = quadratic(23);
+  p.cloth.resolution = {23, 17};
+  Simulation sim(p);
+  const Model& m = sim.model();
+  const BendingMatrix& b = m.topology->bending;
+  const BendingMatrix::Groups& g = b.groups;
+  ASSERT_FALSE(g.length.empty());
+  EXPECT_GT(std::count(g.side_by_side.begin(), g.side_by_side.end(), 1), 0);
+  EXPECT_GT(std::count(g.side_by_side.begin(), g.side_by_side.end(), 0), 0);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> jitter(-0.01, 0.01);
+  State& s = detail::state(sim);
+  for (int i = 0; i < m.n; ++i) s.x[i] += Vec3(jitter(rng), jitter(rng), jitter(rng));
+  Vec3Array f(m.n);
+  detail::add_bending_forces(m, s, f);
+  int grouped = 0;
+  for (const int i : g.stored) {
+    grouped += g.group_of[i] >= 0;
+    double sum[3] = {};
+    for (int e = b.start[i]; e < b.start[i + 1]; ++e)
+      for (int k = 0; k < 3; ++k) sum[k] += b.value[e] * (s.x[b.column[e]][k] - s.x[i][k]);
+    for (int k = 0; k < 3; ++k) EXPECT_EQ(f[i][k], -1.0 * sum[k]) << i << " " << k;
+  }
+  EXPECT_GT(grouped, static_cast<int>(g.stored.size()) / 2);
+  std::vector<double> x(m.n), whole(m.n, 0.0);
+  for (int i = 0; i < m.n; ++i) x[i] = s.x[i][0];
+  detail::add_bending_off_diagonal(m, x.data(), whole.data(), 1.0, 0, m.n);
+  for (const int cut : {1, 2, 25, 47, m.n / 2, m.n - 3}) {
+    std::vector<double> parts(m.n, 0.0);
+    detail::add_bending_off_diagonal(m, x.data(), parts.data(), 1.0, 0, cut);
+    detail::add_bending_off_diagonal(m, x.data(), parts.data(), 1.0, cut, m.n);
+    for (int i = 0; i < m.n; ++i) ASSERT_EQ(parts[i], whole[i]) << "cut " << cut << ", row " << i;
+  }
 }

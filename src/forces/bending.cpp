@@ -65,34 +65,34 @@ void group_rows(BendingMatrix& b) {
   BendingMatrix::Groups& g = b.groups;
   const int n = static_cast<int>(b.start.size()) - 1;
   g = {};
-  g.group_of.assign(n, -1);
-  std::vector<std::vector<int>> open;  // by length, the rows waiting for a group
+  std::vector<std::vector<int>> open;  // by length, the places in stored waiting for a group
   for (int i = 0; i < n; ++i) {
     if (b.in_stencil(i)) continue;
     g.stored.push_back(i);
+    g.group_of.push_back(-1);
     const int length = b.start[i + 1] - b.start[i];
     if (length == 0) continue;
     if (static_cast<int>(open.size()) <= length) open.resize(length + 1);
     std::vector<int>& waiting = open[length];
-    waiting.push_back(i);
+    waiting.push_back(static_cast<int>(g.stored.size()) - 1);
     if (static_cast<int>(waiting.size()) < L) continue;
     const int k = static_cast<int>(g.length.size());
     g.length.push_back(length);
     g.entry.push_back(static_cast<int>(g.column.size()));
+    const int r0 = g.stored[waiting[0]];
     for (int e = 0; e < length; ++e)
-      for (const int r : waiting) {
-        g.column.push_back(b.column[b.start[r] + e]);
-        g.value.push_back(b.value[b.start[r] + e]);
+      for (const int place : waiting) {
+        g.column.push_back(b.column[b.start[g.stored[place]] + e]);
+        g.value.push_back(b.value[b.start[g.stored[place]] + e]);
       }
     bool side_by_side = true;
     for (int l = 0; l < L; ++l) {
-      const int r = waiting[l];
-      side_by_side &= r == waiting[0] + l;
+      const int r = g.stored[waiting[l]];
+      side_by_side &= r == r0 + l;
       for (int e = 0; e < length; ++e)
-        side_by_side &=
-            b.column[b.start[r] + e] - r == b.column[b.start[waiting[0]] + e] - waiting[0];
+        side_by_side &= b.column[b.start[r] + e] - r == b.column[b.start[r0] + e] - r0;
       g.row.push_back(r);
-      g.group_of[r] = k;
+      g.group_of[waiting[l]] = k;
     }
     g.side_by_side.push_back(side_by_side);
     waiting.clear();
@@ -538,7 +538,7 @@ void stored_rows(const BendingMatrix& b, const std::array<const double*, C>& x,
   };
   for (auto it = std::lower_bound(g.stored.begin(), g.stored.end(), a0);
        it != g.stored.end() && *it < a1; ++it) {
-    const int i = *it, q = g.group_of[i];
+    const int i = *it, q = g.group_of[it - g.stored.begin()];
     if (q < 0 || g.row[q * L] < a0 || g.row[q * L + L - 1] >= a1)
       one_row(i);
     else if (i == g.row[q * L] && g.side_by_side[q])

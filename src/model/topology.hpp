@@ -45,7 +45,7 @@ struct BendingMatrix {
   // row[kLanes g ...] (ascending), its entries from entry[g] interleaved
   // (entry e of lane l at e kLanes + l), so that a group sums in one vector
   // loop, each row in its own order: the bits of a row at a time.
-  // group_of[i]: row i's group, or -1 (summed alone).
+  // group_of[k]: the group of row stored[k], or -1 (summed alone).
   static constexpr int kLanes = 4;
   struct Groups {
     std::vector<int> stored, group_of, row, entry, length, column;

@@ -228,8 +228,9 @@ TEST(QuadraticBending, GroupedRowsGiveTheBitsOfARowAtATime) {
   Vec3Array f(m.n);
   detail::add_bending_forces(m, s, f);
   int grouped = 0;
-  for (const int i : g.stored) {
-    grouped += g.group_of[i] >= 0;
+  for (std::size_t place = 0; place < g.stored.size(); ++place) {
+    const int i = g.stored[place];
+    grouped += g.group_of[place] >= 0;
     double sum[3] = {};
     for (int e = b.start[i]; e < b.start[i + 1]; ++e)
       for (int k = 0; k < 3; ++k) sum[k] += b.value[e] * (s.x[b.column[e]][k] - s.x[i][k]);

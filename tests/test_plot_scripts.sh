@@ -293,6 +293,28 @@ if "$PY" "$REPORT" "$T/nowhere" "$T/val2/report.md" >/dev/null 2>&1 \
    && grep -q "^| the cantilever gives B back .* | not run (.*) | not run |$" "$T/val2/report.md"
 then ok "report on no runs: every claim and criterion not run"; else bad "report on no runs"; fi
 
+# A trend broken between humidities is read against the scene's own scatter
+# on the same grid: 51's ensemble (explicit-<scene>), 101's where it ran
+# (scatter101-<scene>), else 51's with a word that 101's was not measured.
+if "$PY" - "$SRC/tools" >"$T/out" 2>&1 <<'PY'
+import sys; sys.path.insert(0, sys.argv[1]); import validation_report as v
+case = lambda w, a: {"humidity": w, "air_model": "exchange", "stop_lifted_m2": a}
+trend = [case(0.3, 0.0400), case(0.5, 0.0430), case(0.7, 0.0420), case(1.0, 0.0390)]
+wide = [case(w, a) for w, a in ((0.6999998, 0.040), (0.7000001, 0.045))]      # 12 %
+narrow = [case(w, a) for w, a in ((0.6999998, 0.0420), (0.7000001, 0.0421))]  # 0.2 %
+note = v.within_scatter("pull-oblique", "stop_lifted_m2", 1e4, "cm²")
+at51 = note({"pull-oblique": trend, "explicit-pull-oblique": wide})
+fine = {"pull-oblique": trend, "explicit-pull-oblique": wide, v.SCATTER_GRID: 101}
+unmeasured = note(fine)
+measured = note(dict(fine, **{"scatter101-pull-oblique": narrow}))
+print(at51, unmeasured, measured, sep="\n")
+assert "from ω = 0.3 to 0.5 it goes from 400 to 430 cm² (+7.5%)" in at51
+assert "on 51 × 51, spreads it by 11.8%: the contact pattern is chaotic" in at51
+assert "on 51 × 51, spreads it by 11.8%: the contact pattern is chaotic" in unmeasured
+assert "on 101 × 101, spreads it by 0.2%: the step is beyond it, so it is the model's" in measured
+PY
+then ok "a broken trend against the scatter of its own grid"; else bad "broken trend's scatter: $(cat "$T/out")"; fi
+
 # plot_metrics.py: one run's columns against time, a panel a --panel; bad
 # input exits 2 and writes nothing.
 PM="$SRC/tools/plot_metrics.py"

@@ -53,6 +53,10 @@ GRID_RUNS = [f"grid-{s}-{g}" for s in GRIDDED for g in GRID_SIZES if g != 51] + 
 PAPER = EXPERIMENTS[:6]
 FINE = 101
 FINE_RUNS = [f"claims{FINE}-{s}" for s in PAPER]
+# The oblique pull's scatter at 101 x 101 (its lifted-area claim): scatter101-pull-oblique.
+SCATTERED = ["pull-oblique"]
+SCATTER_RUNS = [f"scatter{FINE}-{s}" for s in SCATTERED]
+SCATTER_GRID = "grid of the scatter"  # a key of the sweeps passed to the claims' notes
 P_ATM = 101325.0
 HERE = os.path.dirname(os.path.abspath(__file__))
 
@@ -453,14 +457,19 @@ def lifted_only(sweeps, scene="pull-corner", ws=(0.3, 1.0)):
 
 def within_scatter(scene, key, scale, unit, falls=True):
     """A trend broken between neighbouring humidities, against the scene's own
-    scatter at 51 x 51 (its runs at ω = 0.7 moved by k·1e-7)."""
+    scatter on the same grid (its runs at ω = 0.7 moved by k·1e-7:
+    explicit-<scene> at 51 x 51, scatter101-<scene> at 101 x 101), or at 51 x 51
+    where the finer grid's was not run."""
     def note(sweeps):
         cases = sweeps.get(scene) or []
         values = [(w, (find(cases, w) or {}).get(key)) for w in TREND]
         if not all(isinstance(v, float) for _, v in values):
             return None
         broken = [(a, b) for a, b in zip(values, values[1:]) if (b[1] >= a[1] if falls else b[1] <= a[1])]
-        runs = [c.get(key) for c in ensemble(sweeps.get("explicit-" + scene), 0.7)]
+        grid = sweeps.get(SCATTER_GRID, 51)
+        scatter = sweeps.get(f"scatter{grid}-{scene}") if grid != 51 else None
+        measured = 51 if scatter is None else grid
+        runs = [c.get(key) for c in ensemble(scatter or sweeps.get("explicit-" + scene), 0.7)]
         runs = [x for x in runs if isinstance(x, float)]
         if not broken or len(runs) < 2:
             return None
@@ -468,10 +477,12 @@ def within_scatter(scene, key, scale, unit, falls=True):
         within = all(abs(b[1] / a[1] - 1) <= spread_ for a, b in broken)
         return ("; ".join(f"from ω = {a[0]:g} to {b[0]:g} it goes from {a[1] * scale:.0f} to {b[1] * scale:.0f} {unit} "
                           f"({b[1] / a[1] - 1:+.1%})" for a, b in broken) +
-                f"; the scene's own scatter, its runs at ω = 0.7 moved by ±1e−7 and ±2e−7 on 51 × 51, "
-                f"spreads it by {spread_:.1%}" +
+                f"; the scene's own scatter, its runs at ω = 0.7 moved by ±1e−7 and ±2e−7 on "
+                f"{measured} × {measured}, spreads it by {spread_:.1%}" +
                 (": the contact pattern is chaotic, and a step within it is not the humidity's" if within else
-                 ": the step is beyond it (the scatter on the finer grid was not measured)"))
+                 ": the step is beyond it" +
+                 (f" (the scatter on {grid} × {grid} was not measured)" if measured != grid else
+                  ", so it is the model's")))
     return note
 
 
@@ -896,7 +907,7 @@ def report(runs, report_path, command):
     results = [(exp, paper, test, *evaluate(sweeps)) for exp, paper, test, evaluate in CLAIMS]
     count = lambda v: sum(1 for r in results if r[4].startswith(v))
     # The paper's claims again at 101 x 101: its scenes' sweeps in their place.
-    fine_sweeps = dict(sweeps, **{s: sweeps.get(f"claims{FINE}-{s}") for s in PAPER})
+    fine_sweeps = dict(sweeps, **{s: sweeps.get(f"claims{FINE}-{s}") for s in PAPER}, **{SCATTER_GRID: FINE})
     fine = [evaluate(fine_sweeps) if exp in PAPER and fine_sweeps[exp] else
             ("not run", "not run") if exp in PAPER else ("—", "—")
             for exp, _, _, evaluate in CLAIMS]
@@ -981,7 +992,7 @@ def report(runs, report_path, command):
                 f"{len(cases)} cases. Lengths in cm, areas in cm², at the final frame.", "",
                 sweep_table(name, cases), "",
                 "_An ensemble about ω = 0.7, compared in the claims table._"
-                if name.startswith(("implicit-", "explicit-")) else
+                if name.startswith(("implicit-", "explicit-", "scatter")) else
                 f"_At {FINE} × {FINE}, for the claims table's last columns._"
                 if name in FINE_RUNS else figures(name, folder, report_dir), ""]
 

@@ -293,6 +293,20 @@ if "$PY" "$REPORT" "$T/nowhere" "$T/val2/report.md" >/dev/null 2>&1 \
    && grep -q "^| the cantilever gives B back .* | not run (.*) | not run |$" "$T/val2/report.md"
 then ok "report on no runs: every claim and criterion not run"; else bad "report on no runs"; fi
 
+# A driven hand's travel: its mean force and the lifted area at its stop from
+# the frames while it moved, the one written a step past the stop included
+# (the oblique fixture's hand stops at 0.75 s; its frame there moved to 0.7501).
+LATE="$T/runs-late/oblique"; mkdir -p "$T/runs-late"; cp -r "$OBLIQUE" "$LATE"
+sed -i 's/^0.75,/0.7501,/' "$LATE/omega_0.5/metrics.csv"
+if "$PY" - "$SRC/tools" "$OBLIQUE" "$LATE" >"$T/out" 2>&1 <<'PY'
+import sys; sys.path.insert(0, sys.argv[1]); import validation_report as v
+for folder in sys.argv[2:]:
+    c = v.load_sweep(folder)[0]
+    print(folder, c["travel_force_n"], c["stop_lifted_m2"])
+    assert abs(c["travel_force_n"] - 1.125) < 1e-12 and abs(c["stop_lifted_m2"] - 0.015) < 1e-12
+PY
+then ok "a driven hand's stop: its frame a step late still counted"; else bad "driven hand's stop: $(cat "$T/out")"; fi
+
 # A trend broken between humidities is read against the scene's own scatter
 # on the same grid: 51's ensemble (explicit-<scene>), 101's where it ran
 # (scatter101-<scene>), else 51's with a word that 101's was not measured.

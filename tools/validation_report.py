@@ -126,13 +126,17 @@ def load_sweep(folder):
             c["slid_m"] = math.hypot(rows[-1]["centroid_x_m"] - rows[0]["centroid_x_m"],
                                      rows[-1]["centroid_y_m"] - rows[0]["centroid_y_m"])
         # A driven hand (a move handle): its mean force over its travel, the
-        # work it did per metre; from the frames while it moved.
-        # and the lifted area when it stops (the last frame of its travel).
+        # work it did per metre; from the frames while it moved, and the
+        # lifted area when it stops (the last frame of its travel). A frame is
+        # written at the first step past its time, so the one at the hand's
+        # stop may fall a step after it: the frames up to half a frame past.
         c["travel_force_n"] = c["stop_lifted_m2"] = None
         path = driven_path(c["scene"])
-        if path and path[1] > 0:
-            start, end = path[0], path[0] + path[1]
-            moving = [r for r in rows if isinstance(r.get("time_s"), float) and start < r["time_s"] <= end + 1e-9]
+        times = [r["time_s"] for r in rows if isinstance(r.get("time_s"), float)]
+        gaps = sorted(b - a for a, b in zip(times, times[1:]) if b > a)
+        if path and path[1] > 0 and gaps:
+            start, end = path[0], path[0] + path[1] + 0.5 * gaps[len(gaps) // 2]
+            moving = [r for r in rows if isinstance(r.get("time_s"), float) and start < r["time_s"] <= end]
             forces = [r["handle_force_n"] for r in moving if isinstance(r.get("handle_force_n"), float)]
             if forces:
                 c["travel_force_n"] = sum(forces) / len(forces)

@@ -996,7 +996,9 @@ def report(runs, report_path, command):
                 f"{len(cases)} cases. Lengths in cm, areas in cm², at the final frame.", "",
                 sweep_table(name, cases), "",
                 "_An ensemble about ω = 0.7, compared in the claims table._"
-                if name.startswith(("implicit-", "explicit-", "scatter")) else
+                if name.startswith(("implicit-", "explicit-")) else
+                f"_An ensemble about ω = 0.7 at {FINE} × {FINE}: the scatter its claims there are read against._"
+                if name in SCATTER_RUNS else
                 f"_At {FINE} × {FINE}, for the claims table's last columns._"
                 if name in FINE_RUNS else figures(name, folder, report_dir), ""]
 

@@ -47,6 +47,20 @@ Params quadratic(int n) {
   return p;
 }
 
+// A 23 x 17 grid cloth under the quadratic bending (its border rows and
+// stencil both present), each particle moved at random by up to 1 cm.
+Params small_grid() {
+  Params p = quadratic(23);
+  p.cloth.resolution = {23, 17};
+  return p;
+}
+void jitter(Simulation& sim, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> by(-0.01, 0.01);
+  State& s = detail::state(sim);
+  for (int i = 0; i < sim.model().n; ++i) s.x[i] += Vec3(by(rng), by(rng), by(rng));
+}
+
 // Q_ij == Q_ji to the bit, every row's entries as for_each_in_row gives them.
 void expect_symmetric(const BendingMatrix& b, int n) {
   std::map<std::pair<int, int>, double> q;
@@ -169,9 +183,7 @@ TEST(QuadraticBending, ProvotKeepsItsSpringsAndQuadraticHasNone) {
 // and the force and implicit Euler's product are the matrix's rows (each
 // summing to zero with its diagonal).
 TEST(QuadraticBending, TheGridsStencilIsItsMatrixRows) {
-  Params p = quadratic(23);
-  p.cloth.resolution = {23, 17};
-  Simulation sim(p);
+  Simulation sim(small_grid());
   const Model& m = sim.model();
   const BendingMatrix& b = m.topology->bending;
   ASSERT_EQ(b.stencil.offset.size(), 24u);  // 5 x 5 about the particle
@@ -180,10 +192,8 @@ TEST(QuadraticBending, TheGridsStencilIsItsMatrixRows) {
     EXPECT_LE(b.stencil.first[j], 3) << j;
     EXPECT_GE(b.stencil.last[j], m.nu - 3) << j;
   }
-  std::mt19937 rng(7);
-  std::uniform_real_distribution<double> jitter(-0.01, 0.01);
-  State& s = detail::state(sim);
-  for (int i = 0; i < m.n; ++i) s.x[i] += Vec3(jitter(rng), jitter(rng), jitter(rng));
+  jitter(sim, 7);
+  const State& s = detail::state(sim);
   Vec3Array f(m.n);
   detail::add_bending_forces(m, s, f);
   std::vector<double> x(m.n), product(m.n, 0.0);
@@ -212,19 +222,15 @@ TEST(QuadraticBending, TheGridsStencilIsItsMatrixRows) {
 // so a row gives the bits of a row summed alone, and any cut of the
 // particles (as threads make) the bits of none.
 TEST(QuadraticBending, GroupedRowsGiveTheBitsOfARowAtATime) {
-  Params p = quadratic(23);
-  p.cloth.resolution = {23, 17};
-  Simulation sim(p);
+  Simulation sim(small_grid());
   const Model& m = sim.model();
   const BendingMatrix& b = m.topology->bending;
   const BendingMatrix::Groups& g = b.groups;
   ASSERT_FALSE(g.length.empty());
   EXPECT_GT(std::count(g.side_by_side.begin(), g.side_by_side.end(), 1), 0);
   EXPECT_GT(std::count(g.side_by_side.begin(), g.side_by_side.end(), 0), 0);
-  std::mt19937 rng(11);
-  std::uniform_real_distribution<double> jitter(-0.01, 0.01);
-  State& s = detail::state(sim);
-  for (int i = 0; i < m.n; ++i) s.x[i] += Vec3(jitter(rng), jitter(rng), jitter(rng));
+  jitter(sim, 11);
+  const State& s = detail::state(sim);
   Vec3Array f(m.n);
   detail::add_bending_forces(m, s, f);
   int grouped = 0;

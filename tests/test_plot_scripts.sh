@@ -317,10 +317,10 @@ trend = [case(0.3, 0.0400), case(0.5, 0.0430), case(0.7, 0.0420), case(1.0, 0.03
 wide = [case(w, a) for w, a in ((0.6999998, 0.040), (0.7000001, 0.045))]      # 12 %
 narrow = [case(w, a) for w, a in ((0.6999998, 0.0420), (0.7000001, 0.0421))]  # 0.2 %
 note = v.within_scatter("pull-oblique", "stop_lifted_m2", 1e4, "cm²")
-at51 = note({"pull-oblique": trend, "explicit-pull-oblique": wide})
-fine = {"pull-oblique": trend, "explicit-pull-oblique": wide, v.SCATTER_GRID: 101}
-unmeasured = note(fine)
-measured = note(dict(fine, **{"scatter101-pull-oblique": narrow}))
+fine = {"pull-oblique": trend, "explicit-pull-oblique": wide}
+at51 = note(fine, 51)
+unmeasured = note(fine, 101)
+measured = note(dict(fine, **{"scatter101-pull-oblique": narrow}), 101)
 print(at51, unmeasured, measured, sep="\n")
 assert "from ω = 0.3 to 0.5 it goes from 400 to 430 cm² (+7.5%)" in at51
 assert "on 51 × 51, spreads it by 11.8%: the contact pattern is chaotic" in at51

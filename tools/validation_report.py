@@ -56,7 +56,6 @@ FINE_RUNS = [f"claims{FINE}-{s}" for s in PAPER]
 # The oblique pull's scatter at 101 x 101 (its lifted-area claim): scatter101-pull-oblique.
 SCATTERED = ["pull-oblique"]
 SCATTER_RUNS = [f"scatter{FINE}-{s}" for s in SCATTERED]
-SCATTER_GRID = "grid of the scatter"  # a key of the sweeps passed to the claims' notes
 P_ATM = 101325.0
 HERE = os.path.dirname(os.path.abspath(__file__))
 
@@ -427,7 +426,7 @@ CLAIMS = [  # (experiment, the paper reports, the test, evaluate(sweeps) -> (mea
 # Why a claim fails, from the runs: a note under the claims table for each
 # failing claim that has one (the paper's text as the key).
 
-def still_lifting(sweeps, w=0.0, span=0.5):
+def still_lifting(sweeps, grid, w=0.0, span=0.5):
     """The straight pull at ω = w over the last `span` s: is it still lifting?"""
     c = find(sweeps.get("pull-straight") or [], w)
     rows = read_csv(os.path.join(c["folder"], "metrics.csv")) if c else []
@@ -448,7 +447,7 @@ def still_lifting(sweeps, w=0.0, span=0.5):
             "at ω ≈ 0.3, only a slower lift the wetter the cloth")
 
 
-def lifted_only(sweeps, scene="pull-corner", ws=(0.3, 1.0)):
+def lifted_only(sweeps, grid, scene="pull-corner", ws=(0.3, 1.0)):
     cases = sweeps.get(scene) or []
     found = [find(cases, w) for w in ws]
     if not all(c and isinstance(c.get("lifted_area_m2"), float) for c in found):
@@ -464,13 +463,12 @@ def within_scatter(scene, key, scale, unit, falls=True):
     scatter on the same grid (its runs at ω = 0.7 moved by k·1e-7:
     explicit-<scene> at 51 x 51, scatter101-<scene> at 101 x 101), or at 51 x 51
     where the finer grid's was not run."""
-    def note(sweeps):
+    def note(sweeps, grid):
         cases = sweeps.get(scene) or []
         values = [(w, (find(cases, w) or {}).get(key)) for w in TREND]
         if not all(isinstance(v, float) for _, v in values):
             return None
         broken = [(a, b) for a, b in zip(values, values[1:]) if (b[1] >= a[1] if falls else b[1] <= a[1])]
-        grid = sweeps.get(SCATTER_GRID, 51)
         scatter = sweeps.get(f"scatter{grid}-{scene}") if grid != 51 else None
         measured = 51 if scatter is None else grid
         runs = [c.get(key) for c in ensemble(scatter or sweeps.get("explicit-" + scene), 0.7)]
@@ -490,6 +488,8 @@ def within_scatter(scene, key, scale, unit, falls=True):
     return note
 
 
+# Why a failing claim fails, from the runs: note(sweeps, grid), grid the one the
+# claim was read on (51, or FINE with its sweeps in the scenes' place).
 CLAIM_NOTES = {
     "Fig. 7: below ω ≈ 0.3 the whole cloth lifts": still_lifting,
     "Fig. 5: a wetter cloth wrinkles more": lifted_only,
@@ -911,7 +911,7 @@ def report(runs, report_path, command):
     results = [(exp, paper, test, *evaluate(sweeps)) for exp, paper, test, evaluate in CLAIMS]
     count = lambda v: sum(1 for r in results if r[4].startswith(v))
     # The paper's claims again at 101 x 101: its scenes' sweeps in their place.
-    fine_sweeps = dict(sweeps, **{s: sweeps.get(f"claims{FINE}-{s}") for s in PAPER}, **{SCATTER_GRID: FINE})
+    fine_sweeps = dict(sweeps, **{s: sweeps.get(f"claims{FINE}-{s}") for s in PAPER})
     fine = [evaluate(fine_sweeps) if exp in PAPER and fine_sweeps[exp] else
             ("not run", "not run") if exp in PAPER else ("—", "—")
             for exp, _, _, evaluate in CLAIMS]
@@ -945,7 +945,7 @@ def report(runs, report_path, command):
     notes = []
     for (e, p, t, m, v), (fm, fv) in zip(results, fine):
         for grid, ran, verdict_ in ((51, sweeps, v), (FINE, fine_sweeps, fv)):
-            note = CLAIM_NOTES.get(p, lambda _: None)(ran) if verdict_.startswith("FAIL") else None
+            note = CLAIM_NOTES.get(p, lambda *_: None)(ran, grid) if verdict_.startswith("FAIL") else None
             if note:
                 notes.append(f"- **{e}, {p}** ({grid} × {grid}): {note}.")
     if notes:

@@ -140,11 +140,11 @@ const Simulation& warm(const benchmark::State& st) { return warmed(st.range(0), 
 void BM_springs(benchmark::State& st) {
   stage(st, warm(st), false, [](const Model& m, State& s, Workspace& w) {
     // As the symplectic step does: the elastic force; the damping is its own solve.
-    add_spring_forces(m, s, w, false);
+    set_spring_forces(m, s, w, false);
   });
 }
 // The symplectic step's damping solve (additive operator splitting over the
-// stencil's offsets), on the positions the warm step's add_spring_forces left
+// stencil's offsets), on the positions the warm step's set_spring_forces left
 // in columns.
 void BM_spring_damping(benchmark::State& st) {
   stage(st, warm(st), false, [](const Model& m, State& s, Workspace& w) {
@@ -183,17 +183,18 @@ void BM_spring_edges(benchmark::State& st) {
   report(st, sim);
 }
 void BM_gravity(benchmark::State& st) {
-  stage(st, warm(st), false, [](const Model& m, State&, Workspace& w) { add_gravity(m, w.force); });
+  stage(st, warm(st), false,
+        [](const Model& m, State&, Workspace& w) { add_gravity(m, w.force, 0, m.n); });
 }
 void BM_viscous_damping(benchmark::State& st) {
   stage(st, warm(st), false,
-        [](const Model& m, State& s, Workspace& w) { add_viscous_damping(m, s, w.force); });
+        [](const Model& m, State& s, Workspace& w) { add_viscous_damping(m, s, w.force, 0, m.n); });
 }
 // The cloth's drag against the air (wind.k; pull-straight has no wind
 // velocity, which costs the same).
 void BM_wind(benchmark::State& st) {
   stage(st, warm(st), false,
-        [](const Model& m, State& s, Workspace& w) { add_wind(m, s, w, w.force); });
+        [](const Model& m, State& s, Workspace& w) { add_wind(m, s, w, w.force, 0, m.n); });
 }
 // The pulling hand: its force on the patch, then its constraints after the
 // update (a handle that has stopped holds its particles).
@@ -220,7 +221,7 @@ void BM_build_hash(benchmark::State& st) {
   const Vec3Array anchor = warm(st).state().x;  // where add_self_collision searches from
   stage(st, warm(st), false, [&anchor](const Model& m, State&, Workspace& w) {
     // The cell add_self_collision uses.
-    build_hash(anchor, 2 * m.params.self_collision.distance, w);
+    build_hash(anchor, m.params.self_collision.distance, w);
   });
 }
 void BM_limit_strain(benchmark::State& st) {

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <limits>
+#include <type_traits>
 
 #include "geometry/mesh_obstacle.hpp"
 #include "model/topology.hpp"
@@ -237,6 +238,17 @@ void for_each_particle_block(const Model& m, Body&& body) {
   });
 }
 
+// Runs body(first, end) on each thread's own particles, in chunks of 1024:
+// for passes that run several loops over the same particles, each loop
+// finding the chunk's columns (8 KB each) in cache from the one before.
+template <class Body>
+void for_each_particle_chunk(const Model& m, Body&& body) {
+  constexpr int kCached = 1024;
+  for_each_particle_block(m, [&](int first, int end) {
+    for (int a = first; a < end; a += kCached) body(a, std::min(end, a + kCached));
+  });
+}
+
 // Runs body(i) for every particle, whole rows to each thread.
 template <class Body>
 void for_each_particle(const Model& m, Body&& body) {
@@ -330,14 +342,40 @@ inline int grid_neighbour(const Model& m, int i, int j, int di, int dj) {
 // The springs explicit_step_limit looks at, for a blow-up message:
 // "structural 200 N/m, shear 20 N/m, bending 20 N/m".
 std::string step_limit_springs_text(const Params& p);
-void add_spring_forces(const Model& m, const State& s, Workspace& w, bool with_damping);
+// The springs set w.force: they are the step's first force.
+void set_spring_forces(const Model& m, const State& s, Workspace& w, bool with_damping);
 // The general kernels of a mesh cloth (model/mesh_cloth.cpp), where the grid has its stencil's.
 void add_spring_forces_mesh(const Model& m, const State& s, Workspace& w, bool damped);
 void apply_spring_damping_mesh(const Model& m, State& s, double h);
 void compute_normals_mesh(const Model& m, const double* X, Vec3Array& normal);
 void contact_border_mesh(const Model& m, const State& s, Workspace& w);
-void apply_spring_damping(const Model& m, State& s, Workspace& w, double h);
-void add_gravity(const Model& m, Vec3Array& f);
+// A reference to the caller's body(first, end), which outlives the call:
+// std::function would allocate, inside the step, for a lambda of more than
+// two captures.
+class ParticleChunks {
+ public:
+  ParticleChunks() = default;
+  template <class Body>
+  requires(!std::is_same_v<std::decay_t<Body>, ParticleChunks>)
+      ParticleChunks(Body&& body)  // implicit, as std::function's
+      : body_(const_cast<void*>(static_cast<const void*>(&body))),
+        call_([](void* b, int first, int end) {
+          (*static_cast<std::remove_reference_t<Body>*>(b))(first, end);
+        }) {}
+  explicit operator bool() const { return call_ != nullptr; }
+  void operator()(int first, int end) const { call_(body_, first, end); }
+
+ private:
+  void* body_ = nullptr;
+  void (*call_)(void*, int, int) = nullptr;
+};
+// Eq. 1's damping over h, implicitly (forces/springs.cpp). `before` runs on
+// each chunk of particles before the damping reads its velocities, `after`
+// once the damping has changed them, each in the damping's own passes: the
+// symplectic step's velocity update and move, which had cost two passes and
+// two parallel regions of their own.
+void apply_spring_damping(const Model& m, State& s, Workspace& w, double h,
+                          const ParticleChunks& before = {}, const ParticleChunks& after = {});
 // forces/bending.cpp: the quadratic bending's Q from the rest triangles (each
 // split's triangles counted 1 / splits), rigidity B; for a model, its grid
 // split both ways or its mesh's triangles. The force -Q x into f, and the
@@ -352,8 +390,26 @@ void bending_forces(const Model& m, const State& s, Vec3Array& f);  // f = -Q x
 void add_bending_off_diagonal(const Model& m, const double* x, double* y, double scale, int a0,
                               int a1);
 double bending_energy(const Model& m, const Vec3Array& x);
-void add_viscous_damping(const Model& m, const State& s, Vec3Array& f);
-void add_wind(const Model& m, const State& s, const Workspace& w, Vec3Array& f);
+// The forces each particle feels from its own state, over particles
+// [first, end): gravity (forces/gravity.cpp), the viscous drag
+// (viscous_damping.cpp), the wind and the still air's drag (wind.cpp).
+void add_gravity(const Model& m, Vec3Array& f, int first, int end);
+void add_viscous_damping(const Model& m, const State& s, Vec3Array& f, int first, int end);
+void add_wind(const Model& m, const State& s, const Workspace& w, Vec3Array& f, int first, int end);
+// The three into w.force in one pass (the viscous drag with `viscous`), a
+// chunk of particles at a time (for_each_particle_chunk): a pass and a
+// parallel region each had cost 1-2 % of the step. With `zero_first`,
+// w.force is zeroed first.
+inline void add_own_forces(const Model& m, const State& s, Workspace& w, bool viscous,
+                           bool zero_first) {
+  for_each_particle_chunk(m, [&](int a, int b) {
+    if (zero_first)
+      for (int k = 0; k < 3; ++k) std::fill(w.force.column(k) + a, w.force.column(k) + b, 0.0);
+    add_gravity(m, w.force, a, b);
+    if (viscous) add_viscous_damping(m, s, w.force, a, b);
+    add_wind(m, s, w, w.force, a, b);
+  });
+}
 void add_air_pressure(const Model& m, const State& s, Workspace& w);
 void add_adhesion(const Model& m, const State& s, Workspace& w);
 // Self-collision records its pairs in w.collision_pairs; with_damping adds the

@@ -256,13 +256,10 @@ namespace {
 // the result). Implicit Euler takes the damping into its matrix, so leaves it
 // out here.
 void accumulate_forces(const Model& m, const State& s, Workspace& w, bool implicit) {
-  for_each_particle(m, [&](int i) { put(w.force[i], Vec3::Zero()); });
-  add_spring_forces(m, s, w, m.params.integrator.type == IntegratorType::ExplicitEuler);
+  set_spring_forces(m, s, w, m.params.integrator.type == IntegratorType::ExplicitEuler);
   add_bending_forces(m, s, w.force);
   compute_normals(m, s.x.column(0), w.normal, w.normals_scratch);
-  add_gravity(m, w.force);
-  if (!implicit) add_viscous_damping(m, s, w.force);
-  add_wind(m, s, w, w.force);
+  add_own_forces(m, s, w, !implicit, false);
   add_air_pressure(m, s, w);
   add_adhesion(m, s, w);
   add_self_collision(m, s, w, !implicit);

@@ -130,7 +130,7 @@ struct Workspace {
   Vec3 handle_force = Vec3::Zero();            // force the first pulling handle exerts, N
   // Self-collision spatial hash (counting sort by cell).
   std::vector<int> cell_start, cell_entries, particle_cell;
-  std::vector<std::array<long long, 3>> cell_coord;
+  double hash_cell = 0;                 // the side of the hash's cells
   std::vector<std::uint8_t> colliding;  // in a pair within d_t (the pairs' ends, listed once)
   std::vector<int> colliding_particles;
   std::vector<CollisionPair> collision_pairs;

@@ -207,17 +207,23 @@ void update_air(const Model& m, State& s, Workspace& w, double dt) {
   } else {
     const PocketPermeability perm(m, s, w);
     const auto [v_sum, a_sum, s_now, conductance] = ordered_sums<4>(m, w, [&](int j) {
-      std::array<double, 4> sum{};
+      // In locals, not the returned array: its stores and reloads, one per
+      // add, had made the loop 5 % of the step at 201 x 201.
+      double volume = 0, lifted = 0, touching = 0, conducting = 0;
+      int* __restrict pocket = s.pocket.data();
+      const double* __restrict distance = w.distance.data(), * __restrict area = m.area.data();
+      const std::uint8_t* __restrict contact = s.contact.data();
       for (int i = j * m.nu; i < (j + 1) * m.nu; ++i) {
-        s.pocket[i] = holds_air(m, w.distance[i]) ? 0 : -1;  // one pocket under the whole cloth
-        sum[0] += m.area[i] * air_gap(m, w.distance[i]);
-        if (s.pocket[i] >= 0 && !s.contact[i]) {
-          sum[1] += m.area[i];
-          sum[3] += perm.conductance(i);
+        const bool held = holds_air(m, distance[i]);
+        pocket[i] = held ? 0 : -1;  // one pocket under the whole cloth
+        volume += area[i] * air_gap(m, distance[i]);
+        if (held && !contact[i]) {
+          lifted += area[i];
+          conducting += perm.conductance(i);
         }
-        if (s.contact[i]) sum[2] += m.area[i];
+        if (contact[i]) touching += area[i];
       }
-      return sum;
+      return std::array<double, 4>{volume, lifted, touching, conducting};
     });
     const double delta = perm.of(conductance, a_sum);
     const double grown = v_sum - s.air_volume;

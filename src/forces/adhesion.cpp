@@ -26,15 +26,15 @@ void add_adhesion(const Model& m, const State& s, Workspace& w) {
   // A uniform field: eq. 13's two parts once, as before the field.
   const bool per_particle = field && !w.humidity.uniform;
   const double* omega = field ? s.humidity.data() : nullptr;
-  const double s_now = ordered_sum(m, w, [&](int j) {
-    double sum = 0;
-    for (int i = j * m.nu; i < (j + 1) * m.nu; ++i) sum += s.contact[i] ? m.area[i] : 0.0;
-    return sum;
-  });
-  const double border = ordered_sum(m, w, [&](int j) {
+  // The contact area and its border's particles, in one pass.
+  const auto [s_now, border] = ordered_sums<2>(m, w, [&](int j) {
+    double area = 0;
     int count = 0;
-    for (int i = j * m.nu; i < (j + 1) * m.nu; ++i) count += s.contact[i] && w.border[i];
-    return static_cast<double>(count);
+    for (int i = j * m.nu; i < (j + 1) * m.nu; ++i) {
+      area += s.contact[i] ? m.area[i] : 0.0;
+      count += s.contact[i] && w.border[i];
+    }
+    return std::array<double, 2>{area, static_cast<double>(count)};
   });
   const double two_root_s = 2.0 * std::sqrt(s_now);
   const double pressure0 = c.pressure_per_omega(omega0),

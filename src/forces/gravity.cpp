@@ -3,20 +3,18 @@
 
 namespace wetcloth::detail {
 
-void add_gravity(const Model& m, Vec3Array& f) {
+void add_gravity(const Model& m, Vec3Array& f, int first, int end) {
   const Vec3 g = to_vec(m.params.forces.gravity);
   // All three components in one loop: the masses are read once.
-  for_each_particle_block(m, [&](int first, int end) {
-    double* __restrict fx = f.column(0), * __restrict fy = f.column(1), * __restrict fz = f.column(2);
-    const double* __restrict mass = m.mass.data();
-    const double gx = g[0], gy = g[1], gz = g[2];
+  double* __restrict fx = f.column(0), * __restrict fy = f.column(1), * __restrict fz = f.column(2);
+  const double* __restrict mass = m.mass.data();
+  const double gx = g[0], gy = g[1], gz = g[2];
 #pragma GCC ivdep
-    for (int i = first; i < end; ++i) {
-      fx[i] += mass[i] * gx;
-      fy[i] += mass[i] * gy;
-      fz[i] += mass[i] * gz;
-    }
-  });
+  for (int i = first; i < end; ++i) {
+    fx[i] += mass[i] * gx;
+    fy[i] += mass[i] * gy;
+    fz[i] += mass[i] * gz;
+  }
 }
 
 }  // namespace wetcloth::detail

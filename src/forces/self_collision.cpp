@@ -138,7 +138,7 @@ void search_whole_cloth(const Model& m, const State& s, Workspace& w, double rad
   anchor = s.x;
   w.candidates_rotation = Eigen::Matrix3d::Identity();
   w.candidates_motion = Vec3::Zero();
-  build_hash(anchor, 2 * radius, w, m.threads);
+  build_hash(anchor, radius, w, m.threads);
   clear_stale(w);
   if (m.threads <= 1) {  // straight into the list: no second copy of the pairs
     w.candidates.clear();
@@ -180,7 +180,7 @@ void find_mover_pairs(const Model& m, Workspace& w, double radius, Take&& take) 
   auto& is_stale = w.hash_stale_flag;
   constexpr std::size_t kMostStale = 256;
   if (stale.size() + movers.size() > kMostStale) {
-    build_hash(anchor, 2 * radius, w, m.threads);
+    build_hash(anchor, radius, w, m.threads);
     clear_stale(w);
     for (int i : movers)
       for_each_near(anchor, radius, w, anchor[i], i, -1, [&](int j, const Vec3&, double len2) {

@@ -26,7 +26,8 @@ constexpr int kRing = kReach + 1;  // edge rows a thread keeps
 constexpr int kEdges = 8;          // forward offsets of the stencil
 
 // Each particle of a row sums its springs: per live offset the forward edge
-// (+F) and the backward one (-F), and adds the sum to its force, out[k][i].
+// (+F) and the backward one (-F), and sets its force, out[k][i], to the sum
+// (the step's first force: +0 + the sum, the bits of a zeroed force and an add).
 // kLive > 0: that many offsets, the loop over them unrolled; 0: `live`.
 template <int kLive>
 void gather_row(const double* const fwd[kEdges][kSpringFields],
@@ -40,7 +41,7 @@ void gather_row(const double* const fwd[kEdges][kSpringFields],
       double total = 0;
 #pragma GCC unroll 8
       for (int e = 0; e < count; ++e) total = total + fwd[e][k][i] - bwd[e][k][i];
-      out[i] += total;
+      out[i] = 0.0 + total;
     }
   }
 }
@@ -59,7 +60,7 @@ void gather_row(const double* const fwd[kEdges][kSpringFields],
 }
 
 template <bool damped>
-void add_spring_forces(const Model& m, const State& s, Workspace& w) {
+void set_spring_forces(const Model& m, const State& s, Workspace& w) {
   const int nu = m.nu, stride = nu + 2 * kReach;
   const std::size_t per_row = std::size_t(kEdges) * kSpringFields * stride;
   const std::size_t per_thread = kRing * per_row;  // edge rows
@@ -121,13 +122,15 @@ void add_spring_forces(const Model& m, const State& s, Workspace& w) {
 
 }  // namespace
 
-void add_spring_forces(const Model& m, const State& s, Workspace& w, bool with_damping) {
-  if (!m.grid)
+void set_spring_forces(const Model& m, const State& s, Workspace& w, bool with_damping) {
+  if (!m.grid) {
+    for_each_particle(m, [&](int i) { put(w.force[i], Vec3::Zero()); });
     add_spring_forces_mesh(m, s, w, with_damping);
-  else if (with_damping)
-    add_spring_forces<true>(m, s, w);
-  else
-    add_spring_forces<false>(m, s, w);
+  } else if (with_damping) {
+    set_spring_forces<true>(m, s, w);
+  } else {
+    set_spring_forces<false>(m, s, w);
+  }
 }
 
 // Eq. 1's damping over a step h, by backward Euler with additive operator
@@ -383,9 +386,12 @@ struct DampingColumns {
   }
 };
 
-// The grid's positions, velocities and inverse masses in float, and their transposes.
-void load_damping_columns(const Model& m, const State& s, const DampingColumns& d) {
-  for_each_particle_block(m, [&](int first, int end) {
+// The grid's positions, velocities and inverse masses in float, and their
+// transposes; each chunk of particles first through `before`.
+void load_damping_columns(const Model& m, const State& s, const DampingColumns& d,
+                          const ParticleChunks& before) {
+  for_each_particle_chunk(m, [&](int first, int end) {
+    if (before) before(first, end);
     for (int k = 0; k < 3; ++k) {
       const double* __restrict x = s.x.column(k);
       const double* __restrict v = s.v.column(k);
@@ -480,14 +486,17 @@ void solve_damping_groups(const Model& m, double h, int damped, const DampingCol
 
 }  // namespace
 
-void apply_spring_damping(const Model& m, State& s, Workspace& w, double h) {
-  if (!m.grid) {
-    apply_spring_damping_mesh(m, s, h);
+void apply_spring_damping(const Model& m, State& s, Workspace& w, double h,
+                          const ParticleChunks& before, const ParticleChunks& after) {
+  int damped = 0;
+  if (m.grid)
+    for (const StencilEdge& st : m.topology->stencil) damped += st.damping > 0;
+  if (damped == 0) {  // a mesh cloth, or no damped springs: the hooks in passes of their own
+    if (before) for_each_particle_chunk(m, before);
+    if (!m.grid) apply_spring_damping_mesh(m, s, h);
+    if (after) for_each_particle_chunk(m, after);
     return;
   }
-  int damped = 0;
-  for (const StencilEdge& st : m.topology->stencil) damped += st.damping > 0;
-  if (damped == 0) return;
   std::array<int, kGroups> horizontal{};  // each group's horizontal offset, di
   std::array<bool, kGroups> live{};       // each group: some offset of it damped
   const GroupBounds bound = group_bounds(m);
@@ -497,7 +506,7 @@ void apply_spring_damping(const Model& m, State& s, Workspace& w, double h) {
       live[group] = live[group] || m.topology->stencil[e].damping > 0;
     }
   const DampingColumns d(m, w, live);
-  load_damping_columns(m, s, d);
+  load_damping_columns(m, s, d, before);
   bool first[kGroups] = {true, true};     // per group: nothing in its impulses yet
   bool solved[kGroups] = {false, false};  // per group: its horizontal λ solved
   solve_damping_groups(m, h, damped, d, bound, first, solved);
@@ -513,34 +522,50 @@ void apply_spring_damping(const Model& m, State& s, Workspace& w, double h) {
   // A group with no horizontal offset (the shear's) has no λ u: its term
   // would be J + (0 - 0), which adds to the sum what J does (the sum is
   // never −0), so its zeroed columns are neither written nor read.
-  const bool back0 = solved[0], back1 = solved[1];
-  const auto add_groups = [&]<bool kFirst, bool kSecond>() {
-    for_each_particle_block(m, [&](int first, int end) {
+  // Each group's part, a template argument: 0 none, 1 its impulses, 2 its
+  // impulses and its horizontal λ u. (Chosen in the loop, the λ u's loads
+  // were masked gathers: 7 % of the step at 201 x 201.)
+  const auto add_groups = [&]<int kPart0, int kPart1>() {
+    for_each_particle_chunk(m, [&](int first, int end) {
       for (int k = 0; k < 3; ++k) {
-        const double* __restrict jv0 = kFirst ? d.impulse(0, k) : nullptr;
-        const double* __restrict jv1 = kSecond ? d.impulse(1, k) : nullptr;
-        const Real* __restrict lu0 = kFirst ? d.back(0, k) : nullptr;
-        const Real* __restrict lu1 = kSecond ? d.back(1, k) : nullptr;
+        const double* __restrict jv0 = kPart0 > 0 ? d.impulse(0, k) : nullptr;
+        const double* __restrict jv1 = kPart1 > 0 ? d.impulse(1, k) : nullptr;
+        const Real* __restrict lu0 = kPart0 == 2 ? d.back(0, k) : nullptr;
+        const Real* __restrict lu1 = kPart1 == 2 ? d.back(1, k) : nullptr;
         const double* __restrict inv_mass = m.inv_mass.data();
         double* __restrict out = s.v.column(k);
 #pragma GCC ivdep
         for (int a = first; a < end; ++a) {
           double sum = 0;
-          if constexpr (kFirst)
-            sum += back0 ? jv0[a] + (double(lu0[a]) - double(lu0[a - di0])) : jv0[a];
-          if constexpr (kSecond)
-            sum += back1 ? jv1[a] + (double(lu1[a]) - double(lu1[a - di1])) : jv1[a];
+          if constexpr (kPart0 == 2)
+            sum += jv0[a] + (double(lu0[a]) - double(lu0[a - di0]));
+          else if constexpr (kPart0 == 1)
+            sum += jv0[a];
+          if constexpr (kPart1 == 2)
+            sum += jv1[a] + (double(lu1[a]) - double(lu1[a - di1]));
+          else if constexpr (kPart1 == 1)
+            sum += jv1[a];
           out[a] += share * inv_mass[a] * sum;
         }
       }
+      if (after) after(first, end);
     });
   };
-  if (live[0] && live[1])
-    add_groups.template operator()<true, true>();
-  else if (live[0])
-    add_groups.template operator()<true, false>();
+  const auto second = [&]<int kPart0>(int part1) {
+    if (part1 == 2)
+      add_groups.template operator()<kPart0, 2>();
+    else if (part1 == 1)
+      add_groups.template operator()<kPart0, 1>();
+    else
+      add_groups.template operator()<kPart0, 0>();
+  };
+  const int part0 = live[0] ? 1 + solved[0] : 0, part1 = live[1] ? 1 + solved[1] : 0;
+  if (part0 == 2)
+    second.template operator()<2>(part1);
+  else if (part0 == 1)
+    second.template operator()<1>(part1);
   else
-    add_groups.template operator()<false, true>();
+    second.template operator()<0>(part1);  // part1 > 0: some group is damped
 }
 
 }  // namespace wetcloth::detail

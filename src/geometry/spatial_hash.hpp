@@ -2,8 +2,10 @@
 // that the order of pairs, and so the sums, are deterministic.
 #pragma once
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <stdexcept>
 
 #include "wetcloth/simulation.hpp"
 
@@ -25,17 +27,15 @@ void build_hash(const Points& x, double cell, Workspace& w, int threads = 1) {
   std::size_t size = 1;
   while (size < 2 * std::size_t(n)) size <<= 1;
   const auto mask = static_cast<std::uint32_t>(size - 1);
+  w.hash_cell = cell;
   w.cell_start.assign(size + 1, 0);
   w.cell_entries.resize(n);
   w.particle_cell.resize(n);
-  w.cell_coord.resize(n);
 #pragma omp parallel for schedule(static) num_threads(threads) if (threads > 1)
-  for (int i = 0; i < n; ++i) {
-    auto& cc = w.cell_coord[i];
-    cc = {std::llround(std::floor(x[i].x() / cell)), std::llround(std::floor(x[i].y() / cell)),
-          std::llround(std::floor(x[i].z() / cell))};
-    w.particle_cell[i] = static_cast<int>(hash_cell(cc[0], cc[1], cc[2], mask));
-  }
+  for (int i = 0; i < n; ++i)
+    w.particle_cell[i] = static_cast<int>(hash_cell(
+        std::llround(std::floor(x[i].x() / cell)), std::llround(std::floor(x[i].y() / cell)),
+        std::llround(std::floor(x[i].z() / cell)), mask));
   for (int i = 0; i < n; ++i) ++w.cell_start[w.particle_cell[i] + 1];
   for (std::size_t c = 0; c < size; ++c) w.cell_start[c + 1] += w.cell_start[c];
   std::vector<int>& fill = w.queue;  // reuse as a cursor per bucket
@@ -44,29 +44,44 @@ void build_hash(const Points& x, double cell, Workspace& w, int threads = 1) {
 }
 
 // Calls fn(j, d, |d|²) for every particle j > after of the hash, but self,
-// with d = y - x[j] shorter than `radius`, bucket by bucket. The hash must
-// have been built with cell = 2 radius: the ball of radius r around y then
-// meets at most 2 x 2 x 2 cells.
+// with d = y - x[j] shorter than `radius`: the buckets of the cells the ball
+// of that radius around y meets, in order of z, y, x, each bucket once. A
+// particle within the radius is in one of those cells, so in one of those
+// buckets, found once; one of another cell that shares a bucket is beyond
+// the radius. The hash's cells are at least the radius: 2 or 3 a side (4 where
+// a rounding crosses a face). Cells
+// of the radius look at about half the particles of cells of twice it around
+// a cloth, a surface, and the buckets need no cell's coordinates: the
+// self-collision's searches took 0.6 of their time.
 template <class Points, class Fn>
 void for_each_near(const Points& x, double radius, const Workspace& w, const Vec3& y, int self,
                    int after, Fn fn) {
   const auto mask = static_cast<std::uint32_t>(w.cell_start.size() - 2);
-  const double r2 = radius * radius, cell = 2 * radius;
-  const long long cx = std::llround(std::floor((y.x() - radius) / cell));
-  const long long cy = std::llround(std::floor((y.y() - radius) / cell));
-  const long long cz = std::llround(std::floor((y.z() - radius) / cell));
-  for (int dz = 0; dz <= 1; ++dz)
-    for (int dy = 0; dy <= 1; ++dy)
-      for (int dx = 0; dx <= 1; ++dx) {
-        const long long ox = cx + dx, oy = cy + dy, oz = cz + dz;
+  const double r2 = radius * radius, cell = w.hash_cell;
+  if (!(cell >= radius)) throw std::logic_error("spatial hash: cells smaller than the radius");
+  const auto first = [&](double c) { return std::llround(std::floor((c - radius) / cell)); };
+  // At most 3 past the first: where a blown-up cloth's coordinates (1e14 m,
+  // stopped after the step) are whole numbers of cells apart only by 2 or 4,
+  // the last had run past `seen`. (Unsigned: no overflow.)
+  const auto last = [&](double c, long long from) {
+    const long long to = std::llround(std::floor((c + radius) / cell));
+    return static_cast<unsigned long long>(to) - static_cast<unsigned long long>(from) > 3
+               ? from + 3
+               : to;
+  };
+  const long long x0 = first(y.x()), y0 = first(y.y()), z0 = first(y.z());
+  const long long x1 = last(y.x(), x0), y1 = last(y.y(), y0), z1 = last(y.z(), z0);
+  std::uint32_t seen[64];
+  int buckets = 0;
+  for (long long oz = z0; oz <= z1; ++oz)
+    for (long long oy = y0; oy <= y1; ++oy)
+      for (long long ox = x0; ox <= x1; ++ox) {
         const std::uint32_t c = hash_cell(ox, oy, oz, mask);
+        if (std::find(seen, seen + buckets, c) != seen + buckets) continue;
+        seen[buckets++] = c;
         for (int e = w.cell_start[c]; e < w.cell_start[c + 1]; ++e) {
           const int j = w.cell_entries[e];
           if (j <= after || j == self) continue;
-          // A bucket may hold other cells too: take j only in the cell visited,
-          // so that none is found twice.
-          const auto& cj = w.cell_coord[j];
-          if (cj[0] != ox || cj[1] != oy || cj[2] != oz) continue;
           const Vec3 d = y - x[j];
           const double len2 = d.squaredNorm();
           if (len2 < r2) fn(j, d, len2);
@@ -76,7 +91,7 @@ void for_each_near(const Points& x, double radius, const Workspace& w, const Vec
 
 // Calls fn(i, j, d_ij, |d_ij|) once for every pair i < j closer than `radius`
 // that `skip(i, j)` does not exclude, with i in [first, last) (all particles by
-// default), in order of i. The hash must have been built with cell = 2 radius.
+// default), in order of i.
 template <class Points, class Skip, class Fn>
 void for_each_close_pair(const Points& x, double radius, const Workspace& w, Skip skip, Fn fn,
                          int first = 0, int last = -1) {

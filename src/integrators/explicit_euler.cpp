@@ -6,18 +6,16 @@
 namespace wetcloth::detail {
 
 namespace {
-// x += h v.
-void move_at_velocities(const Model& m, State& s, double h) {
-  for_each_particle_block(m, [&](int first, int end) {
-    const double* __restrict vx = s.v.column(0), * __restrict vy = s.v.column(1), * __restrict vz = s.v.column(2);
-    double* __restrict x = s.x.column(0), * __restrict y = s.x.column(1), * __restrict z = s.x.column(2);
+// x += h v, over particles [first, end).
+void move_at_velocities(State& s, double h, int first, int end) {
+  const double* __restrict vx = s.v.column(0), * __restrict vy = s.v.column(1), * __restrict vz = s.v.column(2);
+  double* __restrict x = s.x.column(0), * __restrict y = s.x.column(1), * __restrict z = s.x.column(2);
 #pragma GCC ivdep
-    for (int i = first; i < end; ++i) {
-      x[i] += h * vx[i];
-      y[i] += h * vy[i];
-      z[i] += h * vz[i];
-    }
-  });
+  for (int i = first; i < end; ++i) {
+    x[i] += h * vx[i];
+    y[i] += h * vy[i];
+    z[i] += h * vz[i];
+  }
 }
 }  // namespace
 
@@ -39,7 +37,7 @@ void integrate_explicit_euler(const Model& m, State& s, Workspace& w, double dt)
 // implicit part comes after the constraints (take_air_after_constraints).
 void integrate_symplectic_euler(const Model& m, State& s, Workspace& w, double dt) {
   const double c = m.params.forces.viscous_damping;
-  for_each_particle_block(m, [&](int first, int end) {
+  const auto kick = [&](int first, int end) {
     const double *__restrict fx = w.force.column(0), *__restrict fy = w.force.column(1),
                                *__restrict fz = w.force.column(2);
     double* __restrict vx = s.v.column(0), * __restrict vy = s.v.column(1), * __restrict vz = s.v.column(2);
@@ -50,15 +48,16 @@ void integrate_symplectic_euler(const Model& m, State& s, Workspace& w, double d
       vy[i] += scale * fy[i];
       vz[i] += scale * fz[i];
     }
-  });
-  apply_spring_damping(m, s, w, dt);
-  move_at_velocities(m, s, dt);
+  };
+  // The kick and the move within the damping's passes over the particles.
+  apply_spring_damping(m, s, w, dt, kick,
+                       [&](int first, int end) { move_at_velocities(s, dt, first, end); });
 }
 
 // The air term taken implicitly on the new velocities, then x += h v.
 void move_at_new_velocities(const Model& m, State& s, Workspace& w, double h) {
   correct_air_implicitly(m, s, w, h);
-  move_at_velocities(m, s, h);
+  for_each_particle_block(m, [&](int first, int end) { move_at_velocities(s, h, first, end); });
 }
 
 }  // namespace wetcloth::detail

@@ -513,11 +513,9 @@ void xpbd_step(const Model& m, State& s, Workspace& w) {
   for (int k = 0; k < substeps; ++k) {
     // The external forces (docs/model.md section 8's first stage without the
     // springs and self-collision, which are constraints here).
-    for_each_particle(m, [&](int i) { put(w.force[i], Vec3::Zero()); });
     // The normals once a step: the wind and the air push along them.
     if (k == 0) compute_normals(m, s.x.column(0), w.normal, w.normals_scratch);
-    add_gravity(m, w.force);
-    add_wind(m, s, w, w.force);
+    add_own_forces(m, s, w, false, true);
     add_air_pressure(m, s, w);
     add_adhesion(m, s, w);
     add_handle_forces(m, s, w);

@@ -82,13 +82,26 @@ void apply_friction(const Model& m, State& s, const Workspace& w,
   }
   // Off the contact surface, a particle pushed out of another obstacle this
   // step: its load is the part of the forces that presses it in.
+  // They are few: 64 particles' flags are looked at in one vector first (a
+  // branch per particle had been 2 % of the step at 201 x 201).
   if (!with_load) return;
-  for_each_particle(m, [&](int i) {
-    if (m.driven[i] || s.contact[i] || touched[i] == 0) return;
-    const Vec3 n = query_code(m, w.surfaces, touched[i], s.x[i]).normal;
-    const Vec3 surface = surface_velocity(w.surfaces, touched[i], s.x[i]);
-    slow_down(m, s, i, n, std::max(0.0, -w.force[i].dot(n)), mu, dt,
-              pose_of(w.surfaces, touched[i]) ? &surface : nullptr);
+  for_each_particle_block(m, [&](int first, int end) {
+    const std::uint8_t *__restrict driven = m.driven.data(), *__restrict contact = s.contact.data(),
+                                   *__restrict by = touched.data();
+    for (int i0 = first; i0 < end; i0 += 64) {
+      const int i1 = std::min(end, i0 + 64);
+      int any = 0;
+#pragma omp simd reduction(| : any)
+      for (int i = i0; i < i1; ++i) any |= (by[i] != 0) & !contact[i] & !driven[i];
+      if (!any) continue;
+      for (int i = i0; i < i1; ++i) {
+        if (driven[i] || contact[i] || by[i] == 0) continue;
+        const Vec3 n = query_code(m, w.surfaces, by[i], s.x[i]).normal;
+        const Vec3 surface = surface_velocity(w.surfaces, by[i], s.x[i]);
+        slow_down(m, s, i, n, std::max(0.0, -w.force[i].dot(n)), mu, dt,
+                  pose_of(w.surfaces, by[i]) ? &surface : nullptr);
+      }
+    }
   });
 }
 

@@ -11,10 +11,12 @@
 
 namespace wetcloth::detail {
 
+// In unsigned arithmetic: the products of a blown-up cloth's cells (1e16)
+// wrap, where signed ones overflowed (undefined; the sanitizer build's find).
 inline std::uint32_t hash_cell(long long ix, long long iy, long long iz, std::uint32_t mask) {
-  const auto h = static_cast<std::uint64_t>(ix * 73856093LL) ^
-                 static_cast<std::uint64_t>(iy * 19349663LL) ^
-                 static_cast<std::uint64_t>(iz * 83492791LL);
+  const std::uint64_t h = static_cast<std::uint64_t>(ix) * 73856093ULL ^
+                          static_cast<std::uint64_t>(iy) * 19349663ULL ^
+                          static_cast<std::uint64_t>(iz) * 83492791ULL;
   return static_cast<std::uint32_t>(h) & mask;
 }
 

@@ -51,10 +51,9 @@ void build_hash(const Points& x, double cell, Workspace& w, int threads = 1) {
 // particle within the radius is in one of those cells, so in one of those
 // buckets, found once; one of another cell that shares a bucket is beyond
 // the radius. The hash's cells are at least the radius: 2 or 3 a side (4 where
-// a rounding crosses a face). Cells
-// of the radius look at about half the particles of cells of twice it around
-// a cloth, a surface, and the buckets need no cell's coordinates: the
-// self-collision's searches took 0.6 of their time.
+// a rounding crosses a face). Around a cloth, a surface, cells of the radius
+// hold about half the particles of cells of twice it, and the buckets need no
+// cell's coordinates (docs/performance.md, seventeenth stop).
 template <class Points, class Fn>
 void for_each_near(const Points& x, double radius, const Workspace& w, const Vec3& y, int self,
                    int after, Fn fn) {
@@ -62,9 +61,9 @@ void for_each_near(const Points& x, double radius, const Workspace& w, const Vec
   const double r2 = radius * radius, cell = w.hash_cell;
   if (!(cell >= radius)) throw std::logic_error("spatial hash: cells smaller than the radius");
   const auto first = [&](double c) { return std::llround(std::floor((c - radius) / cell)); };
-  // At most 3 past the first: where a blown-up cloth's coordinates (1e14 m,
-  // stopped after the step) are whole numbers of cells apart only by 2 or 4,
-  // the last had run past `seen`. (Unsigned: no overflow.)
+  // At most 3 past the first: past 2^53 cells (a blown-up cloth at 1e14 m,
+  // stopped after the step) doubles skip whole cells, and the last had
+  // fallen 4 past the first, overrunning `seen`. (Unsigned: no overflow.)
   const auto last = [&](double c, long long from) {
     const long long to = std::llround(std::floor((c + radius) / cell));
     return static_cast<unsigned long long>(to) - static_cast<unsigned long long>(from) > 3

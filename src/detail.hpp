@@ -180,13 +180,27 @@ inline Vec3 surface_velocity(const SurfacePoses& poses, int code, const Vec3& x)
 // With a workspace, mesh obstacles' searches are bounded by its cache.
 void collide(const Model& m, State& s, std::vector<std::uint8_t>* touched,
              const std::vector<int>* only = nullptr, Workspace* w = nullptr);
+// The same over particles [first, end), for a region of for_each_row_block
+// (prepare_contact before it, with a workspace).
+void collide(const Model& m, State& s, std::vector<std::uint8_t>* touched, Workspace* w, int first,
+             int end);
 // forces/normals.cpp: compute_normals from positions by component (x, y, z
 // columns of n), with a scratch array for the triangles' normals (the step's:
 // no allocation).
 void compute_normals(const Model& m, const double* x_columns, Vec3Array& normal,
                      NormalsScratch& scratch);
+// A grid's, in two parts, as the springs'.
+void prepare_normals(const Model& m, NormalsScratch& scratch);
+void compute_normal_rows(const Model& m, const double* x_columns, Vec3Array& normal,
+                         NormalsScratch& scratch, int j0, int j1, int thread);
 // Distances to the contact surface, contact flags and the contact border.
 void update_contact(const Model& m, State& s, Workspace& w);
+// In parts, for a region of for_each_row_block: the mesh caches made ready
+// (before it), the distances and flags of particles [first, end), and the
+// border of rows [j0, j1) (once every row's flags are in).
+void prepare_contact(const Model& m, Workspace& w);
+void update_contact(const Model& m, State& s, Workspace& w, int first, int end);
+void mark_contact_border(const Model& m, const State& s, Workspace& w, int j0, int j1);
 
 // Runs body(r) for r in [0, count) on the step's threads, in fixed static
 // chunks. Bodies write only their own rows, so the result never depends on
@@ -228,6 +242,16 @@ void for_each_row_block(const Model& m, Body&& body) {
   }
 }
 
+// Inside for_each_row_block's body: each thread waits until every thread has
+// got here, so that the rows the others wrote before it can be read. None on
+// one thread, which runs no region: a barrier there would bind to a caller's
+// own parallel region.
+inline void wait_for_all_rows(const Model& m) {
+  if (m.threads > 1) {
+#pragma omp barrier
+  }
+}
+
 // Runs body(first, end) on each thread's own particles, whole rows: for a
 // pass in which each particle stands alone, one loop across the rows (a loop
 // per row of 51 ends in a scalar tail).
@@ -241,11 +265,12 @@ void for_each_particle_block(const Model& m, Body&& body) {
 // Runs body(first, end) on each thread's own particles, in chunks of 1024:
 // for passes that run several loops over the same particles, each loop
 // finding the chunk's columns (8 KB each) in cache from the one before.
+constexpr int kCachedParticles = 1024;
 template <class Body>
 void for_each_particle_chunk(const Model& m, Body&& body) {
-  constexpr int kCached = 1024;
   for_each_particle_block(m, [&](int first, int end) {
-    for (int a = first; a < end; a += kCached) body(a, std::min(end, a + kCached));
+    for (int a = first; a < end; a += kCachedParticles)
+      body(a, std::min(end, a + kCachedParticles));
   });
 }
 
@@ -323,6 +348,23 @@ std::array<double, K> ordered_sums(const Model& m, Workspace& w, Row row) {
   return total;
 }
 
+// ordered_sums inside for_each_row_block's body, for its rows [j0, j1):
+// each thread's rows into w.row_sums (sized K nv before the region), a wait,
+// then every thread adds all the rows in order. Each gets the same total, with
+// the bits of ordered_sums; w.row_sums must not be written again in the region.
+template <std::size_t K, class Row>
+std::array<double, K> ordered_sums_in_rows(const Model& m, Workspace& w, int j0, int j1, Row row) {
+  for (int j = j0; j < j1; ++j) {
+    const std::array<double, K> sums = row(j);
+    std::copy(sums.begin(), sums.end(), w.row_sums.begin() + K * std::size_t(j));
+  }
+  wait_for_all_rows(m);
+  std::array<double, K> total{};
+  for (int j = 0; j < m.nv; ++j)
+    for (std::size_t k = 0; k < K; ++k) total[k] += w.row_sums[K * std::size_t(j) + k];
+  return total;
+}
+
 template <class Row>
 double ordered_sum(const Model& m, Workspace& w, Row row) {
   return ordered_sums<1>(m, w, [&](int j) { return std::array<double, 1>{row(j)}; })[0];
@@ -344,6 +386,11 @@ inline int grid_neighbour(const Model& m, int i, int j, int di, int dj) {
 std::string step_limit_springs_text(const Params& p);
 // The springs set w.force: they are the step's first force.
 void set_spring_forces(const Model& m, const State& s, Workspace& w, bool with_damping);
+// A grid's, in two parts: its scratch made ready (before the region), then a
+// thread's block of rows [j0, j1) (inside for_each_row_block's body).
+void prepare_spring_rows(const Model& m, Workspace& w);
+void set_spring_force_rows(const Model& m, const State& s, Workspace& w, bool with_damping, int j0,
+                           int j1, int thread);
 // The general kernels of a mesh cloth (model/mesh_cloth.cpp), where the grid has its stencil's.
 void add_spring_forces_mesh(const Model& m, const State& s, Workspace& w, bool damped);
 void apply_spring_damping_mesh(const Model& m, State& s, double h);
@@ -385,6 +432,7 @@ BendingMatrix build_bending_matrix(const std::vector<Vec3>& rest,
                                    const std::vector<std::uint8_t>& on_border, double rigidity);
 BendingMatrix build_bending_matrix(const Model& m, double rigidity);
 void add_bending_forces(const Model& m, const State& s, Vec3Array& f);
+void add_bending_forces(const Model& m, const State& s, Vec3Array& f, int first, int end);
 void bending_forces(const Model& m, const State& s, Vec3Array& f);  // f = -Q x
 // y_i += scale Σ_j≠i Q_ij x_j for i in [a0, a1): implicit Euler's product.
 void add_bending_off_diagonal(const Model& m, const double* x, double* y, double scale, int a0,
@@ -400,17 +448,30 @@ void add_wind(const Model& m, const State& s, const Workspace& w, Vec3Array& f, 
 // chunk of particles at a time (for_each_particle_chunk): a pass and a
 // parallel region each had cost 1-2 % of the step. With `zero_first`,
 // w.force is zeroed first.
+// The same over a thread's particles [first, end), in chunks of kCachedParticles.
 inline void add_own_forces(const Model& m, const State& s, Workspace& w, bool viscous,
-                           bool zero_first) {
-  for_each_particle_chunk(m, [&](int a, int b) {
+                           bool zero_first, int first, int end) {
+  for (int a = first; a < end; a += kCachedParticles) {
+    const int b = std::min(end, a + kCachedParticles);
     if (zero_first)
       for (int k = 0; k < 3; ++k) std::fill(w.force.column(k) + a, w.force.column(k) + b, 0.0);
     add_gravity(m, w.force, a, b);
     if (viscous) add_viscous_damping(m, s, w.force, a, b);
     add_wind(m, s, w, w.force, a, b);
-  });
+  }
 }
+inline void add_own_forces(const Model& m, const State& s, Workspace& w, bool viscous,
+                           bool zero_first) {
+  for_each_particle_block(
+      m, [&](int first, int end) { add_own_forces(m, s, w, viscous, zero_first, first, end); });
+}
+// The trapped air's pressure (air/air.cpp) and the liquid bridges' adhesion
+// (adhesion.cpp); the first over particles [first, end), the second over rows
+// [j0, j1) inside for_each_row_block's body, w.row_sums sized 2 nv before it
+// (it waits for every thread's rows: its ordered sums).
+void add_air_pressure(const Model& m, const State& s, Workspace& w, int first, int end);
 void add_air_pressure(const Model& m, const State& s, Workspace& w);
+void add_adhesion_rows(const Model& m, const State& s, Workspace& w, int j0, int j1);
 void add_adhesion(const Model& m, const State& s, Workspace& w);
 // Self-collision records its pairs in w.collision_pairs; with_damping adds the
 // -k_f v of colliding particles (implicit Euler takes it into its matrix).
@@ -436,6 +497,8 @@ void add_handle_forces(const Model& m, const State& s, Workspace& w);
 // atmospheric pressure; update_air advances it over dt (eqs. 2, 4, 5).
 void start_air(const Model& m, State& s, Workspace& w);
 void update_air(const Model& m, State& s, Workspace& w, double dt);
+// update_contact, then update_air (in one parallel region on a grid).
+void update_contact_and_air(const Model& m, State& s, Workspace& w, double dt);
 // The air term taken implicitly, after the explicit velocity update; with
 // `move`, after the constraints, moving the free particles by Δt times the
 // velocity it changes (the symplectic step's order). False: no air to take.
@@ -477,6 +540,9 @@ void hold_stopped_handles(const Model& m, State& s);
 // constraints/friction.cpp: eq. 14 on particles in contact.
 void apply_friction(const Model& m, State& s, const Workspace& w,
                     const std::vector<std::uint8_t>& touched, double dt);
+// The same over particles [first, end) (each stands alone).
+void apply_friction(const Model& m, State& s, const Workspace& w,
+                    const std::vector<std::uint8_t>& touched, double dt, int first, int end);
 // The self-collision candidate pairs (a Verlet list in w.candidates), found again
 // where particles moved from their anchors.
 void refresh_collision_candidates(const Model& m, const State& s, Workspace& w);

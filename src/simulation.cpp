@@ -255,13 +255,34 @@ namespace {
 // 1. Accumulate forces, in a fixed order (the order of a float sum is part of
 // the result). Implicit Euler takes the damping into its matrix, so leaves it
 // out here.
+// On a grid, the forces up to adhesion run in one parallel region, each
+// thread through its own rows: each of them writes only its rows, and reads
+// others' only of the state, which none of them changes. A region of its own
+// each cost about 1.25 µs a stage beyond its work (docs/performance.md,
+// eighteenth stop).
 void accumulate_forces(const Model& m, const State& s, Workspace& w, bool implicit) {
-  set_spring_forces(m, s, w, m.params.integrator.type == IntegratorType::ExplicitEuler);
-  add_bending_forces(m, s, w.force);
-  compute_normals(m, s.x.column(0), w.normal, w.normals_scratch);
-  add_own_forces(m, s, w, !implicit, false);
-  add_air_pressure(m, s, w);
-  add_adhesion(m, s, w);
+  const bool damped_springs = m.params.integrator.type == IntegratorType::ExplicitEuler;
+  if (m.grid) {
+    prepare_spring_rows(m, w);
+    prepare_normals(m, w.normals_scratch);
+    w.row_sums.resize(2 * std::size_t(m.nv));  // adhesion's sums
+    for_each_row_block(m, [&](int j0, int j1, int thread) {
+      const int first = j0 * m.nu, end = j1 * m.nu;
+      set_spring_force_rows(m, s, w, damped_springs, j0, j1, thread);
+      add_bending_forces(m, s, w.force, first, end);
+      compute_normal_rows(m, s.x.column(0), w.normal, w.normals_scratch, j0, j1, thread);
+      add_own_forces(m, s, w, !implicit, false, first, end);
+      add_air_pressure(m, s, w, first, end);
+      add_adhesion_rows(m, s, w, j0, j1);
+    });
+  } else {
+    set_spring_forces(m, s, w, damped_springs);
+    add_bending_forces(m, s, w.force);
+    compute_normals(m, s.x.column(0), w.normal, w.normals_scratch);
+    add_own_forces(m, s, w, !implicit, false);
+    add_air_pressure(m, s, w);
+    add_adhesion(m, s, w);
+  }
   add_self_collision(m, s, w, !implicit);
   add_handle_forces(m, s, w);
 }
@@ -269,12 +290,17 @@ void accumulate_forces(const Model& m, const State& s, Workspace& w, bool implic
 // 2. Integrate: integrators/*.cpp.
 
 // 3. Collide with surfaces: out of the table, the ball and the mesh
-// obstacles, recording in w.touched which one pushed each particle.
-void collide_with_surfaces(const Model& m, State& s, Workspace& w) {
-  collide(m, s, &w.touched, nullptr, &w);
+// obstacles, recording in w.touched which one pushed each particle; then
+// 4. friction on contact particles (eq. 14, constraints/friction.cpp). Each
+// particle stands alone in both: one parallel region, each thread through
+// its own particles.
+void collide_with_surfaces_then_friction(const Model& m, State& s, Workspace& w, double h) {
+  prepare_contact(m, w);
+  for_each_particle_block(m, [&](int first, int end) {
+    collide(m, s, &w.touched, &w, first, end);
+    apply_friction(m, s, w, w.touched, h, first, end);
+  });
 }
-
-// 4. Friction on contact particles (eq. 14): constraints/friction.cpp.
 
 // 5. Strain limiting; then no particle may be left inside a surface. On the
 // table alone only the particles strain limiting moved can be inside: collide
@@ -306,19 +332,14 @@ void take_air_after_constraints(const Model& m, State& s, Workspace& w, double h
   if (correct_air_implicitly(m, s, w, h, true)) collide(m, s, nullptr, nullptr, &w);
 }
 
-// 6. Update the contact state and the trapped air.
-void update_contact_and_air(const Model& m, State& s, Workspace& w, double h) {
-  update_contact(m, s, w);
-  update_air(m, s, w, h);
-}
+// 6. Update the contact state and the trapped air: air/air.cpp.
 
 // Stages 3-6, after an integration over h. Handles hold their particles
 // first, and hold those that stopped after the constraints moved them.
 void finish_substep(const Model& m, State& s, Workspace& w, double h) {
   if (w.surfaces.any) place_surfaces(m, w, s.time);  // where they are at the substep's end
   apply_handle_constraints(m, s, w);
-  collide_with_surfaces(m, s, w);
-  apply_friction(m, s, w, w.touched, h);
+  collide_with_surfaces_then_friction(m, s, w, h);
   limit_strain_outside_surfaces(m, s, w, h);
   if (m.params.integrator.type == IntegratorType::SymplecticEuler)
     take_air_after_constraints(m, s, w, h);

@@ -190,11 +190,83 @@ void update_vented(const Model& m, State& s, Workspace& w, double dt) {
   s.inner_pressure = pressure(p, total_atm, total_sum);
 }
 
+// One pocket under the whole cloth (every model but `vented`): row j's
+// particles' pockets (0 where they hold air, -1 where not), and its part of
+// the sums: the air's volume, the lifted area, the contact area and the
+// lifted particles' conductance.
+std::array<double, 4> pocket_row_sums(const Model& m, State& s, const Workspace& w,
+                                      const PocketPermeability& perm, int j) {
+  // In locals, not the returned array: its stores and reloads, one per add,
+  // had made the loop 5 % of the step at 201 x 201.
+  double volume = 0, lifted = 0, touching = 0, conducting = 0;
+  int* __restrict pocket = s.pocket.data();
+  const double* __restrict distance = w.distance.data(), * __restrict area = m.area.data();
+  const std::uint8_t* __restrict contact = s.contact.data();
+  for (int i = j * m.nu; i < (j + 1) * m.nu; ++i) {
+    const bool held = holds_air(m, distance[i]);
+    pocket[i] = held ? 0 : -1;
+    volume += area[i] * air_gap(m, distance[i]);
+    if (held && !contact[i]) {
+      lifted += area[i];
+      conducting += perm.conductance(i);
+    }
+    if (contact[i]) touching += area[i];
+  }
+  return {volume, lifted, touching, conducting};
+}
+
+// The one pocket's air after a step of dt, from the cloth's sums and the
+// state's air before it (which this does not change).
+struct PocketUpdate {
+  double atm_volume, volume, inner_pressure;
+  PocketAir air;
+};
+PocketUpdate next_pocket(const Params& p, const State& s, const PocketPermeability& perm,
+                         const std::array<double, 4>& sums, double dt) {
+  const AirModel model = p.air.model;
+  const auto [v_sum, a_sum, s_now, conductance] = sums;
+  const double delta = perm.of(conductance, a_sum);
+  const double grown = v_sum - s.air_volume;
+  double atm = s.air_atm_volume;
+  if (model == AirModel::Off || s_now == 0) {
+    // Nothing is trapped while no part of the cloth touches the surface: the
+    // air under it is open to the room.
+    atm = v_sum;
+  } else if (model == AirModel::Exchange) {
+    const bool update = !p.air.paper_update_rule || grown > p.air.paper_threshold;
+    atm = exchange(p, delta, atm, s.air_volume, v_sum, update ? a_sum : 0, dt, true);
+  }
+  // `sealed` (Yamada et al. 2013): the amount of air never changes.
+  // With no lifted cloth over the surface there is no pocket to hold air
+  // above the room's pressure: a cloth that lands flat, its last lifted
+  // particles reaching h_th in one step, would keep the air of the step
+  // before squeezed into the film of its weave (11 atm), with no lifted
+  // area left for it to seep through, and blow up the first particle a
+  // pull lifts. The excess escapes; a deficit (a flat cloth just starting
+  // to peel) stays.
+  if (model != AirModel::Off && s_now > 0 && a_sum == 0) atm = std::min(atm, v_sum);
+  const bool trapped = model != AirModel::Off && s_now > 0;
+  return {
+      atm, v_sum, pressure(p, atm, v_sum),
+      trapped ? pocket_air(p, delta, atm, v_sum, a_sum, model == AirModel::Exchange) : PocketAir{}};
+}
+
+void apply_pocket(const PocketUpdate& u, State& s) {
+  s.pocket_air.push_back(u.air);
+  s.air_atm_volume = u.atm_volume;
+  s.air_volume = u.volume;
+  s.inner_pressure = u.inner_pressure;
+}
+
+void note_peak_deficit(const Params& p, State& s) {
+  const double deficit = p.air.p_atm - s.inner_pressure;
+  if (deficit > s.peak_deficit) s.peak_deficit = deficit;
+}
+
 }  // namespace
 
 void update_air(const Model& m, State& s, Workspace& w, double dt) {
   const Params& p = m.params;
-  const AirModel model = p.air.model;
   s.pocket_air.clear();
   if (m.contact_surface == SurfaceKind::None) {  // no surface, no trapped air
     std::fill(s.pocket.begin(), s.pocket.end(), -1);
@@ -202,60 +274,47 @@ void update_air(const Model& m, State& s, Workspace& w, double dt) {
     s.inner_pressure = p.air.p_atm;
     return;
   }
-  if (model == AirModel::Vented) {
+  if (p.air.model == AirModel::Vented) {
     update_vented(m, s, w, dt);
   } else {
     const PocketPermeability perm(m, s, w);
-    const auto [v_sum, a_sum, s_now, conductance] = ordered_sums<4>(m, w, [&](int j) {
-      // In locals, not the returned array: its stores and reloads, one per
-      // add, had made the loop 5 % of the step at 201 x 201.
-      double volume = 0, lifted = 0, touching = 0, conducting = 0;
-      int* __restrict pocket = s.pocket.data();
-      const double* __restrict distance = w.distance.data(), * __restrict area = m.area.data();
-      const std::uint8_t* __restrict contact = s.contact.data();
-      for (int i = j * m.nu; i < (j + 1) * m.nu; ++i) {
-        const bool held = holds_air(m, distance[i]);
-        pocket[i] = held ? 0 : -1;  // one pocket under the whole cloth
-        volume += area[i] * air_gap(m, distance[i]);
-        if (held && !contact[i]) {
-          lifted += area[i];
-          conducting += perm.conductance(i);
-        }
-        if (contact[i]) touching += area[i];
-      }
-      return std::array<double, 4>{volume, lifted, touching, conducting};
-    });
-    const double delta = perm.of(conductance, a_sum);
-    const double grown = v_sum - s.air_volume;
-    if (model == AirModel::Off || s_now == 0) {
-      // Nothing is trapped while no part of the cloth touches the surface: the
-      // air under it is open to the room.
-      s.air_atm_volume = v_sum;
-    } else if (model == AirModel::Exchange) {
-      const bool update = !p.air.paper_update_rule || grown > p.air.paper_threshold;
-      s.air_atm_volume =
-          exchange(p, delta, s.air_atm_volume, s.air_volume, v_sum, update ? a_sum : 0, dt, true);
-    }
-    // `sealed` (Yamada et al. 2013): the amount of air never changes.
-    // With no lifted cloth over the surface there is no pocket to hold air
-    // above the room's pressure: a cloth that lands flat, its last lifted
-    // particles reaching h_th in one step, would keep the air of the step
-    // before squeezed into the film of its weave (11 atm), with no lifted
-    // area left for it to seep through, and blow up the first particle a
-    // pull lifts. The excess escapes; a deficit (a flat cloth just starting
-    // to peel) stays.
-    if (model != AirModel::Off && s_now > 0 && a_sum == 0)
-      s.air_atm_volume = std::min(s.air_atm_volume, v_sum);
-    const bool trapped = model != AirModel::Off && s_now > 0;
-    s.pocket_air.push_back(
-        trapped ? pocket_air(p, delta, s.air_atm_volume, v_sum, a_sum, model == AirModel::Exchange)
-                : PocketAir{});
-    s.air_volume = v_sum;
-    s.inner_pressure = pressure(p, s.air_atm_volume, v_sum);
+    const auto sums =
+        ordered_sums<4>(m, w, [&](int j) { return pocket_row_sums(m, s, w, perm, j); });
+    apply_pocket(next_pocket(p, s, perm, sums, dt), s);
     for_each_particle(m, [&](int i) { s.pocket_pressure[i] = s.inner_pressure; });
   }
-  const double deficit = p.air.p_atm - s.inner_pressure;
-  if (deficit > s.peak_deficit) s.peak_deficit = deficit;
+  note_peak_deficit(p, s);
+}
+
+// On a grid with one pocket, in one parallel region: each thread's rows'
+// contact, then (after the ordered sums' wait) their border, which reads the
+// rows either side, and their pocket pressure. Each thread works the pocket
+// out alike; the state takes it after the region. Four regions had cost
+// about 5 µs a step at 51 x 51 on two threads (docs/performance.md,
+// eighteenth stop).
+void update_contact_and_air(const Model& m, State& s, Workspace& w, double dt) {
+  if (!m.grid || m.contact_surface == SurfaceKind::None || m.params.air.model == AirModel::Vented) {
+    update_contact(m, s, w);
+    update_air(m, s, w, dt);
+    return;
+  }
+  prepare_contact(m, w);
+  s.pocket_air.clear();
+  const PocketPermeability perm(m, s, w);
+  w.row_sums.resize(4 * std::size_t(m.nv));
+  PocketUpdate next{};
+  for_each_row_block(m, [&](int j0, int j1, int thread) {
+    update_contact(m, s, w, j0 * m.nu, j1 * m.nu);
+    const auto sums = ordered_sums_in_rows<4>(
+        m, w, j0, j1, [&](int j) { return pocket_row_sums(m, s, w, perm, j); });
+    mark_contact_border(m, s, w, j0, j1);
+    const PocketUpdate u = next_pocket(m.params, s, perm, sums, dt);
+    std::fill(s.pocket_pressure.begin() + j0 * m.nu, s.pocket_pressure.begin() + j1 * m.nu,
+              u.inner_pressure);
+    if (thread == 0) next = u;
+  });
+  apply_pocket(next, s);
+  note_peak_deficit(m.params, s);
 }
 
 void start_air(const Model& m, State& s, Workspace& w) {
@@ -274,15 +333,15 @@ void start_air(const Model& m, State& s, Workspace& w) {
 // paper's literal n_i, oriented away from the trapped air) the force is not the
 // gradient of the volume that sets the pressure: it pumps energy into lifted
 // flaps until a pulled cloth flutters and blows up (docs/model.md).
-void add_air_pressure(const Model& m, const State& s, Workspace& w) {
+void add_air_pressure(const Model& m, const State& s, Workspace& w, int first, int end) {
   // No air: air_direction stays zero, as reset left it.
   if (m.params.air.model == AirModel::Off || m.contact_surface == SurfaceKind::None) return;
   const double p_atm = m.params.air.p_atm;
   const bool along_cloth_normal = m.params.air.force_direction == AirForceDirection::Cloth;
-  for_each_particle(m, [&](int i) {
+  for (int i = first; i < end; ++i) {
     if (s.contact[i] || !holds_air(m, w.distance[i])) {
       put(w.air_direction[i], Vec3::Zero());
-      return;
+      continue;
     }
     Vec3 n = w.surface_normal[i];
     if (along_cloth_normal) {
@@ -291,7 +350,11 @@ void add_air_pressure(const Model& m, const State& s, Workspace& w) {
     }
     put(w.air_direction[i], m.area[i] * n);
     sub(w.force[i], (p_atm - s.pocket_pressure[i]) * w.air_direction[i]);
-  });
+  }
+}
+
+void add_air_pressure(const Model& m, const State& s, Workspace& w) {
+  for_each_particle_block(m, [&](int first, int end) { add_air_pressure(m, s, w, first, end); });
 }
 
 // Backward Euler for the air term alone: the force over the step is the one of

@@ -36,7 +36,7 @@ void slow_down(const Model& m, State& s, int i, const Vec3& n, double load, doub
 // forces that presses the particle in; on other obstacles it is that load
 // alone.
 void apply_friction(const Model& m, State& s, const Workspace& w,
-                    const std::vector<std::uint8_t>& touched, double dt) {
+                    const std::vector<std::uint8_t>& touched, double dt, int first, int end) {
   const double mu = m.params.friction.mu;
   if (mu == 0) return;
   const bool with_load = m.params.friction.normal == FrictionNormal::Contact;
@@ -44,40 +44,38 @@ void apply_friction(const Model& m, State& s, const Workspace& w,
   // particle's velocity relative to the surface where it is. A particle
   // held by friction then rides along with it.
   if (pose_of(w.surfaces, m.contact_code())) {
-    for_each_particle(m, [&](int i) {
-      if (!s.contact[i] || m.driven[i]) return;
+    for (int i = first; i < end; ++i) {
+      if (!s.contact[i] || m.driven[i]) continue;
       const Vec3 n = w.surface_normal[i];
       const double pressing = -(w.force[i].dot(n) + w.adhesion[i]);
       const double load = w.adhesion[i] + (with_load && pressing > 0 ? pressing : 0.0);
       const Vec3 surface = surface_velocity(w.surfaces, m.contact_code(), s.x[i]);
       slow_down(m, s, i, n, load, mu, dt, &surface);
-    });
+    }
   } else {
     // On the contact surface, slow_down's arithmetic without a branch (a factor
     // of zero where it does not apply), over columns: a loop that vectorises.
     // w.force holds the step's forces, adhesion included (it is -adhesion·n_s).
-    for_each_particle_block(m, [&](int first, int end) {
-      const double *__restrict nx = w.surface_normal.column(0),
+    const double *__restrict nx = w.surface_normal.column(0),
                              *__restrict ny = w.surface_normal.column(1),
                              *__restrict nz = w.surface_normal.column(2);
-      const double *__restrict fx = w.force.column(0), *__restrict fy = w.force.column(1),
+    const double *__restrict fx = w.force.column(0), *__restrict fy = w.force.column(1),
                              *__restrict fz = w.force.column(2);
-      double* __restrict vx = s.v.column(0), * __restrict vy = s.v.column(1), * __restrict vz = s.v.column(2);
-      double* __restrict xx = s.x.column(0), * __restrict xy = s.x.column(1), * __restrict xz = s.x.column(2);
-      const double* __restrict adhesion = w.adhesion.data(), * __restrict inv_mass =
-                                                                 m.inv_mass.data();
-      const auto acts = [&](int i) { return s.contact[i] && !m.driven[i] ? 1.0 : 0.0; };
-      for_each_chunk(first, end, acts, [&](int i0, int count, const double* gate) {
+    double* __restrict vx = s.v.column(0), * __restrict vy = s.v.column(1), * __restrict vz = s.v.column(2);
+    double* __restrict xx = s.x.column(0), * __restrict xy = s.x.column(1), * __restrict xz = s.x.column(2);
+    const double* __restrict adhesion = w.adhesion.data(), * __restrict inv_mass =
+                                                               m.inv_mass.data();
+    const auto acts = [&](int i) { return s.contact[i] && !m.driven[i] ? 1.0 : 0.0; };
+    for_each_chunk(first, end, acts, [&](int i0, int count, const double* gate) {
 #pragma omp simd
-        for (int k = 0; k < count; ++k) {
-          const int i = i0 + k;
-          const double pressing = -((fx[i] * nx[i] + fy[i] * ny[i] + fz[i] * nz[i]) + adhesion[i]);
-          const double load = adhesion[i] + (with_load && pressing > 0 ? pressing : 0.0);
-          const double dv = mu * load * dt * inv_mass[i];
-          coulomb_clamp(vx[i], vy[i], vz[i], xx[i], xy[i], xz[i], nx[i], ny[i], nz[i], dv,
-                        (gate[k] != 0) & (load > 0), dt);
-        }
-      });
+      for (int k = 0; k < count; ++k) {
+        const int i = i0 + k;
+        const double pressing = -((fx[i] * nx[i] + fy[i] * ny[i] + fz[i] * nz[i]) + adhesion[i]);
+        const double load = adhesion[i] + (with_load && pressing > 0 ? pressing : 0.0);
+        const double dv = mu * load * dt * inv_mass[i];
+        coulomb_clamp(vx[i], vy[i], vz[i], xx[i], xy[i], xz[i], nx[i], ny[i], nz[i], dv,
+                      (gate[k] != 0) & (load > 0), dt);
+      }
     });
   }
   // Off the contact surface, a particle pushed out of another obstacle this
@@ -85,24 +83,28 @@ void apply_friction(const Model& m, State& s, const Workspace& w,
   // They are few: 64 particles' flags are looked at in one vector first (a
   // branch per particle had been 2 % of the step at 201 x 201).
   if (!with_load) return;
-  for_each_particle_block(m, [&](int first, int end) {
-    const std::uint8_t *__restrict driven = m.driven.data(), *__restrict contact = s.contact.data(),
-                                   *__restrict by = touched.data();
-    for (int i0 = first; i0 < end; i0 += 64) {
-      const int i1 = std::min(end, i0 + 64);
-      int any = 0;
+  const std::uint8_t *__restrict driven = m.driven.data(), *__restrict contact = s.contact.data(),
+                                 *__restrict by = touched.data();
+  for (int i0 = first; i0 < end; i0 += 64) {
+    const int i1 = std::min(end, i0 + 64);
+    int any = 0;
 #pragma omp simd reduction(| : any)
-      for (int i = i0; i < i1; ++i) any |= (by[i] != 0) & !contact[i] & !driven[i];
-      if (!any) continue;
-      for (int i = i0; i < i1; ++i) {
-        if (driven[i] || contact[i] || by[i] == 0) continue;
-        const Vec3 n = query_code(m, w.surfaces, by[i], s.x[i]).normal;
-        const Vec3 surface = surface_velocity(w.surfaces, by[i], s.x[i]);
-        slow_down(m, s, i, n, std::max(0.0, -w.force[i].dot(n)), mu, dt,
-                  pose_of(w.surfaces, by[i]) ? &surface : nullptr);
-      }
+    for (int i = i0; i < i1; ++i) any |= (by[i] != 0) & !contact[i] & !driven[i];
+    if (!any) continue;
+    for (int i = i0; i < i1; ++i) {
+      if (driven[i] || contact[i] || by[i] == 0) continue;
+      const Vec3 n = query_code(m, w.surfaces, by[i], s.x[i]).normal;
+      const Vec3 surface = surface_velocity(w.surfaces, by[i], s.x[i]);
+      slow_down(m, s, i, n, std::max(0.0, -w.force[i].dot(n)), mu, dt,
+                pose_of(w.surfaces, by[i]) ? &surface : nullptr);
     }
-  });
+  }
+}
+
+void apply_friction(const Model& m, State& s, const Workspace& w,
+                    const std::vector<std::uint8_t>& touched, double dt) {
+  for_each_particle_block(
+      m, [&](int first, int end) { apply_friction(m, s, w, touched, dt, first, end); });
 }
 
 }  // namespace wetcloth::detail

@@ -11,23 +11,24 @@ namespace wetcloth::detail {
 // humidity field), so that with a uniform ω the forces sum to eq. 13 exactly
 // (with a field, eq. 13 with the border's mean ω in its edge part). The
 // force points along -n_s, toward the surface.
-void add_adhesion(const Model& m, const State& s, Workspace& w) {
+void add_adhesion_rows(const Model& m, const State& s, Workspace& w, int j0, int j1) {
   if (m.contact_surface == SurfaceKind::None) return;  // w.adhesion stays zero, as reset left it
-  std::fill(w.adhesion.begin(), w.adhesion.end(), 0.0);
+  const int first = j0 * m.nu, end = j1 * m.nu;
   // Each particle's own ω (the humidity field); a state without a field (made
   // by hand) has cloth.humidity's everywhere.
   const bool field = s.humidity.size() == static_cast<std::size_t>(m.n);
   const double omega0 = field ? s.humidity[0] : m.params.cloth.humidity;
   const AdhesionConstants c = adhesion_constants(m.params);
-  if (!c.enabled) return;
-  if ((!field || w.humidity.uniform) && c.pressure_per_omega(omega0) == 0 &&
-      c.tension_per_omega(omega0) == 0)
+  if (!c.enabled || ((!field || w.humidity.uniform) && c.pressure_per_omega(omega0) == 0 &&
+                     c.tension_per_omega(omega0) == 0)) {
+    std::fill(w.adhesion.begin() + first, w.adhesion.begin() + end, 0.0);
     return;
+  }
   // A uniform field: eq. 13's two parts once, as before the field.
   const bool per_particle = field && !w.humidity.uniform;
   const double* omega = field ? s.humidity.data() : nullptr;
   // The contact area and its border's particles, in one pass.
-  const auto [s_now, border] = ordered_sums<2>(m, w, [&](int j) {
+  const auto [s_now, border] = ordered_sums_in_rows<2>(m, w, j0, j1, [&](int j) {
     double area = 0;
     int count = 0;
     for (int i = j * m.nu; i < (j + 1) * m.nu; ++i) {
@@ -39,30 +40,33 @@ void add_adhesion(const Model& m, const State& s, Workspace& w) {
   const double two_root_s = 2.0 * std::sqrt(s_now);
   const double pressure0 = c.pressure_per_omega(omega0),
                edge0 = border > 0 ? two_root_s * c.tension_per_omega(omega0) / border : 0.0;
-  for_each_particle_block(m, [&](int first, int end) {
-    const double *__restrict nx = w.surface_normal.column(0),
-                             *__restrict ny = w.surface_normal.column(1),
-                             *__restrict nz = w.surface_normal.column(2);
-    double *__restrict fx = w.force.column(0), *__restrict fy = w.force.column(1),
-                       *__restrict fz = w.force.column(2), *__restrict adhesion = w.adhesion.data();
-    const auto force = [&](int i) {  // zero off the contact region
-      if (!s.contact[i]) return 0.0;
-      if (!per_particle) return pressure0 * m.area[i] + (w.border[i] ? edge0 : 0.0);
-      const double o = omega[i];
-      return c.pressure_per_omega(o) * m.area[i] +
-             (w.border[i] && border > 0 ? two_root_s * c.tension_per_omega(o) / border : 0.0);
-    };
-    for_each_chunk(first, end, force, [&](int i0, int count, const double* f) {
+  const double *__restrict nx = w.surface_normal.column(0),
+                           *__restrict ny = w.surface_normal.column(1),
+                           *__restrict nz = w.surface_normal.column(2);
+  double *__restrict fx = w.force.column(0), *__restrict fy = w.force.column(1),
+                     *__restrict fz = w.force.column(2), *__restrict adhesion = w.adhesion.data();
+  const auto force = [&](int i) {  // zero off the contact region
+    if (!s.contact[i]) return 0.0;
+    if (!per_particle) return pressure0 * m.area[i] + (w.border[i] ? edge0 : 0.0);
+    const double o = omega[i];
+    return c.pressure_per_omega(o) * m.area[i] +
+           (w.border[i] && border > 0 ? two_root_s * c.tension_per_omega(o) / border : 0.0);
+  };
+  for_each_chunk(first, end, force, [&](int i0, int count, const double* f) {
 #pragma omp simd
-      for (int k = 0; k < count; ++k) {
-        const int i = i0 + k;
-        adhesion[i] = f[k];
-        fx[i] -= f[k] * nx[i];
-        fy[i] -= f[k] * ny[i];
-        fz[i] -= f[k] * nz[i];
-      }
-    });
+    for (int k = 0; k < count; ++k) {
+      const int i = i0 + k;
+      adhesion[i] = f[k];
+      fx[i] -= f[k] * nx[i];
+      fy[i] -= f[k] * ny[i];
+      fz[i] -= f[k] * nz[i];
+    }
   });
+}
+
+void add_adhesion(const Model& m, const State& s, Workspace& w) {
+  w.row_sums.resize(2 * std::size_t(m.nv));
+  for_each_row_block(m, [&](int j0, int j1, int) { add_adhesion_rows(m, s, w, j0, j1); });
 }
 
 }  // namespace wetcloth::detail

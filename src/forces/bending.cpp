@@ -628,6 +628,9 @@ void bending_rows_xyz(const Model& m, const State& s, Vec3Array& f, int first, i
 }
 
 // f -= Q x on differences, so that a cloth far from the origin loses no precision.
+void add_bending_forces(const Model& m, const State& s, Vec3Array& f, int first, int end) {
+  if (!m.topology->bending.start.empty()) bending_rows_xyz<false>(m, s, f, first, end);
+}
 void add_bending_forces(const Model& m, const State& s, Vec3Array& f) {
   if (m.topology->bending.start.empty()) return;
   for_each_particle_block(

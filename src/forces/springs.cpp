@@ -59,14 +59,26 @@ void gather_row(const double* const fwd[kEdges][kSpringFields],
   }
 }
 
+// Where the edge rows live in w.spring_rows: the zero row, which stands for
+// edges above the first row, then each thread's ring of kRing edge rows.
+struct EdgeRows {
+  int stride;              // a field's row: nu and kReach either side
+  std::size_t per_row;     // an edge row: every offset's fields
+  std::size_t per_thread;  // a thread's ring
+  explicit EdgeRows(const Model& m)
+      : stride(m.nu + 2 * kReach),
+        per_row(std::size_t(kEdges) * kSpringFields * stride),
+        per_thread(kRing * per_row) {}
+};
+
 template <bool damped>
-void set_spring_forces(const Model& m, const State& s, Workspace& w) {
-  const int nu = m.nu, stride = nu + 2 * kReach;
-  const std::size_t per_row = std::size_t(kEdges) * kSpringFields * stride;
-  const std::size_t per_thread = kRing * per_row;  // edge rows
-  w.spring_rows.resize(kSpringFields * stride + per_thread * m.threads);
-  double* const zero_row = w.spring_rows.data();  // stands for edges above the first row
-  std::fill(zero_row, zero_row + kSpringFields * stride, 0.0);
+void set_spring_force_rows(const Model& m, const State& s, Workspace& w, int j0, int j1,
+                           int thread) {
+  const int nu = m.nu;
+  const EdgeRows rows(m);
+  const int stride = rows.stride;
+  const std::size_t per_row = rows.per_row;
+  double* const zero_row = w.spring_rows.data();
   const SpringColumns<double> c{s.x.column(0), s.x.column(1), s.x.column(2),
                                 s.v.column(0), s.v.column(1), s.v.column(2)};
   // The offsets that hold springs, in order: with the quadratic bending,
@@ -78,59 +90,72 @@ void set_spring_forces(const Model& m, const State& s, Workspace& w) {
     const StencilEdge& st = m.topology->stencil[e];
     if (st.k != 0 || (damped && st.damping != 0)) live[lives++] = e;
   }
-  for_each_row_block(m, [&](int j0, int j1, int thread) {
-    double* const ring = zero_row + kSpringFields * stride + per_thread * thread;
-    // Field k of offset e's edge row j, at its particle i = 0.
-    const auto edges = [&](int j, int e, int k) {
-      return ring + (j % kRing) * per_row + (std::size_t(e) * kSpringFields + k) * stride + kReach;
-    };
-    for (int slot = 0; slot < kRing; ++slot)
-      for (int e = 0; e < kEdges; ++e) {
-        const auto [lo, hi] = spring_edge_span(m, m.topology->stencil[e]);
-        for (int k = 0; k < kSpringFields; ++k) {
-          double* const row = edges(slot, e, k);
-          std::fill(row - kReach, row + lo, 0.0);
-          std::fill(row + hi, row + nu + kReach, 0.0);
-        }
+  double* const ring = zero_row + kSpringFields * stride + rows.per_thread * thread;
+  // Field k of offset e's edge row j, at its particle i = 0.
+  const auto edges = [&](int j, int e, int k) {
+    return ring + (j % kRing) * per_row + (std::size_t(e) * kSpringFields + k) * stride + kReach;
+  };
+  for (int slot = 0; slot < kRing; ++slot)
+    for (int e = 0; e < kEdges; ++e) {
+      const auto [lo, hi] = spring_edge_span(m, m.topology->stencil[e]);
+      for (int k = 0; k < kSpringFields; ++k) {
+        double* const row = edges(slot, e, k);
+        std::fill(row - kReach, row + lo, 0.0);
+        std::fill(row + hi, row + nu + kReach, 0.0);
       }
-    for (int j = std::max(0, j0 - kReach); j < j1; ++j) {
-      for (const int e : std::span(live, lives)) {
-        if (j + m.topology->stencil[e].dj >= m.nv) continue;  // gathered from the zero row instead
-        double* out[kSpringFields];
-        for (int k = 0; k < kSpringFields; ++k) out[k] = edges(j, e, k);
-        spring_edge_row<double, damped>(m, c, m.topology->stencil[e], j, out);
-      }
-      if (j < j0) continue;
-      // Row j's particles gather: per offset, the edge starting here (force
-      // +F) and the one ending here, which starts at (i - di, j - dj) (-F).
-      const double* fwd[kEdges][kSpringFields];
-      const double* bwd[kEdges][kSpringFields];
-      for (int q = 0; q < lives; ++q) {
-        const int e = live[q];
-        const StencilEdge& st = m.topology->stencil[e];
-        for (int k = 0; k < kSpringFields; ++k) {
-          fwd[q][k] = j + st.dj < m.nv ? edges(j, e, k) : zero_row + kReach;
-          bwd[q][k] = (j >= st.dj ? edges(j - st.dj, e, k) : zero_row + kReach) - st.di;
-        }
-      }
-      double* force[kSpringFields];
-      for (int k = 0; k < kSpringFields; ++k) force[k] = w.force.column(k) + j * nu;
-      gather_row(fwd, bwd, lives, nu, force);
     }
-  });
+  for (int j = std::max(0, j0 - kReach); j < j1; ++j) {
+    for (const int e : std::span(live, lives)) {
+      if (j + m.topology->stencil[e].dj >= m.nv) continue;  // gathered from the zero row instead
+      double* out[kSpringFields];
+      for (int k = 0; k < kSpringFields; ++k) out[k] = edges(j, e, k);
+      spring_edge_row<double, damped>(m, c, m.topology->stencil[e], j, out);
+    }
+    if (j < j0) continue;
+    // Row j's particles gather: per offset, the edge starting here (force
+    // +F) and the one ending here, which starts at (i - di, j - dj) (-F).
+    const double* fwd[kEdges][kSpringFields];
+    const double* bwd[kEdges][kSpringFields];
+    for (int q = 0; q < lives; ++q) {
+      const int e = live[q];
+      const StencilEdge& st = m.topology->stencil[e];
+      for (int k = 0; k < kSpringFields; ++k) {
+        fwd[q][k] = j + st.dj < m.nv ? edges(j, e, k) : zero_row + kReach;
+        bwd[q][k] = (j >= st.dj ? edges(j - st.dj, e, k) : zero_row + kReach) - st.di;
+      }
+    }
+    double* force[kSpringFields];
+    for (int k = 0; k < kSpringFields; ++k) force[k] = w.force.column(k) + j * nu;
+    gather_row(fwd, bwd, lives, nu, force);
+  }
 }
 
 }  // namespace
+
+void prepare_spring_rows(const Model& m, Workspace& w) {
+  const EdgeRows rows(m);
+  w.spring_rows.resize(kSpringFields * rows.stride + rows.per_thread * m.threads);
+  std::fill(w.spring_rows.begin(), w.spring_rows.begin() + kSpringFields * rows.stride, 0.0);
+}
+
+void set_spring_force_rows(const Model& m, const State& s, Workspace& w, bool with_damping, int j0,
+                           int j1, int thread) {
+  if (with_damping)
+    set_spring_force_rows<true>(m, s, w, j0, j1, thread);
+  else
+    set_spring_force_rows<false>(m, s, w, j0, j1, thread);
+}
 
 void set_spring_forces(const Model& m, const State& s, Workspace& w, bool with_damping) {
   if (!m.grid) {
     for_each_particle(m, [&](int i) { put(w.force[i], Vec3::Zero()); });
     add_spring_forces_mesh(m, s, w, with_damping);
-  } else if (with_damping) {
-    set_spring_forces<true>(m, s, w);
-  } else {
-    set_spring_forces<false>(m, s, w);
+    return;
   }
+  prepare_spring_rows(m, w);
+  for_each_row_block(m, [&](int j0, int j1, int thread) {
+    set_spring_force_rows(m, s, w, with_damping, j0, j1, thread);
+  });
 }
 
 // Eq. 1's damping over a step h, by backward Euler with additive operator

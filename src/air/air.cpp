@@ -370,7 +370,8 @@ void add_air_pressure(const Model& m, const State& s, Workspace& w) {
 // make explicit steps blow up. With `move`, after the constraints: the
 // velocities the strain limiter gave are in Σ b·v, and each free particle
 // moves by Δt times its change (docs/model.md section 8).
-bool correct_air_implicitly(const Model& m, State& s, Workspace& w, double dt, bool move) {
+bool correct_air_implicitly(const Model& m, State& s, Workspace& w, double dt, bool move,
+                            const ParticleChunks& after) {
   const std::size_t pockets = s.pocket_air.size();
   // Air open to the room (or `off`) has no stiffness and nothing to seep:
   // every change below would be zero.
@@ -393,31 +394,49 @@ bool correct_air_implicitly(const Model& m, State& s, Workspace& w, double dt, b
     sums[0] += b.dot(s.v[i]) + given_back(i, k) * b_a;
     sums[1] += b_a;
   };
-  // By rows on the threads for one pocket, in particle order for the pockets of `vented`.
-  if (pockets == 1) {
-    const auto sums = ordered_sums<2>(m, w, [&](int j) {
-      std::array<double, 2> row{};
-      for (int i = j * m.nu; i < (j + 1) * m.nu; ++i)
-        if (s.pocket[i] == 0) add_terms(i, 0, row.data());
-      return row;
-    });
-    std::copy(sums.begin(), sums.end(), w.pocket_sums.begin());
-  } else {
-    for (int i = 0; i < m.n; ++i)
-      if (const int k = s.pocket[i]; k >= 0) add_terms(i, k, &w.pocket_sums[3 * k]);
-  }
-  for (std::size_t k = 0; k < pockets; ++k) {
+  // Each particle's change, from its pocket's sums (3 per pocket: Σ b·v turned
+  // into the pocket's ΔP_end term, Σ b·M⁻¹a, the seeped share), over [first, end).
+  const auto apply = [&](int first, int end, const double* pocket_sums) {
+    for (int i = first; i < end; ++i) {
+      const int k = s.pocket[i];
+      if (k < 0) continue;
+      const double dv = given_back(i, k) - pocket_sums[3 * k];
+      if (dv == 0 || (move && (m.driven[i] || s.held[i]))) continue;
+      const Vec3 change = (dv * m.inv_mass[i]) * w.air_direction[i];
+      add(s.v[i], change);
+      if (move) add(s.x[i], dt * change);
+    }
+  };
+  const auto solve = [&](std::size_t k, double* pocket_sums) {
     const double c = dt * dt * stiffness(s.pocket_air[k], dt);
-    w.pocket_sums[3 * k] = c * w.pocket_sums[3 * k] / (1.0 + c * w.pocket_sums[3 * k + 1]);
+    pocket_sums[3 * k] = c * pocket_sums[3 * k] / (1.0 + c * pocket_sums[3 * k + 1]);
+  };
+  // One pocket: by rows on the threads, in one region. Each thread adds up
+  // the rows in order (ordered_sums_in_rows) and solves the pocket alike, then
+  // changes its own particles and runs `after` on them.
+  if (pockets == 1) {
+    w.row_sums.resize(2 * std::size_t(m.nv));
+    for_each_row_block(m, [&](int j0, int j1, int) {
+      const auto row_sums = ordered_sums_in_rows<2>(m, w, j0, j1, [&](int j) {
+        std::array<double, 2> row{};
+        for (int i = j * m.nu; i < (j + 1) * m.nu; ++i)
+          if (s.pocket[i] == 0) add_terms(i, 0, row.data());
+        return row;
+      });
+      double sums[3] = {row_sums[0], row_sums[1], w.pocket_sums[2]};
+      solve(0, sums);
+      apply(j0 * m.nu, j1 * m.nu, sums);
+      if (after) after(j0 * m.nu, j1 * m.nu);
+    });
+    return true;
   }
-  for_each_particle(m, [&](int i) {
-    const int k = s.pocket[i];
-    if (k < 0) return;
-    const double dv = given_back(i, k) - w.pocket_sums[3 * k];
-    if (dv == 0 || (move && (m.driven[i] || s.held[i]))) return;
-    const Vec3 change = (dv * m.inv_mass[i]) * w.air_direction[i];
-    add(s.v[i], change);
-    if (move) add(s.x[i], dt * change);
+  // The pockets of `vented`, in particle order.
+  for (int i = 0; i < m.n; ++i)
+    if (const int k = s.pocket[i]; k >= 0) add_terms(i, k, &w.pocket_sums[3 * k]);
+  for (std::size_t k = 0; k < pockets; ++k) solve(k, w.pocket_sums.data());
+  for_each_particle_block(m, [&](int first, int end) {
+    apply(first, end, w.pocket_sums.data());
+    if (after) after(first, end);
   });
   return true;
 }

@@ -445,10 +445,9 @@ void add_gravity(const Model& m, Vec3Array& f, int first, int end);
 void add_viscous_damping(const Model& m, const State& s, Vec3Array& f, int first, int end);
 void add_wind(const Model& m, const State& s, const Workspace& w, Vec3Array& f, int first, int end);
 // The three into w.force in one pass (the viscous drag with `viscous`), a
-// chunk of particles at a time (for_each_particle_chunk): a pass and a
-// parallel region each had cost 1-2 % of the step. With `zero_first`,
-// w.force is zeroed first.
-// The same over a thread's particles [first, end), in chunks of kCachedParticles.
+// chunk of kCachedParticles at a time: a pass and a parallel region each had
+// cost 1-2 % of the step. With `zero_first`, w.force is zeroed first. Over
+// particles [first, end), or (the second) the whole cloth.
 inline void add_own_forces(const Model& m, const State& s, Workspace& w, bool viscous,
                            bool zero_first, int first, int end) {
   for (int a = first; a < end; a += kCachedParticles) {

@@ -3,7 +3,9 @@
 // which reach it through detail::workspace).
 #pragma once
 
+#include <algorithm>
 #include <array>
+#include <compare>
 #include <cstdint>
 #include <vector>
 
@@ -30,6 +32,35 @@ struct CollisionPair {
 struct NormalsScratch {
   std::vector<double> quad_normals, chequer;
   int chequer_nu = 0;
+};
+
+// A search of the spatial hash (geometry/spatial_hash.hpp): the cells it
+// visits, from lo to lo + span on each axis (span at most 3), and the
+// particle it searches around (32 B). Sorted, searches that visit the same
+// cells are side by side.
+struct NearSearch {
+  std::array<long long, 3> lo;
+  std::array<std::uint8_t, 3> span;
+  int query;
+  bool same_cells(const NearSearch& o) const { return lo == o.lo && span == o.span; }
+  auto operator<=>(const NearSearch&) const = default;
+};
+
+// A thread's scratch for its searches: the points (x, y, z) and particles of
+// the cells a search visits, gathered in runs, each one's squared distance
+// and whether it is kept.
+struct NearScratch {
+  std::vector<double> x, y, z, len2;
+  std::vector<int> index;
+  std::vector<std::uint8_t> keep;  // 8 longer: read eight at a time
+  void make_room(int count) {
+    const auto n = static_cast<std::size_t>(count);
+    if (n <= x.size()) return;
+    const std::size_t size = std::max(n, 2 * x.size());
+    for (auto* v : {&x, &y, &z, &len2}) v->resize(size);
+    index.resize(size);
+    keep.resize(size + 8);
+  }
 };
 
 // integrator.threads = 0: the step's threads are chosen as it runs. Now and
@@ -128,9 +159,13 @@ struct Workspace {
   std::vector<std::uint8_t> strain_saved;      // x_before holds where it started this call
   std::vector<int> strain_changed;             // particles moved in this call
   Vec3 handle_force = Vec3::Zero();            // force the first pulling handle exerts, N
-  // Self-collision spatial hash (counting sort by cell).
+  // Self-collision spatial hash (counting sort by cell), its points in the
+  // buckets' order, and a search's scratch on each thread.
   std::vector<int> cell_start, cell_entries, particle_cell;
-  double hash_cell = 0;                 // the side of the hash's cells
+  std::vector<double> hash_x, hash_y, hash_z;
+  double hash_cell = 0;               // the side of the hash's cells
+  std::vector<NearSearch> near_plan;  // the searches, in order of their cells
+  std::vector<NearScratch> near_scratch;
   std::vector<std::uint8_t> colliding;  // in a pair within d_t (the pairs' ends, listed once)
   std::vector<int> colliding_particles;
   std::vector<CollisionPair> collision_pairs;

@@ -110,18 +110,25 @@ double farthest(const Model& m, const AnchorGap& gap) {
   return most;
 }
 
-// Grid neighbours never collide: within `reach` grid steps; a mesh cloth's
-// particles, within its own reach along the springs (Topology::ring).
-struct NearInGrid {
-  int nu, reach;
-  bool grid;
-  const int* ring;
+// Grid neighbours never collide: within `reach` grid steps, which the
+// search leaves out itself (GridNear); a mesh cloth's particles, within its
+// own reach along the springs (Topology::ring).
+struct NearOnCloth {
+  GridNear grid;    // reach -1 on a mesh cloth
+  const int* ring;  // null on a grid
   const int* ring_start;
   bool operator()(int i, int j) const {
-    if (!grid) return std::binary_search(ring + ring_start[i], ring + ring_start[i + 1], j);
-    return std::abs(i % nu - j % nu) <= reach && std::abs(i / nu - j / nu) <= reach;
+    if (ring) return std::binary_search(ring + ring_start[i], ring + ring_start[i + 1], j);
+    return grid(i, j);
   }
 };
+
+// The cells of side `cell` a cloth's surface crosses, about: its area, n
+// spacing², over a cell's, times up to √3 for a plane at a slant (2 here).
+std::size_t crossed_cells(const Model& m, double cell) {
+  const double per_particle = std::min(1.0, 2 * m.spacing * m.spacing / (cell * cell));
+  return static_cast<std::size_t>(std::ceil(m.n * per_particle));
+}
 
 // Forgets which particles were anchored again since the hash was built.
 void clear_stale(Workspace& w) {
@@ -129,35 +136,37 @@ void clear_stale(Workspace& w) {
   w.hash_stale.clear();
 }
 
-// Every particle anchored where it is and the whole cloth searched, by
-// blocks of rows on the step's threads.
+// Every particle anchored where it is and the whole cloth searched, the
+// searches shared between the step's threads.
 void search_whole_cloth(const Model& m, const State& s, Workspace& w, double radius,
-                        const NearInGrid& near_in_grid) {
+                        const NearOnCloth& near) {
   auto& anchor = w.candidates_anchor;
   w.candidates_radius = radius;
   anchor = s.x;
   w.candidates_rotation = Eigen::Matrix3d::Identity();
   w.candidates_motion = Vec3::Zero();
-  build_hash(anchor, radius, w, m.threads);
+  build_hash(anchor, radius, w, m.threads, crossed_cells(m, radius));
   clear_stale(w);
+  auto& plan = w.near_plan;
+  plan_searches(anchor, w.cell_entries, radius, w, plan);
+  w.near_scratch.resize(std::max(1, m.threads));
+  const auto search = [&](std::size_t first, std::size_t last, int t, auto& list) {
+    for_each_near(anchor, radius, w, w.near_scratch[t], plan, first, last, true, near.grid,
+                  [&](int i, int j, double) {
+                    if (!near(i, j)) list.push_back({i, j});
+                  });
+  };
   if (m.threads <= 1) {  // straight into the list: no second copy of the pairs
     w.candidates.clear();
-    for_each_close_pair(anchor, radius, w, near_in_grid, [&](int i, int j, const Vec3&, double) {
-      w.candidates.push_back({i, j});
-    });
+    search(0, plan.size(), 0, w.candidates);
     std::sort(w.candidates.begin(), w.candidates.end());
     return;
   }
   w.thread_candidates.resize(m.threads);
   for (auto& list : w.thread_candidates) list.clear();  // the runtime may give fewer threads
   for_each_row_block(m, [&](int j0, int j1, int t) {
-    auto& list = w.thread_candidates[t];
-    for_each_close_pair(
-        anchor, radius, w, near_in_grid,
-        [&](int i, int j, const Vec3&, double) {
-          list.push_back({i, j});
-        },
-        j0 * m.nu, j1 * m.nu);
+    const std::size_t count = plan.size();
+    search(count * j0 / m.nv, count * j1 / m.nv, t, w.thread_candidates[t]);
   });
   w.candidates.clear();
   for (const auto& list : w.thread_candidates)
@@ -169,36 +178,39 @@ void search_whole_cloth(const Model& m, const State& s, Workspace& w, double rad
 // particles every other step, and a build costs a pass over the cloth): a
 // mover finds through it the particles it holds where they are, and the
 // stale ones (anchored again since) and the other movers one by one. Once
-// those are many, it is built again. The pairs are the same either way,
-// found by the same sums. take(i, j, len2) is given each pair within radius.
+// those are many, it is built again. The pairs are the same either way (but
+// for a pair at the radius itself, which the rounding of a sum may tip: one
+// that is never within d_t). take(i, j, len2) is given each pair within
+// radius, the grid's neighbours left out.
 template <class Take>
-void find_mover_pairs(const Model& m, Workspace& w, double radius, Take&& take) {
+void find_mover_pairs(const Model& m, Workspace& w, double radius, const GridNear& grid,
+                      Take&& take) {
   const auto& anchor = w.candidates_anchor;
   const auto& movers = w.candidate_movers;
   const auto& moved = w.candidate_moved;
   auto& stale = w.hash_stale;
   auto& is_stale = w.hash_stale_flag;
   constexpr std::size_t kMostStale = 256;
-  if (stale.size() + movers.size() > kMostStale) {
-    build_hash(anchor, radius, w, m.threads);
+  const bool build = stale.size() + movers.size() > kMostStale;
+  if (build) {
+    build_hash(anchor, radius, w, m.threads, crossed_cells(m, radius));
     clear_stale(w);
-    for (int i : movers)
-      for_each_near(anchor, radius, w, anchor[i], i, -1, [&](int j, const Vec3&, double len2) {
-        if (!(moved[j] && j < i)) take(i, j, len2);  // j < i: found from j
-      });
-    return;
   }
+  plan_searches(anchor, movers, radius, w, w.near_plan);
+  w.near_scratch.resize(std::max<std::size_t>(1, w.near_scratch.size()));
+  for_each_near(anchor, radius, w, w.near_scratch[0], w.near_plan, 0, w.near_plan.size(), false,
+                grid, [&](int i, int j, double len2) {
+                  if (build ? !(moved[j] && j < i)  // j < i: found from j
+                            : !moved[j] && !is_stale[j])
+                    take(i, j, len2);
+                });
+  if (build) return;
   const double r2 = radius * radius;
   const auto check = [&](int i, int j) {
-    const Vec3 y = anchor[i];  // as for_each_near has it
-    const Vec3 d = y - anchor[j];
-    const double len2 = d.squaredNorm();
+    const double len2 = (anchor[i] - anchor[j]).squaredNorm();
     if (len2 < r2) take(i, j, len2);
   };
   for (int i : movers) {
-    for_each_near(anchor, radius, w, anchor[i], i, -1, [&](int j, const Vec3&, double len2) {
-      if (!moved[j] && !is_stale[j]) take(i, j, len2);
-    });
     for (const int j : stale)
       if (!moved[j]) check(i, j);
     for (const int j : movers)
@@ -215,7 +227,7 @@ void find_mover_pairs(const Model& m, Workspace& w, double radius, Take&& take) 
 // The movers' pairs, dropped and searched again from their new anchors.
 // Their flags are set here and cleared at the end: no pass over the cloth.
 void search_movers_again(const Model& m, const State& s, Workspace& w, double radius,
-                         const NearInGrid& near_in_grid, const RigidMotion& motion) {
+                         const NearOnCloth& near, const RigidMotion& motion) {
   auto& anchor = w.candidates_anchor;
   const auto& movers = w.candidate_movers;
   auto& moved = w.candidate_moved;
@@ -229,8 +241,8 @@ void search_movers_again(const Model& m, const State& s, Workspace& w, double ra
   // a flat cloth at 401 x 401 lists a million pairs, too many to sort again.
   std::erase_if(list, [&](const auto& c) { return moved[c[0]] || moved[c[1]]; });
   const auto kept = static_cast<std::ptrdiff_t>(list.size());
-  find_mover_pairs(m, w, radius, [&](int i, int j, double len2) {
-    if (len2 == 0 || near_in_grid(i, j)) return;
+  find_mover_pairs(m, w, radius, near.grid, [&](int i, int j, double len2) {
+    if (len2 == 0 || near(i, j)) return;
     list.push_back({std::min(i, j), std::max(i, j)});
   });
   for (int i : movers) moved[i] = 0;
@@ -279,8 +291,8 @@ void refresh_collision_candidates(const Model& m, const State& s, Workspace& w) 
   const double margin =
       std::max(std::min(0.5 * dt_dist, 1.5 * step), std::min({dt_dist, 1.5 * step, flat_room}));
   const double radius = dt_dist + margin;
-  const NearInGrid near_in_grid{m.nu, reach, m.grid, m.topology->ring.data(),
-                                m.topology->ring_start.data()};
+  const NearOnCloth near{m.grid ? GridNear(m.nu, reach) : GridNear(),
+                         m.grid ? nullptr : m.topology->ring.data(), m.topology->ring_start.data()};
   const auto& anchor = w.candidates_anchor;
   auto& movers = w.candidate_movers;
   movers.clear();
@@ -306,9 +318,9 @@ void refresh_collision_candidates(const Model& m, const State& s, Workspace& w) 
   }
   w.hash_stale_flag.resize(m.n, 0);
   if (search_all)
-    search_whole_cloth(m, s, w, radius, near_in_grid);
+    search_whole_cloth(m, s, w, radius, near);
   else if (!movers.empty())
-    search_movers_again(m, s, w, radius, near_in_grid, motion);
+    search_movers_again(m, s, w, radius, near, motion);
 }
 
 void add_self_collision(const Model& m, const State& s, Workspace& w, bool with_damping) {

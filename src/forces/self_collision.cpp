@@ -177,8 +177,8 @@ void search_whole_cloth(const Model& m, const State& s, Workspace& w, double rad
 // The hash is not built again for a few movers (a pulled handle moves a few
 // particles every other step, and a build costs a pass over the cloth): a
 // mover finds through it the particles it holds where they are, and the
-// stale ones (anchored again since) and the other movers one by one. Once
-// those are many, it is built again. The pairs are the same either way (but
+// stale ones (anchored again since) and the other movers in a list of their
+// own. Once those are many, it is built again. The pairs are the same either way (but
 // for a pair at the radius itself, which the rounding of a sum may tip: one
 // that is never within d_t). take(i, j, len2) is given each pair within
 // radius, the grid's neighbours left out.
@@ -196,26 +196,37 @@ void find_mover_pairs(const Model& m, Workspace& w, double radius, const GridNea
     build_hash(anchor, radius, w, m.threads, crossed_cells(m, radius));
     clear_stale(w);
   }
+  // A pair of movers is found from both: taken from the first.
+  const auto take_once = [&](int i, int j, double len2) {
+    if (!(moved[j] && j < i)) take(i, j, len2);
+  };
   plan_searches(anchor, movers, radius, w, w.near_plan);
   w.near_scratch.resize(std::max<std::size_t>(1, w.near_scratch.size()));
-  for_each_near(anchor, radius, w, w.near_scratch[0], w.near_plan, 0, w.near_plan.size(), false,
-                grid, [&](int i, int j, double len2) {
-                  if (build ? !(moved[j] && j < i)  // j < i: found from j
-                            : !moved[j] && !is_stale[j])
+  auto& scratch = w.near_scratch[0];
+  for_each_near(anchor, radius, w, scratch, w.near_plan, 0, w.near_plan.size(), false, grid,
+                [&](int i, int j, double len2) {
+                  if (build)
+                    take_once(i, j, len2);
+                  else if (!moved[j] && !is_stale[j])  // where the hash has them
                     take(i, j, len2);
                 });
   if (build) return;
-  const double r2 = radius * radius;
-  const auto check = [&](int i, int j) {
-    const double len2 = (anchor[i] - anchor[j]).squaredNorm();
-    if (len2 < r2) take(i, j, len2);
+  // The stale particles and the movers, where they are now: gathered once,
+  // tested against each mover.
+  int count = 0;
+  scratch.make_room(static_cast<int>(stale.size() + movers.size()));
+  const auto gather = [&](int j) {
+    scratch.index[count] = j;
+    scratch.x[count] = anchor[j].x();
+    scratch.y[count] = anchor[j].y();
+    scratch.z[count] = anchor[j].z();
+    ++count;
   };
-  for (int i : movers) {
-    for (const int j : stale)
-      if (!moved[j]) check(i, j);
-    for (const int j : movers)
-      if (j > i) check(i, j);
-  }
+  for (const int j : stale)
+    if (!moved[j]) gather(j);
+  for (const int j : movers) gather(j);
+  for (const int i : movers)
+    test_gathered(scratch, count, anchor[i], i, radius * radius, -1, grid, take_once);
   stale.reserve(kMostStale);  // never more: no allocation once warm
   for (const int i : movers)
     if (!is_stale[i]) {

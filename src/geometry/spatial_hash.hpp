@@ -129,15 +129,48 @@ void plan_searches(const Points& y, const Queries& queries, double radius, const
   std::sort(plan.begin(), plan.end());
 }
 
+// Calls fn(i, j, |d|²) with d = y - x_j for each of the `count` points x_j
+// (particles j) gathered in s with 0 < |d|² < r2, j > after, and not near(i,
+// j), in their order. One vectorised pass with no branch (& for &&) finds
+// them; the few it keeps are then given.
+template <class Fn>
+void test_gathered(NearScratch& s, int count, const Vec3& y, int i, double r2, int after,
+                   const GridNear& near, Fn& fn) {
+  const double yx = y.x(), yy = y.y(), yz = y.z();
+  const double *gx = s.x.data(), *gy = s.y.data(), *gz = s.z.data();
+  const int* gj = s.index.data();
+  double* len2 = s.len2.data();
+  std::uint8_t* keep = s.keep.data();
+  const int nu = near.nu, reach = near.reach, vi = near.row(i), ui = i - vi * nu;
+  const double inv_nu = near.inv_nu;
+#pragma omp simd
+  for (int e = 0; e < count; ++e) {
+    const double dx = yx - gx[e], dy = yy - gy[e], dz = yz - gz[e];
+    const double l2 = dx * dx + dy * dy + dz * dz;
+    const int j = gj[e], vj = static_cast<int>((j + 0.5) * inv_nu), uj = j - vj * nu;
+    const bool grid_near = (std::abs(vj - vi) <= reach) & (std::abs(uj - ui) <= reach);
+    len2[e] = l2;
+    keep[e] = (l2 < r2) & (l2 != 0) & (j > after) & !grid_near;
+  }
+  for (int e = count; e % 8 != 0; ++e) keep[e] = 0;
+  for (int e = 0; e < count; e += 8) {  // eight flags a word: most are all zero
+    std::uint64_t flags;
+    std::memcpy(&flags, keep + e, 8);
+    for (; flags != 0; flags &= flags - 1) {  // a flag is a byte's lowest bit
+      const int k = e + std::countr_zero(flags) / 8;
+      fn(i, gj[k], len2[k]);
+    }
+  }
+}
+
 // Calls fn(i, j, |d|²) with d = y[i] - x[j], for the searches plan[first,
 // last) (plan_searches) and every particle j of the hash with 0 < |d| <
 // radius, j > i if only_after, and not near(i, j): j = i and points that
 // coincide are never given. A particle within the radius is in a cell the
 // search visits, so in one of those cells' buckets, each gathered once; one
 // of another cell that shares a bucket is beyond the radius. The gathered
-// points are tested in one vectorised pass a search, the few it keeps then
-// given in their order. Around a cloth, a surface, cells of the radius hold
-// about half the particles of cells of twice it, and the buckets need no
+// points are tested in one vectorised pass a search (test_gathered). Around a cloth, a surface,
+// cells of the radius hold about half the particles of cells of twice it, and the buckets need no
 // cell's coordinates (docs/performance.md, seventeenth stop).
 template <class Points, class Fn>
 void for_each_near(const Points& y, double radius, const Workspace& w, NearScratch& s,
@@ -183,33 +216,7 @@ void for_each_near(const Points& y, double radius, const Workspace& w, NearScrat
       gathered = &search;
     }
     const int i = search.query;
-    const double yx = y[i].x(), yy = y[i].y(), yz = y[i].z();
-    const int after = only_after ? i : -1, vi = near.row(i), ui = i - vi * near.nu;
-    const double *gx = s.x.data(), *gy = s.y.data(), *gz = s.z.data();
-    const int* gj = s.index.data();
-    double* len2 = s.len2.data();
-    std::uint8_t* keep = s.keep.data();
-    const int nu = near.nu, reach = near.reach;
-    const double inv_nu = near.inv_nu;
-    // No branch in the loop (& for &&): it vectorises.
-#pragma omp simd
-    for (int e = 0; e < count; ++e) {
-      const double dx = yx - gx[e], dy = yy - gy[e], dz = yz - gz[e];
-      const double l2 = dx * dx + dy * dy + dz * dz;
-      const int j = gj[e], vj = static_cast<int>((j + 0.5) * inv_nu), uj = j - vj * nu;
-      const bool grid_near = (std::abs(vj - vi) <= reach) & (std::abs(uj - ui) <= reach);
-      len2[e] = l2;
-      keep[e] = (l2 < r2) & (l2 != 0) & (j > after) & !grid_near;
-    }
-    for (int e = count; e % 8 != 0; ++e) keep[e] = 0;
-    for (int e = 0; e < count; e += 8) {  // eight flags a word: most are all zero
-      std::uint64_t flags;
-      std::memcpy(&flags, keep + e, 8);
-      for (; flags != 0; flags &= flags - 1) {  // a flag is a byte's lowest bit
-        const int k = e + std::countr_zero(flags) / 8;
-        fn(i, gj[k], len2[k]);
-      }
-    }
+    test_gathered(s, count, y[i], i, r2, only_after ? i : -1, near, fn);
   }
 }
 

@@ -187,6 +187,7 @@ void for_each_near(const Points& y, double radius, const Workspace& w, NearScrat
     const NearSearch& search = plan[q];
     if (!gathered || !search.same_cells(*gathered)) {  // gather the cells' entries
       std::uint32_t seen[64];
+      std::uint64_t seen_bits = 0;
       int buckets = 0;
       count = 0;
       const auto& lo = search.lo;
@@ -195,9 +196,14 @@ void for_each_near(const Points& y, double radius, const Workspace& w, NearScrat
         for (long long oy = lo[1]; oy <= lo[1] + span[1]; ++oy)
           for (long long ox = lo[0]; ox <= lo[0] + span[0]; ++ox) {
             const std::uint32_t c = hash_cell(ox, oy, oz, mask);
-            if (std::find(seen, seen + buckets, c) != seen + buckets) continue;
+            // A bucket's bit among 64: only one whose bit is set may have
+            // been seen (27 buckets: most are not looked for in the list).
+            const std::uint64_t bit = std::uint64_t{1} << (c & 63);
+            if ((seen_bits & bit) && std::find(seen, seen + buckets, c) != seen + buckets) continue;
+            seen_bits |= bit;
             seen[buckets++] = c;
             const int from = w.cell_start[c], to = w.cell_start[c + 1];
+            if (from == to) continue;  // most cells around a surface are empty
             s.make_room(count + (to - from));
             const int* entries = w.cell_entries.data() + from;
             int* index = s.index.data() + count;

@@ -159,10 +159,9 @@ struct Workspace {
   std::vector<std::uint8_t> strain_saved;      // x_before holds where it started this call
   std::vector<int> strain_changed;             // particles moved in this call
   Vec3 handle_force = Vec3::Zero();            // force the first pulling handle exerts, N
-  // Self-collision spatial hash (counting sort by cell), its points in the
-  // buckets' order, and a search's scratch on each thread.
+  // Self-collision spatial hash (counting sort by cell), its searches and
+  // their scratch on each thread.
   std::vector<int> cell_start, cell_entries, particle_cell;
-  std::vector<double> hash_x, hash_y, hash_z;
   double hash_cell = 0;               // the side of the hash's cells
   std::vector<NearSearch> near_plan;  // the searches, in order of their cells
   std::vector<NearScratch> near_scratch;

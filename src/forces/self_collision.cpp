@@ -178,10 +178,10 @@ void search_whole_cloth(const Model& m, const State& s, Workspace& w, double rad
 // particles every other step, and a build costs a pass over the cloth): a
 // mover finds through it the particles it holds where they are, and the
 // stale ones (anchored again since) and the other movers in a list of their
-// own. Once those are many, it is built again. The pairs are the same either way (but
-// for a pair at the radius itself, which the rounding of a sum may tip: one
-// that is never within d_t). take(i, j, len2) is given each pair within
-// radius, the grid's neighbours left out.
+// own. Once those are many, it is built again. The pairs are the same either
+// way (but for a pair at the radius itself, which the rounding of a sum may
+// tip: one that is never within d_t). take(i, j, len2) is given each pair
+// within the radius, the grid's neighbours left out.
 template <class Take>
 void find_mover_pairs(const Model& m, Workspace& w, double radius, const GridNear& grid,
                       Take&& take) {

@@ -169,9 +169,10 @@ void test_gathered(NearScratch& s, int count, const Vec3& y, int i, double r2, i
 // coincide are never given. A particle within the radius is in a cell the
 // search visits, so in one of those cells' buckets, each gathered once; one
 // of another cell that shares a bucket is beyond the radius. The gathered
-// points are tested in one vectorised pass a search (test_gathered). Around a cloth, a surface,
-// cells of the radius hold about half the particles of cells of twice it, and the buckets need no
-// cell's coordinates (docs/performance.md, seventeenth stop).
+// points are tested in one vectorised pass a search (test_gathered; the
+// searches' costs: docs/performance.md, nineteenth stop). Around a cloth, a
+// surface, cells of the radius hold about half the particles of cells of
+// twice it, and the buckets need no cell's coordinates (seventeenth stop).
 template <class Points, class Fn>
 void for_each_near(const Points& y, double radius, const Workspace& w, NearScratch& s,
                    const std::vector<NearSearch>& plan, std::size_t first, std::size_t last,

@@ -151,6 +151,21 @@ void BM_spring_damping(benchmark::State& st) {
     apply_spring_damping(m, s, w, m.params.integrator.dt);
   });
 }
+// The same on two threads (the structural offsets on one, the shear's on the
+// other): its time against BM_spring_damping's is what two threads save of
+// the solve. At 51 x 51, nothing (docs/performance.md, twentieth stop).
+void BM_spring_damping_two_threads(benchmark::State& st) {
+  Model m = warmed(st.range(0), false).model();
+  m.threads = 2;
+  const Simulation& from = warm(st);
+  State s = from.state();
+  Workspace w = detail::workspace(from);
+  for (auto _ : st) {
+    apply_spring_damping(m, s, w, m.params.integrator.dt);
+    benchmark::ClobberMemory();
+  }
+  report(st, from);
+}
 // The springs' kernel alone (forces/spring_edges.hpp): every forward edge of
 // the warm cloth, damped, in float or double, positions and velocities by
 // component. It is what float would speed up most; the step stays in double
@@ -263,6 +278,7 @@ void BM_normals(benchmark::State& st) {
 
 BENCHMARK(BM_springs)->Apply(grids);
 BENCHMARK(BM_spring_damping)->Apply(grids);
+BENCHMARK(BM_spring_damping_two_threads)->Apply(grids);
 BENCHMARK(BM_spring_edges<double>)->Apply(grids);
 BENCHMARK(BM_spring_edges<float>)->Apply(grids);
 BENCHMARK(BM_gravity)->Apply(grids);

@@ -385,128 +385,127 @@ bool correct_air_implicitly(const Model& m, State& s, Workspace& w, double dt, b
   w.pocket_sums.assign(3 * pockets, 0.0);
   for (std::size_t k = 0; k < pockets; ++k)
     w.pocket_sums[3 * k + 2] = -std::expm1(-dt * s.pocket_air[k].seep_rate);
-  auto given_back = [&](int i, int k) {  // Δt ΔP (1 - e^(-Δt/τ)), a velocity per unit M⁻¹a
-    return dt * (p_atm - s.pocket_pressure[i]) * w.pocket_sums[3 * k + 2];
-  };
-  auto add_terms = [&](int i, int k, double* sums) {
-    const Vec3 b = m.area[i] * w.surface_normal[i];
-    const double b_a = m.inv_mass[i] * b.dot(w.air_direction[i]);
-    sums[0] += b.dot(s.v[i]) + given_back(i, k) * b_a;
-    sums[1] += b_a;
-  };
-  // Each particle's change, from its pocket's sums (3 per pocket: Σ b·v turned
-  // into the pocket's ΔP_end term, Σ b·M⁻¹a, the seeped share), over [first, end).
-  const auto apply = [&](int first, int end, const double* pocket_sums) {
-    for (int i = first; i < end; ++i) {
-      const int k = s.pocket[i];
-      if (k < 0) continue;
-      const double dv = given_back(i, k) - pocket_sums[3 * k];
-      if (dv == 0 || (move && (m.driven[i] || s.held[i]))) continue;
-      const Vec3 change = (dv * m.inv_mass[i]) * w.air_direction[i];
-      add(s.v[i], change);
-      if (move) add(s.x[i], dt * change);
+  // Each particle's terms of its pocket's sums, over [c0, c0 + count) into t0
+  // and t1 (zero outside a pocket): Σ b·v with the seeped deficit given back,
+  // Δt ΔP (1 - e^(-Δt/τ)) a velocity per unit M⁻¹a, and Σ b·M⁻¹a. Over
+  // columns in a loop that vectorises (a branch a particle had been a tenth
+  // of the dry pull's step); the columns are locals: read through the
+  // closure, they were loaded again every particle.
+  const auto terms = [&](int c0, int count, const double* sums, double* t0, double* t1,
+                         auto single) {
+    const double h = dt, atm = p_atm;
+    const double *__restrict area = m.area.data(), *__restrict inv_mass = m.inv_mass.data(),
+                             *__restrict p_in = s.pocket_pressure.data();
+    const double *__restrict nx = w.surface_normal.column(0),
+                             *__restrict ny = w.surface_normal.column(1),
+                             *__restrict nz = w.surface_normal.column(2);
+    const double *__restrict ax = w.air_direction.column(0),
+                             *__restrict ay = w.air_direction.column(1),
+                             *__restrict az = w.air_direction.column(2);
+    const double* __restrict vx = s.v.column(0), * __restrict vy = s.v.column(1), * __restrict vz = s.v.column(2);
+    const int* __restrict pocket = s.pocket.data();
+#pragma omp simd
+    for (int q = 0; q < count; ++q) {
+      const int i = c0 + q, k = pocket[i];
+      const double bx = area[i] * nx[i], by = area[i] * ny[i], bz = area[i] * nz[i];
+      // Eigen's dot of three: x0 + (x1 + x2) (its unrolled sum splits in halves).
+      const double b_a = inv_mass[i] * (bx * ax[i] + (by * ay[i] + bz * az[i]));
+      // One pocket: its share a constant, not a gather.
+      const double given = h * (atm - p_in[i]) * sums[single ? 2 : 3 * std::max(k, 0) + 2];
+      const double b_v = bx * vx[i] + (by * vy[i] + bz * vz[i]);
+      t0[q] = k >= 0 ? b_v + given * b_a : 0.0;
+      t1[q] = k >= 0 ? b_a : 0.0;
     }
+  };
+  // Each particle's change over [first, end), from its pocket's sums (3 per
+  // pocket: Σ b·v turned into the pocket's ΔP_end term, Σ b·M⁻¹a, the seeped
+  // share), applied by a select (a particle outside a pocket, or held, keeps
+  // its velocity and place).
+  const auto change = [&](int first, int end, const double* sums, auto moving, auto single) {
+    const double h = dt, atm = p_atm;
+    const double* __restrict inv_mass = m.inv_mass.data(), * __restrict p_in =
+                                                               s.pocket_pressure.data();
+    const double *__restrict ax = w.air_direction.column(0),
+                             *__restrict ay = w.air_direction.column(1),
+                             *__restrict az = w.air_direction.column(2);
+    double* __restrict vx = s.v.column(0), * __restrict vy = s.v.column(1), * __restrict vz = s.v.column(2);
+    double* __restrict xx = s.x.column(0), * __restrict xy = s.x.column(1), * __restrict xz = s.x.column(2);
+    const int* __restrict pocket = s.pocket.data();
+    const std::uint8_t* __restrict driven = m.driven.data(), * __restrict held = s.held.data();
+#pragma omp simd
+    for (int i = first; i < end; ++i) {
+      // (std::max returned a reference: a gather.) One pocket: its sums constants.
+      const int k = single || pocket[i] < 0 ? 0 : pocket[i];
+      const double dv = h * (atm - p_in[i]) * sums[3 * k + 2] - sums[3 * k];
+      bool act = pocket[i] >= 0 && dv != 0;
+      if constexpr (moving) act = act && !driven[i] && !held[i];
+      const double f = dv * inv_mass[i];
+      const double cx = f * ax[i], cy = f * ay[i], cz = f * az[i];
+      vx[i] = act ? vx[i] + cx : vx[i];
+      vy[i] = act ? vy[i] + cy : vy[i];
+      vz[i] = act ? vz[i] + cz : vz[i];
+      if constexpr (moving) {
+        xx[i] = act ? xx[i] + h * cx : xx[i];
+        xy[i] = act ? xy[i] + h * cy : xy[i];
+        xz[i] = act ? xz[i] + h * cz : xz[i];
+      }
+    }
+  };
+  const auto change_and_after = [&](int first, int end, const double* sums, auto single) {
+    if (move)
+      change(first, end, sums, std::true_type{}, single);
+    else
+      change(first, end, sums, std::false_type{}, single);
+    if (after) after(first, end);
   };
   const auto solve = [&](std::size_t k, double* pocket_sums) {
     const double c = dt * dt * stiffness(s.pocket_air[k], dt);
     pocket_sums[3 * k] = c * pocket_sums[3 * k] / (1.0 + c * pocket_sums[3 * k + 1]);
   };
+  // The terms a chunk at a time, added in particle order: the bits of a
+  // particle loop. A particle outside a pocket adds +0 to a sum that starts
+  // at +0, and so is never -0: nothing.
+  constexpr int kChunk = 64;
+  double t0[kChunk], t1[kChunk];
   // One pocket: by rows on the threads, in one region. Each thread adds up
   // the rows in order (ordered_sums_in_rows) and solves the pocket alike, then
-  // changes its own particles and runs `after` on them. The arithmetic of
-  // add_terms and apply above, over columns in loops that vectorise (a
-  // branch a particle had been a tenth of the dry pull's step): a particle
-  // outside the pocket adds +0 to a row's sum, which is never -0 (it starts
-  // at +0), and keeps its velocity by a select; the terms are summed in
-  // particle order, a chunk at a time, so the bits are the particle loop's.
+  // changes its own particles and runs `after` on them.
   if (pockets == 1) {
     const int nu = m.nu;
-    const double share = w.pocket_sums[2];
-    // Each lambda's columns in locals: read through its closure, they were
-    // loaded again every particle, and the loop did not vectorise.
-    constexpr int kChunk = 64;
-    const auto row_terms = [&](int j) {
-      const double h = dt, atm = p_atm, seeped = share;
-      const double *__restrict area = m.area.data(), *__restrict inv_mass = m.inv_mass.data(),
-                               *__restrict p_in = s.pocket_pressure.data();
-      const double *__restrict nx = w.surface_normal.column(0),
-                               *__restrict ny = w.surface_normal.column(1),
-                               *__restrict nz = w.surface_normal.column(2);
-      const double *__restrict ax = w.air_direction.column(0),
-                               *__restrict ay = w.air_direction.column(1),
-                               *__restrict az = w.air_direction.column(2);
-      const double* __restrict vx = s.v.column(0), * __restrict vy = s.v.column(1), * __restrict vz = s.v.column(2);
-      const int* __restrict pocket = s.pocket.data();
-      std::array<double, 2> row{};
-      double t0[kChunk], t1[kChunk];
-      for (int c0 = j * nu; c0 < (j + 1) * nu; c0 += kChunk) {
-        const int count = std::min(kChunk, (j + 1) * nu - c0);
-#pragma omp simd
-        for (int q = 0; q < count; ++q) {
-          const int i = c0 + q;
-          const double bx = area[i] * nx[i], by = area[i] * ny[i], bz = area[i] * nz[i];
-          const double b_a = inv_mass[i] * (bx * ax[i] + by * ay[i] + bz * az[i]);
-          const double given = h * (atm - p_in[i]) * seeped;
-          const double b_v = bx * vx[i] + by * vy[i] + bz * vz[i];
-          const bool in = pocket[i] == 0;
-          t0[q] = in ? b_v + given * b_a : 0.0;
-          t1[q] = in ? b_a : 0.0;
-        }
-        for (int q = 0; q < count; ++q) {
-          row[0] += t0[q];
-          row[1] += t1[q];
-        }
-      }
-      return row;
-    };
-    const auto change = [&](int first, int end, double deficit, auto moving) {
-      const double h = dt, atm = p_atm, seeped = share;
-      const double* __restrict inv_mass = m.inv_mass.data(), * __restrict p_in =
-                                                                 s.pocket_pressure.data();
-      const double *__restrict ax = w.air_direction.column(0),
-                               *__restrict ay = w.air_direction.column(1),
-                               *__restrict az = w.air_direction.column(2);
-      double* __restrict vx = s.v.column(0), * __restrict vy = s.v.column(1), * __restrict vz = s.v.column(2);
-      double* __restrict xx = s.x.column(0), * __restrict xy = s.x.column(1), * __restrict xz = s.x.column(2);
-      const int* __restrict pocket = s.pocket.data();
-      const std::uint8_t* __restrict driven = m.driven.data(), * __restrict held = s.held.data();
-#pragma omp simd
-      for (int i = first; i < end; ++i) {
-        const double dv = h * (atm - p_in[i]) * seeped - deficit;
-        bool act = pocket[i] == 0 && dv != 0;
-        if constexpr (moving) act = act && !driven[i] && !held[i];
-        const double f = dv * inv_mass[i];
-        const double cx = f * ax[i], cy = f * ay[i], cz = f * az[i];
-        vx[i] = act ? vx[i] + cx : vx[i];
-        vy[i] = act ? vy[i] + cy : vy[i];
-        vz[i] = act ? vz[i] + cz : vz[i];
-        if constexpr (moving) {
-          xx[i] = act ? xx[i] + h * cx : xx[i];
-          xy[i] = act ? xy[i] + h * cy : xy[i];
-          xz[i] = act ? xz[i] + h * cz : xz[i];
-        }
-      }
-    };
     w.row_sums.resize(2 * std::size_t(m.nv));
     for_each_row_block(m, [&](int j0, int j1, int) {
-      const auto row_sums = ordered_sums_in_rows<2>(m, w, j0, j1, row_terms);
-      double sums[3] = {row_sums[0], row_sums[1], share};
+      const auto row_sums = ordered_sums_in_rows<2>(m, w, j0, j1, [&](int j) {
+        std::array<double, 2> row{};
+        double r0[kChunk], r1[kChunk];  // this thread's
+        for (int c0 = j * nu; c0 < (j + 1) * nu; c0 += kChunk) {
+          const int count = std::min(kChunk, (j + 1) * nu - c0);
+          terms(c0, count, w.pocket_sums.data(), r0, r1, std::true_type{});
+          for (int q = 0; q < count; ++q) {
+            row[0] += r0[q];
+            row[1] += r1[q];
+          }
+        }
+        return row;
+      });
+      double sums[3] = {row_sums[0], row_sums[1], w.pocket_sums[2]};
       solve(0, sums);
-      if (move)
-        change(j0 * nu, j1 * nu, sums[0], std::true_type{});
-      else
-        change(j0 * nu, j1 * nu, sums[0], std::false_type{});
-      if (after) after(j0 * nu, j1 * nu);
+      change_and_after(j0 * nu, j1 * nu, sums, std::true_type{});
     });
     return true;
   }
   // The pockets of `vented`, in particle order.
-  for (int i = 0; i < m.n; ++i)
-    if (const int k = s.pocket[i]; k >= 0) add_terms(i, k, &w.pocket_sums[3 * k]);
+  for (int c0 = 0; c0 < m.n; c0 += kChunk) {
+    const int count = std::min(kChunk, m.n - c0);
+    terms(c0, count, w.pocket_sums.data(), t0, t1, std::false_type{});
+    for (int q = 0; q < count; ++q)
+      if (const int k = s.pocket[c0 + q]; k >= 0) {
+        w.pocket_sums[3 * k] += t0[q];
+        w.pocket_sums[3 * k + 1] += t1[q];
+      }
+  }
   for (std::size_t k = 0; k < pockets; ++k) solve(k, w.pocket_sums.data());
   for_each_particle_block(m, [&](int first, int end) {
-    apply(first, end, w.pocket_sums.data());
-    if (after) after(first, end);
+    change_and_after(first, end, w.pocket_sums.data(), std::false_type{});
   });
   return true;
 }
